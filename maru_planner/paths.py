@@ -1,0 +1,32 @@
+"""Where the package's data files live, in a source checkout or an install."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+PACKAGE_NAME = "maru_planner"
+
+
+def share_dir() -> Path:
+    """Directory holding ``config/``, ``urdf/`` and ``launch/``.
+
+    A source checkout (or editable install) uses the repository root; an
+    ament install uses ``<prefix>/share/maru_planner``.
+    """
+    repo_root = Path(__file__).resolve().parent.parent
+    if (repo_root / "config").is_dir() and (repo_root / "package.xml").is_file():
+        return repo_root
+    for prefix in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep) + [os.sys.prefix]:
+        candidate = Path(prefix) / "share" / PACKAGE_NAME
+        if (candidate / "config").is_dir():
+            return candidate
+    raise FileNotFoundError("cannot locate the maru_planner share directory (config/, urdf/)")
+
+
+def config_path(*parts: str) -> Path:
+    return share_dir().joinpath("config", *parts)
+
+
+def urdf_path(*parts: str) -> Path:
+    return share_dir().joinpath("urdf", *parts)

@@ -1,0 +1,143 @@
+"""Shared test set-up: loopback-only DDS on a random domain, rclpy helpers.
+
+Every process that starts rclpy in the suite (this one and the node
+subprocesses it spawns, which inherit ``os.environ``) talks DDS on 127.0.0.1
+only, on a domain id picked at random for this run.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+from maru_planner.ros.env import configure_loopback_dds
+
+REPO_ROOT = Path(__file__).resolve().parent.parent
+
+
+def pytest_configure(config):
+    configure_loopback_dds(random_domain=True)
+    os.environ.setdefault("MPLBACKEND", "Agg")
+
+
+@pytest.fixture(scope="session")
+def rclpy_session():
+    """rclpy initialised once for the test process; shut down at the end."""
+    import rclpy
+
+    if not rclpy.ok():
+        rclpy.init()
+    yield rclpy
+    if rclpy.ok():
+        rclpy.shutdown()
+
+
+class SpinningNode:
+    """A test node spun by a background executor thread (clients, subscribers)."""
+
+    def __init__(self, name: str):
+        import rclpy
+        from rclpy.executors import MultiThreadedExecutor
+
+        self.node = rclpy.create_node(name)
+        self.executor = MultiThreadedExecutor(num_threads=4)
+        self.executor.add_node(self.node)
+        self._thread = threading.Thread(target=self.executor.spin, daemon=True)
+        self._thread.start()
+
+    def call(self, client, request, timeout: float = 60.0):
+        """Call a service synchronously from the test thread."""
+        if not client.wait_for_service(timeout_sec=timeout):
+            raise TimeoutError(f"service {client.srv_name} not available after {timeout} s")
+        future = client.call_async(request)
+        deadline = time.monotonic() + timeout
+        while not future.done():
+            if time.monotonic() > deadline:
+                client.remove_pending_request(future)
+                raise TimeoutError(f"no response from {client.srv_name} within {timeout} s")
+            time.sleep(0.005)
+        return future.result()
+
+    def wait_for(self, predicate, timeout: float = 20.0, period: float = 0.01) -> bool:
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            if predicate():
+                return True
+            time.sleep(period)
+        return predicate()
+
+    def destroy(self):
+        self.executor.shutdown(timeout_sec=2.0)
+        self.node.destroy_node()
+
+
+@pytest.fixture
+def spinning_node(rclpy_session, request):
+    """A fresh spinning client node per test, named after the test."""
+    name = "test_" + "".join(c if c.isalnum() else "_" for c in request.node.name)[:50]
+    spinning = SpinningNode(name)
+    yield spinning
+    spinning.destroy()
+
+
+class NodeProcess:
+    """A maru_planner node running as its own process, as ``ros2 run`` would start it."""
+
+    def __init__(self, module: str, args: list[str], log_path: Path):
+        self.log_path = log_path
+        self._log = open(log_path, "w")
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", module, *args],
+            stdout=self._log,
+            stderr=subprocess.STDOUT,
+            stdin=subprocess.DEVNULL,
+            cwd=REPO_ROOT,
+            env=dict(os.environ),
+        )
+
+    def log(self) -> str:
+        self._log.flush()
+        return self.log_path.read_text(errors="replace")
+
+    def alive(self) -> bool:
+        return self.proc.poll() is None
+
+    def stop(self):
+        if self.alive():
+            self.proc.terminate()
+            try:
+                self.proc.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait(timeout=5)
+        self._log.close()
+
+
+@pytest.fixture(scope="module")
+def node_process(tmp_path_factory):
+    """Factory: ``node_process("maru_planner.ros.planning_node", ["--ros-args", ...])``.
+
+    Processes are stopped when the test module ends; their logs are printed
+    if they died early, to make failures readable.
+    """
+    started: list[NodeProcess] = []
+    log_dir = tmp_path_factory.mktemp("node_logs")
+
+    def start(module: str, args: list[str] | None = None) -> NodeProcess:
+        log_path = log_dir / f"{module.rsplit('.', 1)[-1]}_{len(started)}.log"
+        proc = NodeProcess(module, args or [], log_path)
+        started.append(proc)
+        return proc
+
+    yield start
+    for proc in started:
+        died = not proc.alive()
+        proc.stop()
+        if died:
+            print(f"--- log of {proc.proc.args}:\n{proc.log()}")
