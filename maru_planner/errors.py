@@ -1,0 +1,92 @@
+"""Typed errors of the core. Nodes map each class to an error code in one place.
+
+Every error carries ``source`` (the stage that raised it) and a message that
+names what is wrong (the joint, obstacle, link or field).
+"""
+
+from __future__ import annotations
+
+
+class MaruError(Exception):
+    """Base of all maru_planner errors."""
+
+    source = "core"
+
+    def __init__(self, message: str, *, source: str | None = None):
+        super().__init__(message)
+        if source is not None:
+            self.source = source
+
+    @property
+    def message(self) -> str:
+        return str(self)
+
+
+class InvalidRequest(MaruError, ValueError):
+    """A request field is invalid (e.g. a time budget <= 0)."""
+
+    source = "validation"
+
+
+class InvalidGroup(InvalidRequest):
+    """The planning group does not exist."""
+
+
+class InvalidPlanner(InvalidRequest):
+    """The planner id is not registered."""
+
+
+class InvalidJointNames(InvalidRequest):
+    """Unknown, duplicated or missing joint names."""
+
+
+class InvalidJointCount(InvalidRequest):
+    """The number of values does not match the names or the group."""
+
+
+class InvalidState(InvalidRequest):
+    """A joint value is NaN/inf or outside its limits."""
+
+
+class NoStartState(InvalidRequest):
+    """No start state was given and none is known."""
+
+
+class InCollision(MaruError):
+    """A configuration collides; ``pairs`` names the colliding bodies."""
+
+    source = "collision"
+
+    def __init__(self, message: str, pairs: list[tuple[str, str]] | None = None, **kwargs):
+        super().__init__(message, **kwargs)
+        self.pairs = list(pairs or [])
+
+
+class StartInCollision(InCollision):
+    """The start configuration collides."""
+
+
+class GoalInCollision(InCollision):
+    """The goal configuration collides."""
+
+
+class NoIKSolution(MaruError):
+    """Inverse kinematics found no configuration reaching the target(s)."""
+
+    source = "ik"
+
+
+class InvalidScene(MaruError, ValueError):
+    """A scene or obstacle is malformed; the message names the obstacle and field."""
+
+    source = "scene"
+
+
+class PlanningFailed(MaruError):
+    """The planner found no path within its attempts."""
+
+    source = "planner"
+
+
+class PlanningTimedOut(PlanningFailed):
+    """The time budget ran out."""
