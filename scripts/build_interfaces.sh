@@ -28,6 +28,7 @@ for f in "$venv"/share/*/cmake/*__rosidl_generator_pyExport.cmake; do
   fi
 done
 
+mkdir -p "$build"
 echo "maru_planner_interfaces: building (about 10 s)"
 export PATH="$venv/bin:$PATH"
 # The wheels ship their shared libraries under the venv; cmake-run generators need them.
@@ -41,10 +42,10 @@ PY
 )
 export LD_LIBRARY_PATH="$venv/lib:${ros_libs}:${LD_LIBRARY_PATH:-}"
 cmake -S "$src" -B "$build" -DCMAKE_INSTALL_PREFIX="$venv" -DCMAKE_PREFIX_PATH="$venv" \
-  -DPython3_EXECUTABLE="$py" -DBUILD_TESTING=OFF -DCMAKE_BUILD_TYPE=Release >"$build.log" 2>&1 \
-  || { tail -40 "$build.log"; exit 1; }
-cmake --build "$build" -j "$(nproc)" >>"$build.log" 2>&1 || { tail -40 "$build.log"; exit 1; }
-cmake --install "$build" >>"$build.log" 2>&1 || { tail -40 "$build.log"; exit 1; }
+  -DPython3_EXECUTABLE="$py" -DBUILD_TESTING=OFF -DCMAKE_BUILD_TYPE=Release >"$build/build.log" 2>&1 \
+  || { tail -40 "$build/build.log"; exit 1; }
+cmake --build "$build" -j "$(nproc)" >>"$build/build.log" 2>&1 || { tail -40 "$build/build.log"; exit 1; }
+cmake --install "$build" >>"$build/build.log" 2>&1 || { tail -40 "$build/build.log"; exit 1; }
 "$py" -c "import maru_planner_interfaces.srv" || { echo "built, but Python cannot import maru_planner_interfaces"; exit 1; }
 echo "$hash" > "$stamp"
 echo "maru_planner_interfaces: installed into $venv"
