@@ -1,0 +1,347 @@
+"""Message <-> core conversions for the planning node.
+
+Everything that turns a ROS message into a plain Python/numpy value for the
+core (and back) lives here, and so does the ONE table mapping the core's
+typed exceptions and ``PlanStatus`` values to ``PlanningError`` codes.
+Joint values are always matched by name, never by position in an array.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from builtin_interfaces.msg import Duration
+from geometry_msgs.msg import Pose
+from shape_msgs.msg import SolidPrimitive
+from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+
+from maru_planner import errors
+from maru_planner_interfaces.msg import PlannerStats, PlanningError, SceneObstacle
+
+# Most specific class first: the first isinstance match wins.
+ERROR_CODES: tuple[tuple[type[errors.MaruError], int], ...] = (
+    (errors.InvalidGroup, PlanningError.INVALID_GROUP_NAME),
+    (errors.InvalidPlanner, PlanningError.INVALID_PLANNER),
+    (errors.InvalidJointNames, PlanningError.INVALID_JOINT_NAMES),
+    (errors.InvalidJointCount, PlanningError.INVALID_JOINT_COUNT),
+    (errors.InvalidState, PlanningError.INVALID_ROBOT_STATE),
+    (errors.NoStartState, PlanningError.NO_START_STATE),
+    (errors.InvalidRequest, PlanningError.INVALID_REQUEST),
+    (errors.StartInCollision, PlanningError.START_STATE_IN_COLLISION),
+    (errors.GoalInCollision, PlanningError.GOAL_IN_COLLISION),
+    (errors.NoIKSolution, PlanningError.NO_IK_SOLUTION),
+    (errors.InvalidScene, PlanningError.INVALID_SCENE),
+    (errors.PlanningTimedOut, PlanningError.TIMED_OUT),
+    (errors.PlanningFailed, PlanningError.PLANNING_FAILED),
+)
+
+# PlanStatus member name -> code (the status of a MotionResult without a typed error).
+STATUS_CODES: dict[str, int] = {
+    "SUCCESS": PlanningError.SUCCESS,
+    "PLANNING_FAILED": PlanningError.PLANNING_FAILED,
+    "TIMED_OUT": PlanningError.TIMED_OUT,
+    "INVALID_GROUP": PlanningError.INVALID_GROUP_NAME,
+    "INVALID_PLANNER": PlanningError.INVALID_PLANNER,
+    "INVALID_JOINT_NAMES": PlanningError.INVALID_JOINT_NAMES,
+    "INVALID_JOINT_COUNT": PlanningError.INVALID_JOINT_COUNT,
+    "INVALID_STATE": PlanningError.INVALID_ROBOT_STATE,
+    "START_IN_COLLISION": PlanningError.START_STATE_IN_COLLISION,
+    "GOAL_IN_COLLISION": PlanningError.GOAL_IN_COLLISION,
+    "NO_IK_SOLUTION": PlanningError.NO_IK_SOLUTION,
+    "INVALID_SCENE": PlanningError.INVALID_SCENE,
+    "INVALID_REQUEST": PlanningError.INVALID_REQUEST,
+    "NO_START_STATE": PlanningError.NO_START_STATE,
+}
+
+CODE_NAMES: dict[int, str] = {
+    getattr(PlanningError, name): name
+    for name in dir(PlanningError)
+    if name.isupper() and isinstance(getattr(PlanningError, name), int)
+}
+
+
+def code_name(code: int) -> str:
+    """``PlanningError`` constant name of ``code`` (e.g. ``-16`` -> ``"INVALID_PLANNER"``)."""
+    return CODE_NAMES.get(code, f"UNKNOWN({code})")
+
+
+def error_code(exc: BaseException) -> int:
+    """``PlanningError`` code of a core exception; INTERNAL_ERROR for anything else."""
+    for cls, code in ERROR_CODES:
+        if isinstance(exc, cls):
+            return code
+    return PlanningError.INTERNAL_ERROR
+
+
+def error_msg(exc: BaseException | None = None, *, source: str = "") -> PlanningError:
+    """``PlanningError`` for ``exc`` (None = SUCCESS)."""
+    if exc is None:
+        return PlanningError(code=PlanningError.SUCCESS, message="", source=source)
+    message = str(exc) if isinstance(exc, errors.MaruError) else f"{type(exc).__name__}: {exc}"
+    return PlanningError(code=error_code(exc), message=message, source=getattr(exc, "source", source) or source)
+
+
+def result_error_msg(result) -> PlanningError:
+    """``PlanningError`` for a core ``MotionResult`` (status + typed error + message)."""
+    if result.success:
+        return PlanningError(code=PlanningError.SUCCESS, message=result.message or "", source="")
+    if result.error is not None:
+        err = error_msg(result.error)
+        if err.code != PlanningError.INTERNAL_ERROR:
+            return err
+    status = getattr(result.status, "name", str(result.status))
+    code = STATUS_CODES.get(status, PlanningError.INTERNAL_ERROR)
+    source = getattr(result.error, "source", "") if result.error is not None else "planner"
+    return PlanningError(code=code, message=result.message or status, source=source or "planner")
+
+
+# ---------------------------------------------------------------- joint values
+
+
+def named_values(names, values, what: str) -> dict[str, float]:
+    """``{name: value}`` from parallel name/value arrays, checked for length and duplicates."""
+    names = list(names)
+    values = list(values)
+    if len(names) != len(values):
+        raise errors.InvalidJointCount(f"{what}: {len(names)} joint names but {len(values)} positions")
+    seen: set[str] = set()
+    for name in names:
+        if name in seen:
+            raise errors.InvalidJointNames(f"{what}: joint '{name}' appears twice")
+        seen.add(name)
+    return {name: float(value) for name, value in zip(names, values, strict=True)}
+
+
+def joint_state_values(msg, what: str = "start_state") -> dict[str, float]:
+    """Positions of a ``sensor_msgs/JointState`` by joint name."""
+    return named_values(msg.name, msg.position, what)
+
+
+def joint_state_msg(names, positions, stamp=None):
+    """``sensor_msgs/JointState`` with positions only."""
+    from sensor_msgs.msg import JointState
+
+    msg = JointState()
+    if stamp is not None:
+        msg.header.stamp = stamp
+    msg.name = list(names)
+    msg.position = [float(v) for v in positions]
+    return msg
+
+
+# ---------------------------------------------------------------- poses
+
+
+def quaternion_to_matrix(x: float, y: float, z: float, w: float) -> np.ndarray:
+    """3x3 rotation of a (normalised) quaternion."""
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+def matrix_to_quaternion(rotation: np.ndarray) -> tuple[float, float, float, float]:
+    """(x, y, z, w) of a 3x3 rotation matrix (Shepperd's method)."""
+    m = np.asarray(rotation, dtype=float)
+    trace = m[0, 0] + m[1, 1] + m[2, 2]
+    if trace > 0:
+        s = 2.0 * math.sqrt(trace + 1.0)
+        w, x, y, z = 0.25 * s, (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s
+    elif m[0, 0] > m[1, 1] and m[0, 0] > m[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2])
+        w, x, y, z = (m[2, 1] - m[1, 2]) / s, 0.25 * s, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s
+    elif m[1, 1] > m[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2])
+        w, x, y, z = (m[0, 2] - m[2, 0]) / s, (m[0, 1] + m[1, 0]) / s, 0.25 * s, (m[1, 2] + m[2, 1]) / s
+    else:
+        s = 2.0 * math.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1])
+        w, x, y, z = (m[1, 0] - m[0, 1]) / s, (m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, 0.25 * s
+    return float(x), float(y), float(z), float(w)
+
+
+def pose_to_matrix(pose, what: str = "pose") -> np.ndarray:
+    """4x4 homogeneous transform of a ``geometry_msgs/Pose``; the quaternion is normalised.
+
+    Raises ``InvalidRequest`` for NaN/inf fields or a zero quaternion.
+    """
+    p, o = pose.position, pose.orientation
+    values = [p.x, p.y, p.z, o.x, o.y, o.z, o.w]
+    if not all(math.isfinite(v) for v in values):
+        raise errors.InvalidRequest(f"{what}: position/orientation has a NaN or infinite value")
+    norm = math.sqrt(o.x**2 + o.y**2 + o.z**2 + o.w**2)
+    if norm < 1e-9:
+        raise errors.InvalidRequest(f"{what}: orientation quaternion is zero")
+    transform = np.eye(4)
+    transform[:3, :3] = quaternion_to_matrix(o.x / norm, o.y / norm, o.z / norm, o.w / norm)
+    transform[:3, 3] = [p.x, p.y, p.z]
+    return transform
+
+
+def matrix_to_pose(transform) -> Pose:
+    """``geometry_msgs/Pose`` of a 4x4 homogeneous transform."""
+    t = np.asarray(transform, dtype=float)
+    pose = Pose()
+    pose.position.x, pose.position.y, pose.position.z = (float(v) for v in t[:3, 3])
+    q = matrix_to_quaternion(t[:3, :3])
+    pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w = q
+    return pose
+
+
+def pose_goals(poses, links, planning_frame: str) -> dict[str, np.ndarray]:
+    """``{link: 4x4}`` from ``goal_poses`` + ``goal_links``; poses must be in the planning frame."""
+    poses, links = list(poses), list(links)
+    if len(poses) != len(links):
+        raise errors.InvalidRequest(f"{len(poses)} goal_poses but {len(links)} goal_links (one link per pose)")
+    goals: dict[str, np.ndarray] = {}
+    for stamped, link in zip(poses, links, strict=True):
+        frame = stamped.header.frame_id
+        if frame not in ("", planning_frame):
+            raise errors.InvalidRequest(
+                f"goal pose for '{link}' is in frame '{frame}'; only '{planning_frame}' is supported (no tf here)"
+            )
+        if link in goals:
+            raise errors.InvalidRequest(f"goal link '{link}' appears twice")
+        goals[link] = pose_to_matrix(stamped.pose, what=f"goal pose for '{link}'")
+    return goals
+
+
+# ---------------------------------------------------------------- scene obstacles
+
+SHAPE_NAMES = {SolidPrimitive.BOX: "box", SolidPrimitive.SPHERE: "sphere", SolidPrimitive.CYLINDER: "cylinder"}
+
+
+def obstacle_pose(pose: Pose, name: str) -> np.ndarray:
+    """4x4 pose of obstacle ``name``; a NaN or zero-quaternion pose raises ``InvalidScene``."""
+    try:
+        return pose_to_matrix(pose, what=f"obstacle '{name}' pose")
+    except errors.InvalidRequest as exc:
+        raise errors.InvalidScene(str(exc)) from None
+
+
+def primitive_to_obstacle(name: str, shape: SolidPrimitive, pose: Pose) -> dict:
+    """Scene obstacle dict (``Scene.from_dict`` schema) of a named ``SolidPrimitive`` at ``pose``."""
+    if not name:
+        raise errors.InvalidScene("obstacle has an empty name")
+    kind = SHAPE_NAMES.get(shape.type)
+    if kind is None:
+        raise errors.InvalidScene(
+            f"obstacle '{name}': shape type {shape.type} is not BOX (1), SPHERE (2) or CYLINDER (3)"
+        )
+    dims = [float(v) for v in shape.dimensions]
+    expected = {"box": 3, "sphere": 1, "cylinder": 2}[kind]
+    if len(dims) != expected:
+        raise errors.InvalidScene(f"obstacle '{name}': a {kind} needs {expected} dimensions, got {len(dims)}")
+    if not all(math.isfinite(v) and v > 0 for v in dims):
+        raise errors.InvalidScene(f"obstacle '{name}': {kind} dimensions must be finite and > 0, got {dims}")
+    obstacle: dict = {"name": name, "type": kind, "pose": obstacle_pose(pose, name).tolist()}
+    if kind == "box":
+        obstacle["size"] = dims
+    elif kind == "sphere":
+        obstacle["radius"] = dims[0]
+    else:
+        obstacle["length"], obstacle["radius"] = dims
+    return obstacle
+
+
+def obstacle_to_msg(obstacle: dict, frame_id: str) -> SceneObstacle:
+    """``SceneObstacle`` (operation ADD) of a scene obstacle dict; meshes become their bounding box."""
+    msg = SceneObstacle(name=obstacle["name"], operation=SceneObstacle.ADD)
+    msg.header.frame_id = frame_id
+    kind = obstacle["type"]
+    if kind == "sphere":
+        msg.shape.type = SolidPrimitive.SPHERE
+        msg.shape.dimensions = [float(obstacle["radius"])]
+    elif kind == "cylinder":
+        msg.shape.type = SolidPrimitive.CYLINDER
+        msg.shape.dimensions = [float(obstacle["length"]), float(obstacle["radius"])]
+    else:
+        msg.shape.type = SolidPrimitive.BOX
+        msg.shape.dimensions = [float(v) for v in obstacle.get("size", [0.0, 0.0, 0.0])]
+    msg.pose = matrix_to_pose(obstacle["pose"])
+    return msg
+
+
+# ---------------------------------------------------------------- trajectories and stats
+
+
+def duration_msg(seconds: float) -> Duration:
+    sec = math.floor(seconds)
+    nanosec = int(round((seconds - sec) * 1e9))
+    if nanosec >= 1_000_000_000:
+        sec, nanosec = sec + 1, nanosec - 1_000_000_000
+    return Duration(sec=int(sec), nanosec=nanosec)
+
+
+def duration_seconds(duration) -> float:
+    return duration.sec + duration.nanosec * 1e-9
+
+
+def trajectory_msg(trajectory, frame_id: str, stamp=None) -> JointTrajectory:
+    """``JointTrajectory`` of a core trajectory (joint_names, times, positions, velocities, accelerations)."""
+    msg = JointTrajectory()
+    msg.header.frame_id = frame_id
+    if stamp is not None:
+        msg.header.stamp = stamp
+    msg.joint_names = list(trajectory.joint_names)
+    positions = np.asarray(trajectory.positions, dtype=float)
+    velocities = _optional_rows(trajectory, "velocities", positions.shape)
+    accelerations = _optional_rows(trajectory, "accelerations", positions.shape)
+    for i, t in enumerate(np.asarray(trajectory.times, dtype=float)):
+        point = JointTrajectoryPoint()
+        point.positions = positions[i].tolist()
+        if velocities is not None:
+            point.velocities = velocities[i].tolist()
+        if accelerations is not None:
+            point.accelerations = accelerations[i].tolist()
+        point.time_from_start = duration_msg(float(t))
+        msg.points.append(point)
+    return msg
+
+
+def _optional_rows(trajectory, field: str, shape) -> np.ndarray | None:
+    values = getattr(trajectory, field, None)
+    if values is None:
+        return None
+    array = np.asarray(values, dtype=float)
+    return array if array.shape == tuple(shape) else None
+
+
+def trajectory_positions(msg: JointTrajectory) -> tuple[list[str], np.ndarray, np.ndarray]:
+    """(joint names, times (n,), positions (n, k)) of a ``JointTrajectory``."""
+    times = np.array([duration_seconds(p.time_from_start) for p in msg.points])
+    positions = np.array([list(p.positions) for p in msg.points], dtype=float)
+    return list(msg.joint_names), times, positions
+
+
+STATS_FIELDS_INT = ("nodes", "edges", "collision_checks", "waypoints", "seed")
+STATS_FIELDS_FLOAT = (
+    "path_length",
+    "smoothness",
+    "validation_time",
+    "ik_time",
+    "solve_time",
+    "simplify_time",
+    "parameterize_time",
+    "total_time",
+)
+
+
+def stats_msg(stats) -> PlannerStats:
+    """``PlannerStats`` of a core ``PlanStats`` (missing or None fields stay 0; seed None -> -1)."""
+    msg = PlannerStats()
+    if stats is None:
+        return msg
+    msg.planner_id = str(getattr(stats, "planner_id", "") or "")
+    for field in STATS_FIELDS_INT:
+        value = getattr(stats, field, None)
+        if value is None:
+            value = -1 if field == "seed" else 0
+        setattr(msg, field, int(value))
+    for field in STATS_FIELDS_FLOAT:
+        value = getattr(stats, field, None)
+        setattr(msg, field, float(value) if value is not None and math.isfinite(value) else 0.0)
+    return msg
