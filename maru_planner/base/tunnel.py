@@ -1,0 +1,442 @@
+"""Heuristic tunnel planner (paper 003, Hyun 2014) on an occupancy grid.
+
+The grid of small cells α is grouped into big cells β of ``b × b`` small
+cells (the paper uses 3 × 3). Three processes run in turn:
+
+* **TFP** (tunnel finding): from β_start, repeatedly add the 4-neighbour
+  (Σ(β)) of the current β that minimises
+  ``f_T = K1·f1 + K2·f2 + K3·f3`` (eq. 3-6; K1, K3 > 0, K2 < 0):
+  f1 = distance to β_goal, f2 = distance from β_start (both divided by the
+  β-grid diagonal ‖β_0 − β_N‖), f3 = fraction of obstacle cells in β, or
+  ``maximum_value`` when β is full (never entered). The paper's loop has no
+  rule for a dead end; ours backtracks along the chain to the last β with an
+  unvisited neighbour (a greedy depth-first walk), so TFP fails only when
+  no β chain exists. Every visited β belongs to the tunnel T.
+* **LCRP** (lumped-cell removal): β ∈ T with 3+ Σ-neighbours in T are
+  "lumped". Backtracking from β_goal to β_start inside T, always to a
+  neighbour one step closer to β_start (breadth-first distances inside T),
+  ties broken by ``f_L = K1·f_L1 + K2·f_L2`` (eq. 8-10) with the lumped
+  cells as subgoals, gives the thin tunnel B (no β has 3+ B-neighbours).
+* **PFP** (path finding): inside B, small cells are joined 8-neighbour (no
+  corner cutting) by a greedy depth-first walk minimising
+  ``f_P = (K4·‖α_sub − α‖ + K5·‖α_prev − α‖) / ‖α_0 − α_N‖`` (eq. 11;
+  K4 > 0, K5 < 0) toward the centre α of the next β of B, then α_goal.
+
+If PFP fails, β shrinks by one small cell per side and the three
+processes run again; at ``min_big_cell_size`` the β connection where PFP
+got stuck is recorded as a virtual obstacle (a blocked β–β edge) and TFP
+runs again. With ``min_big_cell_size = 1`` the last round works on single
+cells and finds a path whenever a 4-connected (= 8-connected without
+corner cutting) free path exists.
+
+The final path is the PFP cell chain shortened by line-of-sight
+shortcuts between its cells (the paper's "turning points").
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from maru_planner.base import result as res
+
+SIGMA = ((-1, 0), (0, 1), (1, 0), (0, -1))  # Σ(β): 4-neighbours (row, col)
+GAMMA = ((-1, 0), (0, 1), (1, 0), (0, -1), (-1, -1), (-1, 1), (1, 1), (1, -1))  # Γ(α)
+
+
+@dataclass
+class TunnelParams:
+    """Named parameters of the tunnel planner (paper's signs enforced)."""
+
+    big_cell_size: int = 3
+    min_big_cell_size: int = 1
+    k1: float = 1.0  # TFP/LCRP: weight of the distance to the goal (> 0)
+    k2: float = -0.2  # TFP/LCRP: weight of the distance from the start (< 0)
+    k3: float = 0.05  # TFP: weight of the obstacle fraction of β (> 0)
+    k4: float = 1.0  # PFP: weight of the distance to the next subgoal (> 0)
+    k5: float = -0.2  # PFP: weight of the distance from the last subgoal (< 0)
+    maximum_value: float = 1.0e6
+    max_virtual_obstacles: int = 200
+    shortcut: bool = True
+
+    def validate(self) -> None:
+        checks = [
+            (self.big_cell_size >= 1, "big_cell_size must be >= 1"),
+            (1 <= self.min_big_cell_size <= self.big_cell_size, "min_big_cell_size must be in [1, big_cell_size]"),
+            (self.k1 > 0, "k1 must be > 0 (paper: K1 positive)"),
+            (self.k2 < 0, "k2 must be < 0 (paper: K2 negative)"),
+            (self.k3 > 0, "k3 must be > 0 (paper: K3 positive)"),
+            (self.k4 > 0, "k4 must be > 0 (paper: K4 positive)"),
+            (self.k5 < 0, "k5 must be < 0 (paper: K5 negative)"),
+            (self.maximum_value > 0, "maximum_value must be > 0"),
+            (self.max_virtual_obstacles >= 0, "max_virtual_obstacles must be >= 0"),
+        ]
+        for ok, message in checks:
+            if not ok:
+                raise ValueError(message)
+
+
+@dataclass
+class Attempt:
+    """One TFP → LCRP → PFP round (kept for pictures and stats)."""
+
+    big_cell_size: int
+    failed_stage: str | None  # None = solved, "TFP" or "PFP"
+    tunnel: np.ndarray  # (k, 2) β of T in visiting order
+    lumped: np.ndarray  # (m, 2) lumped β
+    thin_tunnel: np.ndarray  # (n, 2) β of B from start to goal
+    cells: np.ndarray  # (p, 2) α path (PFP), empty on failure
+    virtual_obstacles: list = field(default_factory=list)  # blocked β edges at this size
+
+
+@dataclass
+class CellPlan:
+    """Tunnel planner answer in cell coordinates (row, col)."""
+
+    status: str
+    message: str
+    raw_cells: np.ndarray  # PFP chain of small cells
+    waypoints: np.ndarray  # shortcut turning points (row, col)
+    attempts: list
+    stats: dict
+
+
+class BigCellGrid:
+    """Small-cell grid seen as big cells of ``size × size`` (cells past the edge count as occupied)."""
+
+    def __init__(self, occupied: np.ndarray, size: int):
+        self.size = size
+        h, w = occupied.shape
+        self.shape = (-(-h // size), -(-w // size))
+        padded = np.ones((self.shape[0] * size, self.shape[1] * size), dtype=bool)
+        padded[:h, :w] = occupied
+        counts = padded.reshape(self.shape[0], size, self.shape[1], size).sum(axis=(1, 3))
+        self.obstacle_count = counts.astype(np.uint16)
+        self.full = self.obstacle_count == size * size
+        self.diagonal = max(float(np.hypot(self.shape[0] - 1, self.shape[1] - 1)), 1.0)
+
+    def of(self, cell: tuple[int, int]) -> tuple[int, int]:
+        return cell[0] // self.size, cell[1] // self.size
+
+    def centre(self, big: tuple[int, int], grid_shape: tuple[int, int]) -> tuple[int, int]:
+        half = self.size // 2
+        return min(big[0] * self.size + half, grid_shape[0] - 1), min(big[1] * self.size + half, grid_shape[1] - 1)
+
+    def contains(self, big: tuple[int, int]) -> bool:
+        return 0 <= big[0] < self.shape[0] and 0 <= big[1] < self.shape[1]
+
+
+def _edge(a: tuple[int, int], b: tuple[int, int]) -> tuple:
+    return (a, b) if a <= b else (b, a)
+
+
+def _dist(a, b) -> float:
+    return math.hypot(a[0] - b[0], a[1] - b[1])
+
+
+# --------------------------------------------------------------------------- TFP
+
+
+def tunnel_finding(bg: BigCellGrid, start: tuple, goal: tuple, p: TunnelParams, blocked: set) -> tuple[list, bool]:
+    """TFP: greedy walk over Σ(β) minimising f_T, backtracking at dead ends.
+
+    Returns (T in visiting order, reached_goal).
+    """
+    visited = np.zeros(bg.shape, dtype=bool)
+    visited[start] = True
+    tunnel = [start]
+    chain = [start]
+    cells_per_big = bg.size * bg.size
+    while chain:
+        cur = chain[-1]
+        if cur == goal:
+            return tunnel, True
+        best, best_f = None, np.inf
+        for dr, dc in SIGMA:
+            nb = (cur[0] + dr, cur[1] + dc)
+            if not bg.contains(nb) or visited[nb] or _edge(cur, nb) in blocked:
+                continue
+            if bg.full[nb]:
+                continue  # eq. 6 adds MAXIMUM_VALUE: a full β is never connected
+            f3 = bg.obstacle_count[nb] / cells_per_big
+            f = p.k1 * _dist(goal, nb) / bg.diagonal + p.k2 * _dist(start, nb) / bg.diagonal + p.k3 * f3
+            if f < best_f:
+                best, best_f = nb, f
+        if best is None:
+            chain.pop()
+            continue
+        visited[best] = True
+        tunnel.append(best)
+        chain.append(best)
+    return tunnel, False
+
+
+# -------------------------------------------------------------------------- LCRP
+
+
+def lumped_cells(tunnel: list) -> list:
+    """β of T with three or more Σ-neighbours in T."""
+    members = set(tunnel)
+    return [b for b in tunnel if sum((b[0] + dr, b[1] + dc) in members for dr, dc in SIGMA) >= 3]
+
+
+def _bfs_depths(tunnel: list, start: tuple, blocked: set) -> dict:
+    members = set(tunnel)
+    depth = {start: 0}
+    frontier = [start]
+    while frontier:
+        nxt = []
+        for cur in frontier:
+            for dr, dc in SIGMA:
+                nb = (cur[0] + dr, cur[1] + dc)
+                if nb in members and nb not in depth and _edge(cur, nb) not in blocked:
+                    depth[nb] = depth[cur] + 1
+                    nxt.append(nb)
+        frontier = nxt
+    return depth
+
+
+def lumped_cell_removal(bg: BigCellGrid, tunnel: list, start: tuple, goal: tuple, p: TunnelParams, blocked: set):
+    """LCRP: backtrack from β_goal to β_start inside T; returns (B start→goal, lumped cells)."""
+    lumped = lumped_cells(tunnel)
+    depth = _bfs_depths(tunnel, start, blocked)
+    # Subgoal queue: lumped cells met on the way back, farthest from the start first.
+    subgoals = sorted((b for b in lumped if b in depth), key=lambda b: (-depth[b], b))
+    back = [goal]
+    current_subgoal = goal
+    cur = goal
+    pending = 0  # index of the next subgoal in the queue
+    while cur != start:
+        while pending < len(subgoals) and depth[subgoals[pending]] >= depth[cur]:
+            pending += 1
+        next_subgoal = subgoals[pending] if pending < len(subgoals) else start
+        best, best_f = None, np.inf
+        for dr, dc in SIGMA:
+            nb = (cur[0] + dr, cur[1] + dc)
+            if depth.get(nb, -1) != depth[cur] - 1 or _edge(cur, nb) in blocked:
+                continue
+            f = (p.k1 * _dist(next_subgoal, nb) + p.k2 * _dist(current_subgoal, nb)) / bg.diagonal
+            if f < best_f:
+                best, best_f = nb, f
+        cur = best
+        if cur == next_subgoal:
+            current_subgoal = cur
+        back.append(cur)
+    back.reverse()
+    return back, lumped
+
+
+# --------------------------------------------------------------------------- PFP
+
+
+def path_finding(occupied: np.ndarray, bg: BigCellGrid, thin: list, start: tuple, goal: tuple, p: TunnelParams):
+    """PFP: greedy depth-first 8-neighbour walk of small cells inside B.
+
+    Returns (cells or None, index in B of the β where the walk got stuck, expansions).
+    """
+    h, w = occupied.shape
+    order = {b: i for i, b in enumerate(thin)}
+    diag = max(float(np.hypot(h - 1, w - 1)), 1.0)
+    last = len(thin) - 1
+    visited = {start}
+    chain = [start]
+    progress = 0
+    expansions = 0
+    while chain:
+        cur = chain[-1]
+        if cur == goal:
+            return chain, progress, expansions
+        expansions += 1
+        progress = max(progress, order[bg.of(cur)])
+        target = goal if progress == last else bg.centre(thin[progress + 1], (h, w))
+        previous = start if progress == 0 else bg.centre(thin[progress], (h, w))
+        best, best_f = None, np.inf
+        for dr, dc in GAMMA:
+            r, c = cur[0] + dr, cur[1] + dc
+            if not (0 <= r < h and 0 <= c < w) or occupied[r, c] or (r, c) in visited:
+                continue
+            if dr and dc and (occupied[cur[0] + dr, cur[1]] or occupied[cur[0], cur[1] + dc]):
+                continue  # no corner cutting
+            if bg.of((r, c)) not in order:
+                continue
+            f = (p.k4 * _dist(target, (r, c)) + p.k5 * _dist(previous, (r, c))) / diag
+            if f < best_f:
+                best, best_f = (r, c), f
+        if best is None:
+            chain.pop()
+            continue
+        visited.add(best)
+        chain.append(best)
+    return None, progress, expansions
+
+
+# ------------------------------------------------------------------- shortcuts
+
+
+def segment_is_free(occupied: np.ndarray, a, b) -> bool:
+    """True when the segment between the centres of cells a and b crosses only free cells.
+
+    Conservative: samples every quarter cell and tests the 2 × 2 cells around
+    each sample's ±0.25 box, so a segment grazing a corner counts as touching it.
+    """
+    (r0, c0), (r1, c1) = a, b
+    n = int(np.ceil(4.0 * max(abs(r1 - r0), abs(c1 - c0)))) + 1
+    t = np.linspace(0.0, 1.0, n)
+    rows = r0 + 0.5 + t * (r1 - r0)
+    cols = c0 + 0.5 + t * (c1 - c0)
+    h, w = occupied.shape
+    for dr in (-0.25, 0.25):
+        for dc in (-0.25, 0.25):
+            ri = np.clip(np.floor(rows + dr).astype(int), 0, h - 1)
+            ci = np.clip(np.floor(cols + dc).astype(int), 0, w - 1)
+            if occupied[ri, ci].any():
+                return False
+    return True
+
+
+def shortcut_cells(occupied: np.ndarray, cells: list) -> list:
+    """Keep only the turning points: from each anchor, the farthest cell still in line of sight."""
+    if len(cells) <= 2:
+        return list(cells)
+    out = [cells[0]]
+    anchor = 0
+    j = 1
+    while j < len(cells):
+        if segment_is_free(occupied, cells[anchor], cells[j]):
+            j += 1
+            continue
+        anchor = j - 1
+        out.append(cells[anchor])
+    out.append(cells[-1])
+    return out
+
+
+# ----------------------------------------------------------------------- driver
+
+
+def _as_array(items) -> np.ndarray:
+    return np.asarray(list(items), dtype=int).reshape(-1, 2)
+
+
+def _check_endpoint(occupied: np.ndarray, cell, name: str):
+    h, w = occupied.shape
+    if not (0 <= cell[0] < h and 0 <= cell[1] < w):
+        return (res.START_OUTSIDE_MAP if name == "start" else res.GOAL_OUTSIDE_MAP), f"{name} cell {cell} outside map"
+    if occupied[cell]:
+        return (res.START_OCCUPIED if name == "start" else res.GOAL_OCCUPIED), f"{name} cell {cell} is occupied"
+    return None
+
+
+class TunnelPlanner:
+    """Plans on a bool occupancy array (True = occupied, already grown by the robot radius)."""
+
+    def __init__(self, params: TunnelParams | None = None, **overrides):
+        self.params = params or TunnelParams()
+        for key, value in overrides.items():
+            if not hasattr(self.params, key):
+                raise ValueError(f"unknown tunnel parameter {key!r}")
+            setattr(self.params, key, value)
+        self.params.validate()
+
+    def plan_cells(self, occupied: np.ndarray, start, goal) -> CellPlan:
+        occupied = np.asarray(occupied, dtype=bool)
+        start, goal = (int(start[0]), int(start[1])), (int(goal[0]), int(goal[1]))
+        t0 = time.perf_counter()
+        stats = {"tfp_expansions": 0, "lcrp_cells": 0, "pfp_expansions": 0, "attempts": 0, "virtual_obstacles": 0}
+        for cell, name in ((start, "start"), (goal, "goal")):
+            bad = _check_endpoint(occupied, cell, name)
+            if bad:
+                return self._finish(bad[0], bad[1], [], [], [], stats, t0)
+        p = self.params
+        attempts: list[Attempt] = []
+        for size in range(p.big_cell_size, p.min_big_cell_size - 1, -1):
+            bg = BigCellGrid(occupied, size)
+            blocked: set = set()
+            while True:
+                attempt, cells = self._round(occupied, bg, start, goal, blocked, stats)
+                attempts.append(attempt)
+                if cells is not None:
+                    return self._finish(res.SOLVED, f"path found with big cells of {size}×{size}",
+                                        cells, attempts, occupied, stats, t0)
+                if attempt.failed_stage == "TFP" or size > p.min_big_cell_size:
+                    break
+                if len(blocked) >= p.max_virtual_obstacles:
+                    break
+                blocked.add(attempt.virtual_obstacles[-1])
+                stats["virtual_obstacles"] = len(blocked)
+        last = attempts[-1] if attempts else None
+        reason = f"{last.failed_stage} failed at big-cell size {last.big_cell_size}" if last else "no attempt"
+        return self._finish(res.NO_PATH, f"no path: {reason}", [], attempts, occupied, stats, t0)
+
+    def _round(self, occupied, bg: BigCellGrid, start, goal, blocked: set, stats: dict):
+        p = self.params
+        stats["attempts"] += 1
+        b_start, b_goal = bg.of(start), bg.of(goal)
+        tunnel, reached = tunnel_finding(bg, b_start, b_goal, p, blocked)
+        stats["tfp_expansions"] += len(tunnel)
+        empty = np.zeros((0, 2), dtype=int)
+        if not reached:
+            return Attempt(bg.size, "TFP", _as_array(tunnel), empty, empty, empty, sorted(blocked)), None
+        thin, lumped = lumped_cell_removal(bg, tunnel, b_start, b_goal, p, blocked)
+        stats["lcrp_cells"] += len(thin)
+        cells, stuck, expansions = path_finding(occupied, bg, thin, start, goal, p)
+        stats["pfp_expansions"] += expansions
+        if cells is None:
+            failing = _edge(thin[stuck], thin[min(stuck + 1, len(thin) - 1)])
+            virtual = sorted(blocked) + [failing]
+            attempt = Attempt(bg.size, "PFP", _as_array(tunnel), _as_array(lumped), _as_array(thin), empty, virtual)
+            return attempt, None
+        attempt = Attempt(bg.size, None, _as_array(tunnel), _as_array(lumped), _as_array(thin), _as_array(cells),
+                          sorted(blocked))
+        return attempt, cells
+
+    def _finish(self, status, message, cells, attempts, occupied, stats, t0) -> CellPlan:
+        waypoints = cells
+        if cells and self.params.shortcut:
+            waypoints = shortcut_cells(occupied, cells)
+        stats = dict(stats)
+        stats["expansions"] = stats["tfp_expansions"] + stats["pfp_expansions"]
+        stats["planning_time"] = time.perf_counter() - t0
+        return CellPlan(status, message, _as_array(cells), _as_array(waypoints), attempts, stats)
+
+
+# ----------------------------------------------------------------- world frame
+
+
+def cells_to_path(cells: np.ndarray, to_world, start_theta: float, goal_theta: float) -> np.ndarray:
+    """(row, col) cells → (x, y, θ) rows; θ follows each segment, the ends keep the request's θ."""
+    if len(cells) == 0:
+        return np.zeros((0, 3))
+    xy = np.array([to_world(int(r), int(c)) for r, c in cells], dtype=float).reshape(-1, 2)
+    theta = np.empty(len(xy))
+    if len(xy) > 1:
+        d = np.diff(xy, axis=0)
+        theta[:-1] = np.arctan2(d[:, 1], d[:, 0])
+    theta[0] = start_theta
+    theta[-1] = goal_theta
+    return np.column_stack([xy, theta])
+
+
+def plan_tunnel(grid, start, goal, robot_radius: float = 0.25, **params) -> res.BasePlanResult:
+    """Tunnel planner on an ``OccupancyGrid`` (world poses (x, y, θ); obstacles grown by ``robot_radius``)."""
+    planner = TunnelPlanner(**params)
+    t0 = time.perf_counter()
+    grown = grid.inflate(robot_radius) if robot_radius > 0 else grid
+    occupied = np.asarray(grown.occupied, dtype=bool)
+    start_cell, goal_cell = grid.world_to_cell(start[0], start[1]), grid.world_to_cell(goal[0], goal[1])
+    plan = planner.plan_cells(occupied, start_cell, goal_cell)
+    path = cells_to_path(plan.waypoints, grid.cell_to_world, float(start[2]), float(goal[2]))
+    if len(path):
+        path[0, :2] = start[0], start[1]
+        path[-1, :2] = goal[0], goal[1]
+    stats = dict(plan.stats)
+    stats["planning_time"] = time.perf_counter() - t0
+    stats["collision_checks"] = stats["expansions"]
+    last = plan.attempts[-1] if plan.attempts else None
+    stats["deciding_stage"] = f"tunnel b={last.big_cell_size}" if last else "tunnel"
+    layers = {"inflated": occupied, "attempts": plan.attempts, "raw_cells": plan.raw_cells,
+              "waypoints": plan.waypoints}
+    return res.BasePlanResult(plan.status, plan.message, path, stats, layers)
