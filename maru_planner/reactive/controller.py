@@ -1,0 +1,244 @@
+"""ElasticStripController: one laser scan in, one (v, w) + strip + arm step out (paper 001, Fig. 17)."""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field, fields
+
+import numpy as np
+
+from maru_planner.reactive.forces import external_forces
+from maru_planner.reactive.kinematics import clamp_twist, wrap_angle
+from maru_planner.reactive.scan import LaserScanData, obstacle_check, scan_to_points, to_world
+from maru_planner.reactive.strip import ElasticStrip
+from maru_planner.reactive.vias import ViaTarget
+
+
+@dataclass
+class StripParams:
+    """Parameters of the reactive layer. Defaults: the paper's gains and the Silvermate base."""
+
+    k_r: float = 0.5  # repulsion gain (paper)
+    k_c: float = 0.3  # contraction gain (paper)
+    d_safe: float = 0.30  # safety margin added to the robot radius: d_0 = d_safe + d_r
+    robot_radius: float = 0.30  # d_r
+    num_vias: int = 20
+    via_spacing: float = 0.30  # m between vias on the reference path
+    strip: str = "modified"  # "modified" (eq. 41-42) or "plain" (eq. 39)
+    head_on_ratio: float = 0.25  # modified only: see forces.modified_external_forces
+    iterations: int = 2  # force steps per update
+    max_via_step: float = 0.2  # m, per iteration
+    max_linear: float = 0.5
+    max_angular: float = 1.0
+    k_angular: float = 2.0  # w = k_angular * heading error
+    lookahead: float = 0.6  # m along the strip to the base target
+    beam_window: tuple[int, int] | None = (31, 331)  # paper's central window of a 0.5 deg scan
+    avoidance_range: float = 1.5  # obstacle_check threshold (AVOIDANCE_RANGE)
+    force_range: float = 8.0  # scan points farther than this are ignored by the forces
+    is_sort_radius: float = 0.5  # IsSort, m per axis
+    is_sort_rule: str = "either_axis"  # paper's code; or "both_axes"
+    use_via_events: bool = True  # paper's inserted avoidance via (SortPosition / IsSort)
+    via_reach: float = 0.35  # m: an inserted via counts as reached
+    goal_tolerance: float = 0.25  # m
+    slow_radius: float = 0.8  # m: linear speed ramps down inside this distance of the goal
+    stop_distance: float = 0.0  # m: stop if an obstacle point is this close in front (0 = off)
+    laser_pose: tuple[float, float, float] = (0.22, 0.0, 0.0)  # laser in base_link: x, y, yaw
+    arm_enabled: bool = True
+    arm_d_safe: float = 0.10
+    arm_link_radius: float = 0.055
+    arm_alpha: float = 1.0
+    arm_max_joint_step: float = 0.05
+
+    def __post_init__(self):
+        if self.strip not in ("modified", "plain"):
+            raise ValueError(f"strip must be 'modified' or 'plain', got {self.strip!r}")
+        if self.is_sort_rule not in ("either_axis", "both_axes"):
+            raise ValueError(f"is_sort_rule must be 'either_axis' or 'both_axes', got {self.is_sort_rule!r}")
+        if self.num_vias < 3:
+            raise ValueError(f"num_vias must be >= 3, got {self.num_vias}")
+        for name in ("k_r", "k_c", "robot_radius", "via_spacing", "max_linear", "max_angular", "lookahead",
+                     "avoidance_range", "goal_tolerance"):
+            value = getattr(self, name)
+            if not math.isfinite(value) or value <= 0:
+                raise ValueError(f"StripParams.{name} must be positive, got {value!r}")
+        if self.beam_window is not None:
+            lo, hi = self.beam_window
+            if lo < 0 or hi <= lo:
+                raise ValueError(f"beam_window must be (lo, hi) with 0 <= lo < hi, got {self.beam_window}")
+            self.beam_window = (int(lo), int(hi))
+        self.laser_pose = tuple(float(v) for v in self.laser_pose)
+
+    @property
+    def d0(self) -> float:
+        return self.d_safe + self.robot_radius
+
+    @classmethod
+    def from_dict(cls, values: dict) -> StripParams:
+        known = {f.name for f in fields(cls)}
+        unknown = sorted(set(values) - known)
+        if unknown:
+            raise ValueError(f"unknown StripParams field(s): {', '.join(unknown)}")
+        values = dict(values)
+        for key in ("beam_window", "laser_pose"):
+            if values.get(key) is not None:
+                values[key] = tuple(values[key])
+        return cls(**values)
+
+
+@dataclass
+class ControlOutput:
+    """Result of one update. Points and strip are in the world (odometry) frame."""
+
+    v: float
+    w: float
+    strip: np.ndarray
+    target: tuple[float, float]
+    reached_goal: bool
+    obstacle_points: np.ndarray
+    arm_joint_steps: np.ndarray | None = None
+    arm_joint_positions: np.ndarray | None = None
+    update_time: float = 0.0
+    obstacle_event: bool = False
+    via_active: bool = False
+    robot_force: tuple[float, float] = (0.0, 0.0)
+    work: dict = field(default_factory=dict)
+
+
+class ElasticStripController:
+    """Modified (or plain) elastic strip on a diff-drive base with two reactive arms."""
+
+    def __init__(self, params: StripParams | None = None):
+        self.params = params or StripParams()
+        p = self.params
+        self.strip = ElasticStrip(p.num_vias, p.via_spacing, p.k_c, p.k_r, p.d0, p.strip, p.iterations,
+                                  p.max_via_step, p.head_on_ratio)
+        self.via = ViaTarget(reach=p.via_reach, blocked_radius=p.robot_radius)
+        self.arm = None
+        if p.arm_enabled:
+            from maru_planner.reactive.arm import ArmReactive
+
+            self.arm = ArmReactive(k_c=p.k_c, k_r=p.k_r, d0=p.arm_d_safe + p.arm_link_radius, alpha=p.arm_alpha,
+                                   max_joint_step=p.arm_max_joint_step, strip=p.strip)
+        self.goal: np.ndarray | None = None
+        self._path: np.ndarray | None = None
+        self._needs_start = True
+        self.updates = 0
+        self.last_work: dict = {}
+
+    # -- inputs -------------------------------------------------------------------------------
+    def set_goal(self, goal) -> None:
+        """Goal (x, y[, theta]). Without a path the initial path is the straight line to it."""
+        goal = np.asarray(goal, dtype=float).reshape(-1)
+        if goal.size not in (2, 3) or not np.all(np.isfinite(goal)):
+            raise ValueError(f"goal must be 2 or 3 finite numbers, got {goal}")
+        self.goal = np.array([goal[0], goal[1], goal[2] if goal.size == 3 else 0.0])
+        self._path = None
+        self._needs_start = True
+        self.via.clear()
+
+    def set_path(self, path) -> None:
+        """Initial path (n, 2|3) in the world frame; its last point becomes the goal unless one is set after."""
+        path = np.asarray(path, dtype=float)
+        if path.ndim != 2 or path.shape[0] < 1 or path.shape[1] not in (2, 3):
+            raise ValueError(f"path must have shape (n, 2) or (n, 3), got {path.shape}")
+        if not np.all(np.isfinite(path)):
+            raise ValueError("path contains NaN or inf")
+        self.strip.set_path(path)
+        self._path = path
+        last = path[-1]
+        self.goal = np.array([last[0], last[1], last[2] if path.shape[1] == 3 else 0.0])
+        self._needs_start = False
+        self.via.clear()
+
+    def set_arm_state(self, q) -> None:
+        if self.arm is not None:
+            self.arm.set_state(q)
+
+    @property
+    def has_goal(self) -> bool:
+        return self.goal is not None
+
+    # -- update ---------------------------------------------------------------------------------
+    def update(self, pose, scan: LaserScanData) -> ControlOutput:
+        """One scan in, one command out: O(beams * vias), independent of run time."""
+        t0 = time.perf_counter()
+        p = self.params
+        if self.goal is None:
+            raise RuntimeError("ElasticStripController has no goal; call set_goal or set_path first")
+        pose = np.asarray(pose, dtype=float).reshape(-1)
+        if pose.size != 3 or not np.all(np.isfinite(pose)):
+            raise ValueError(f"pose must be 3 finite numbers (x, y, theta), got {pose}")
+        scan.validate()
+        if self._needs_start:
+            self.strip.set_path(np.vstack([pose[:2], self.goal[:2]]))
+            self._needs_start = False
+        position = pose[:2]
+
+        points_robot = scan_to_points(scan, p.laser_pose, p.beam_window, max_range=p.force_range)
+        points_world = to_world(points_robot, pose)
+
+        self.strip.anchor(position)
+        self.strip.deform(points_world)
+        strip = self.strip.vias
+
+        to_goal = self.goal[:2] - position
+        dist_goal = float(np.hypot(*to_goal))
+        goal_dir = to_goal / max(dist_goal, 1e-9)
+
+        look_idx, look_point = self.strip.lookahead(p.lookahead)
+        event = obstacle_check(scan, p.avoidance_range, p.beam_window) is not None
+        if p.use_via_events:
+            self.via.refresh(position, goal_dir, points_world)
+            if event and look_idx > 0:
+                current = self.via.point if self.via.active else self.strip.planned_point(look_idx)
+                self.via.offer(look_point, current, p.is_sort_radius, p.is_sort_rule)
+        target = self.via.point if self.via.active else look_point
+
+        robot_force = self._robot_force(position, target, points_world)
+        v, w, reached = self._command(pose, target, robot_force, dist_goal, points_robot)
+
+        arm_steps = arm_q = None
+        if self.arm is not None:
+            arm_steps, _ = self.arm.step(points_robot)
+            arm_q = self.arm.q.copy()
+        self.updates += 1
+        self.last_work = {"beams": int(scan.ranges.size), "points": int(len(points_world)),
+                          "vias": int(len(strip)), "force_evaluations": self.strip.iterations}
+        return ControlOutput(
+            v=v, w=w, strip=strip, target=(float(target[0]), float(target[1])), reached_goal=reached,
+            obstacle_points=points_world, arm_joint_steps=arm_steps, arm_joint_positions=arm_q,
+            update_time=time.perf_counter() - t0, obstacle_event=event, via_active=self.via.active,
+            robot_force=(float(robot_force[0]), float(robot_force[1])), work=dict(self.last_work),
+        )
+
+    def _robot_force(self, position: np.ndarray, target: np.ndarray, points: np.ndarray) -> np.ndarray:
+        """External force on the base's own control point (eq. 39/41 at the robot)."""
+        if len(points) == 0:
+            return np.zeros(2)
+        direction = target - position
+        norm = np.hypot(*direction)
+        tangent = direction / norm if norm > 1e-9 else np.array([1.0, 0.0])
+        p = self.params
+        return external_forces(position[None, :], tangent[None, :], points, p.d0, p.k_r, p.strip,
+                               p.head_on_ratio)[0]
+
+    def _command(self, pose, target, robot_force, dist_goal, points_robot):
+        """Eq. 43-45: Δ = (target - current) + F, heading atan2(Δ); then a unicycle law within limits."""
+        p = self.params
+        if dist_goal < p.goal_tolerance:
+            return 0.0, 0.0, True
+        delta = (np.asarray(target) - pose[:2]) + robot_force
+        heading = math.atan2(delta[1], delta[0])
+        err = wrap_angle(heading - pose[2])
+        w = p.k_angular * err
+        v = p.max_linear * max(math.cos(err), 0.0) ** 2
+        v *= min(1.0, dist_goal / p.slow_radius) if p.slow_radius > 0 else 1.0
+        if abs(err) > math.pi / 2:
+            v = 0.0
+        if p.stop_distance > 0 and len(points_robot):
+            ahead = (points_robot[:, 0] > 0) & (np.abs(points_robot[:, 1]) < p.robot_radius)
+            if np.any(np.hypot(*points_robot[ahead].T) < p.robot_radius + p.stop_distance):
+                v = 0.0
+        v, w = clamp_twist(v, w, p.max_linear, p.max_angular)
+        return float(v), float(w), False
