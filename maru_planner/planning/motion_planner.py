@@ -1,0 +1,349 @@
+"""``MotionPlanner.plan(MotionRequest) -> MotionResult``: validate, (IK), search, simplify, time-parameterise.
+
+One hard time budget per request covers validation, IK, search and post-processing. Bad input
+never raises: the typed error (``maru_planner.errors``) becomes ``result.status`` + message.
+
+Threads: ``plan`` and ``set_scene`` of one MotionPlanner are serialised by its own lock (the
+robot model, checker and roadmap cache are not thread-safe), and every OMPL search in the process
+runs under one module lock, because OMPL's seed generator is process-global: reseeding it right
+before the planner is built and solved is what makes "same seed, same path" hold. Concurrent
+requests therefore queue; a node wanting parallel planning would need separate processes.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import secrets
+import threading
+import time
+
+import numpy as np
+from ompl import base as ob
+from ompl import geometric as og
+from ompl import util as ou
+
+from maru_planner import errors
+from maru_planner.planning import postprocess
+from maru_planner.planning.config import PlannerConfig
+from maru_planner.planning.registry import check_planner_id, make_planner, merged_params
+from maru_planner.planning.roadmap import Roadmap
+from maru_planner.planning.space import BatchedMotionValidator, EdgeChecker, GroupSpace, make_validity_fn
+from maru_planner.planning.types import MotionRequest, MotionResult, PlanStats, PlanStatus, status_of_error
+
+OMPL_LOCK = threading.RLock()
+ou.setLogLevel(ou.LOG_WARN)  # OMPL's INFO chatter would mix into CLI output
+
+
+@contextlib.contextmanager
+def seeded_ompl(seed: int):
+    """Hold the OMPL lock with OMPL's seed generator restarted from ``seed`` (its warning silenced)."""
+    with OMPL_LOCK:
+        level = ou.getLogLevel()
+        ou.setLogLevel(ou.LOG_NONE)
+        try:
+            ou.RNG.setSeed(int(seed) % (2**31 - 2) + 1)
+        finally:
+            ou.setLogLevel(level)
+        yield
+
+
+def _finite_time(value, name: str) -> float:
+    try:
+        value = float(value)
+    except (TypeError, ValueError) as exc:
+        raise errors.InvalidRequest(f"{name} must be a number, got {value!r}") from exc
+    if not math.isfinite(value) or value <= 0:
+        raise errors.InvalidRequest(f"{name} must be a finite number > 0, got {value}")
+    return value
+
+
+class MotionPlanner:
+    """Arm motion planning on OMPL for one robot model and collision checker (see module doc)."""
+
+    def __init__(self, robot, checker, config: PlannerConfig | None = None, scene=None):
+        self.robot = robot
+        self.checker = checker
+        self.config = config or PlannerConfig()
+        self._lock = threading.RLock()
+        self._scene_epoch = 0
+        self._roadmaps: dict[tuple, Roadmap] = {}
+        self.last_revalidation = None
+        self.scene = None
+        if scene is not None:
+            self.set_scene(scene)
+
+    # --- scene ------------------------------------------------------------------------------
+    def set_scene(self, scene) -> None:
+        """Give the checker a new scene; cached PRM roadmaps are re-validated at their next query."""
+        with self._lock:
+            self.checker.set_scene(scene)
+            self.scene = scene
+            self._scene_epoch += 1
+
+    # --- planning ---------------------------------------------------------------------------
+    def plan(self, request: MotionRequest) -> MotionResult:
+        """Plan ``request``; never raises (errors become the result's status and message)."""
+        t0 = time.monotonic()
+        stats = PlanStats(planner_id=getattr(request, "planner_id", "") or self.config.default_planner)
+        result = MotionResult(status=PlanStatus.PLANNING_FAILED, stats=stats)
+        try:
+            with self._lock:
+                self._plan(request, result, t0)
+        except errors.MaruError as exc:
+            result.status = status_of_error(exc)
+            result.message = exc.message
+            result.error = exc
+        except Exception as exc:  # a bug or a checker failure: report it, keep serving
+            result.status = PlanStatus.PLANNING_FAILED
+            result.message = f"internal error: {type(exc).__name__}: {exc}"
+            result.error = exc
+        stats.total_time = time.monotonic() - t0
+        return result
+
+    def _plan(self, req: MotionRequest, result: MotionResult, t0: float) -> None:
+        stats = result.stats
+        budget = _finite_time(req.time_budget, "time_budget")
+        deadline = t0 + budget
+        planner_id = check_planner_id(req.planner_id or self.config.default_planner)
+        stats.planner_id = planner_id
+        attempts = int(req.attempts)
+        if attempts < 1:
+            raise errors.InvalidRequest(f"attempts must be >= 1, got {req.attempts}")
+        for name in ("velocity_scaling", "acceleration_scaling"):
+            value = float(getattr(req, name))
+            if not (math.isfinite(value) and 0.0 < value <= 1.0):
+                raise errors.InvalidRequest(f"{name} must be in (0, 1], got {value}")
+        seed = int(req.seed) if req.seed is not None else secrets.randbelow(2**31 - 1)
+        stats.seed = seed
+
+        indices = sorted(self.robot.group_joint_indices(req.group))
+        names = [self.robot.joint_names[i] for i in indices]
+        result.joint_names = names
+        start_full = self._start_state(req, indices)
+        if req.goal_poses:
+            t_ik = time.monotonic()
+            goal_full = self._solve_pose_goal(req, start_full, indices, deadline)
+            stats.ik_time = time.monotonic() - t_ik
+        else:
+            goal_full = self._goal_state(req, start_full, indices)
+        t_val = time.monotonic()
+        self._check_free(start_full, errors.StartInCollision, "start")
+        self._check_free(goal_full, errors.GoalInCollision, "goal")
+        stats.validation_time = time.monotonic() - t_val
+
+        gs = GroupSpace(names, indices, self.robot.lower_limits[indices], self.robot.upper_limits[indices], start_full)
+        start, goal = start_full[indices], goal_full[indices]
+        checks0 = self.checker.check_count
+        try:
+            raw = self._search(planner_id, gs, start, goal, seed, attempts, deadline, stats)
+            stats.raw_waypoints = len(raw)
+            stats.raw_path_length = postprocess.path_length(raw)
+            path = self._simplify(req, gs, raw, seed, deadline, stats)
+        finally:
+            stats.collision_checks = int(self.checker.check_count - checks0)
+
+        t_par = time.monotonic()
+        result.trajectory = postprocess.time_parameterize(
+            path,
+            names,
+            np.asarray(self.robot.velocity_limits)[indices],
+            np.asarray(self.robot.acceleration_limits)[indices],
+            float(req.velocity_scaling),
+            float(req.acceleration_scaling),
+            self.config.trajectory_dt,
+        )
+        stats.parameterize_time = time.monotonic() - t_par
+        result.path = path
+        stats.waypoints = len(path)
+        stats.path_length = postprocess.path_length(path)
+        stats.smoothness = postprocess.smoothness(path)
+        if time.monotonic() > deadline:
+            raise errors.PlanningTimedOut(
+                f"a path was found but the {budget:.3g} s budget ran out during post-processing", source="planner"
+            )
+        result.status = PlanStatus.SUCCESS
+        result.message = (
+            f"{planner_id}: {len(path)} waypoints, length {stats.path_length:.3f} rad, "
+            f"trajectory {result.trajectory.duration:.2f} s"
+        )
+
+    # --- request validation -----------------------------------------------------------------
+    def _check_values(self, values: dict, what: str) -> dict[int, float]:
+        """Joint index → value for a name → value map; unknown names, NaN and limits raise."""
+        if not isinstance(values, dict):
+            raise errors.InvalidRequest(f"{what} must map joint names to values, got {type(values).__name__}")
+        known = {n: i for i, n in enumerate(self.robot.joint_names)}
+        unknown = [n for n in values if n not in known]
+        if unknown:
+            raise errors.InvalidJointNames(f"{what}: unknown joint(s) {', '.join(map(str, unknown))}")
+        out = {}
+        lower, upper = np.asarray(self.robot.lower_limits), np.asarray(self.robot.upper_limits)
+        for name, value in values.items():
+            i = known[name]
+            try:
+                v = float(value)
+            except (TypeError, ValueError) as exc:
+                raise errors.InvalidState(f"{what}: joint {name} has a non-numeric value {value!r}") from exc
+            if not math.isfinite(v):
+                raise errors.InvalidState(f"{what}: joint {name} is {v}")
+            if v < lower[i] - 1e-9 or v > upper[i] + 1e-9:
+                raise errors.InvalidState(
+                    f"{what}: joint {name} = {v:.4f} is outside its limits [{lower[i]:.4f}, {upper[i]:.4f}]"
+                )
+            out[i] = min(max(v, lower[i]), upper[i])
+        return out
+
+    def _start_state(self, req: MotionRequest, indices) -> np.ndarray:
+        if not req.start:
+            raise errors.NoStartState("no start state given (start is empty)")
+        values = self._check_values(req.start, "start")
+        missing = [self.robot.joint_names[i] for i in indices if i not in values]
+        if missing:
+            raise errors.InvalidJointNames(f"start is missing joint(s) of group {req.group}: {', '.join(missing)}")
+        q = np.asarray(self.robot.neutral(), dtype=float).copy()
+        for i, v in values.items():
+            q[i] = v
+        return q
+
+    def _goal_state(self, req: MotionRequest, start_full: np.ndarray, indices) -> np.ndarray:
+        if req.goal_joints is None:
+            raise errors.InvalidRequest("no goal: give goal_joints or goal_poses")
+        values = self._check_values(req.goal_joints, "goal")
+        in_group = set(indices)
+        outside = [self.robot.joint_names[i] for i in values if i not in in_group]
+        if outside:
+            raise errors.InvalidJointNames(f"goal names joint(s) outside group {req.group}: {', '.join(outside)}")
+        if len(values) != len(indices):
+            missing = [self.robot.joint_names[i] for i in indices if i not in values]
+            raise errors.InvalidJointCount(
+                f"goal has {len(values)} value(s) for group {req.group} of {len(indices)} joints; "
+                f"missing: {', '.join(missing)}"
+            )
+        q = start_full.copy()
+        for i, v in values.items():
+            q[i] = v
+        return q
+
+    def _solve_pose_goal(self, req: MotionRequest, start_full, indices, deadline) -> np.ndarray:
+        if req.goal_joints:
+            raise errors.InvalidRequest("give either goal_joints or goal_poses, not both")
+        from maru_planner.planning.pose_goal import solve_pose_goal
+
+        return solve_pose_goal(self.robot, self.checker, req.group, req.goal_poses, start_full, indices, deadline)
+
+    def _check_free(self, q: np.ndarray, error_cls, what: str) -> None:
+        if self.checker.is_valid(q):
+            return
+        pairs = list(self.checker.colliding_pairs(q))
+        named = ", ".join(f"{a}–{b}" for a, b in pairs[:5]) or "unknown bodies"
+        raise error_cls(f"{what} configuration is in collision: {named}", pairs=pairs)
+
+    # --- search -----------------------------------------------------------------------------
+    def _search(self, planner_id, gs, start, goal, seed, attempts, deadline, stats) -> np.ndarray:
+        if np.allclose(start, goal, atol=1e-12, rtol=0):
+            stats.attempts_used = 0
+            return np.vstack([start, goal])
+        reserve = self.config.postprocess_reserve * max(0.0, deadline - time.monotonic())
+        search_deadline = deadline - reserve
+        params = merged_params(planner_id, self.config.planner_params.get(planner_id))
+        failure = None
+        for attempt in range(attempts):
+            seconds = search_deadline - time.monotonic()
+            if seconds <= 0:
+                break
+            stats.attempts_used = attempt + 1
+            t_solve = time.monotonic()
+            build_before = stats.roadmap_build_time
+            if planner_id == "PRM":
+                path, failure = self._search_prm(gs, start, goal, params, search_deadline, stats)
+            else:
+                path, failure = self._search_tree(planner_id, gs, start, goal, params, seed + attempt, seconds, stats)
+            # PRM: query time only; the roadmap build is reported apart (roadmap_build_time)
+            stats.solve_time += time.monotonic() - t_solve - (stats.roadmap_build_time - build_before)
+            if path is not None:
+                return path
+        if failure is None or time.monotonic() >= search_deadline:
+            raise errors.PlanningTimedOut(
+                f"{planner_id} found no path within the time budget ({stats.attempts_used} attempt(s), "
+                f"{stats.nodes} nodes)",
+                source="planner",
+            )
+        raise errors.PlanningFailed(failure, source="planner")
+
+    def _search_tree(self, planner_id, gs, start, goal, params, seed, seconds, stats):
+        edges = EdgeChecker(gs, self.checker, self.config.resolution)
+        with seeded_ompl(seed):
+            ss = og.SimpleSetup(gs.space)
+            si = ss.getSpaceInformation()
+            ss.setStateValidityChecker(make_validity_fn(edges))
+            validator = BatchedMotionValidator(si, edges)
+            si.setMotionValidator(validator)
+            ss.setStartAndGoalStates(gs.to_state(start), gs.to_state(goal))
+            if planner_id == "RCRRT" and params.get("seed") is None:
+                params = dict(params, seed=seed)
+            planner = make_planner(planner_id, si, params, edge_checker=edges)
+            ss.setPlanner(planner)
+            ss.solve(ob.timedPlannerTerminationCondition(seconds))
+        stats.nodes, stats.edges = _tree_size(planner, si)
+        if ss.haveExactSolutionPath():
+            return np.array([gs.to_array(s) for s in ss.getSolutionPath().getStates()]), None
+        if planner_id == "RCRRT" and planner.exhausted:
+            return None, (
+                f"RCRRT tried every input of all {planner.count} lattice nodes: no path exists at "
+                f"step {planner.get_param('step')} rad"
+            )
+        return None, None
+
+    def _roadmap_for(self, gs: GroupSpace, params) -> Roadmap:
+        outside = np.setdiff1d(np.arange(len(gs.base)), gs.indices)
+        key = (tuple(gs.indices), tuple(np.round(gs.base[outside], 9)), self.config.resolution, tuple(params.items()))
+        roadmap = self._roadmaps.get(key)
+        if roadmap is None:
+            roadmap = Roadmap(gs, self.checker, self.config.resolution, params["max_nearest_neighbors"])
+            roadmap.scene_epoch = self._scene_epoch
+            self._roadmaps = {key: roadmap}  # one roadmap at a time: bounded memory
+        return roadmap
+
+    def _search_prm(self, gs, start, goal, params, search_deadline, stats):
+        roadmap = self._roadmap_for(gs, params)
+        if roadmap.scene_epoch != self._scene_epoch:
+            report = roadmap.revalidate()
+            self.last_revalidation = report
+            stats.validation_time += report.seconds
+            if not report.still_valid:
+                self._roadmaps.clear()
+                roadmap = self._roadmap_for(gs, params)
+            roadmap.scene_epoch = self._scene_epoch
+        stats.roadmap_reused = roadmap.queries > 0
+        if roadmap.milestones < self.config.prm_roadmap_nodes:
+            before = roadmap.build_time
+            with OMPL_LOCK:
+                roadmap.build(self.config.prm_roadmap_nodes, search_deadline)
+            stats.roadmap_build_time += roadmap.build_time - before
+        seconds = search_deadline - time.monotonic()
+        if seconds <= 0:
+            return None, None
+        with OMPL_LOCK:
+            _status, path = roadmap.query(start, goal, seconds)
+        stats.nodes, stats.edges = roadmap.milestones, roadmap.edge_count
+        return path, None
+
+    # --- post-processing --------------------------------------------------------------------
+    def _simplify(self, req, gs, raw, seed, deadline, stats) -> np.ndarray:
+        if not getattr(req, "simplify", True) or len(raw) <= 2:
+            return raw
+        t_simp = time.monotonic()
+        edges = EdgeChecker(gs, self.checker, self.config.resolution)
+        rng = np.random.default_rng(seed)
+        path, _checks = postprocess.shortcut(raw, edges.edge_valid, rng, deadline, self.config.simplify_max_tries)
+        stats.simplify_time = time.monotonic() - t_simp
+        return path
+
+
+def _tree_size(planner, si) -> tuple[int, int]:
+    if hasattr(planner, "count"):  # RCRRT: read its arrays, no PlannerData copy needed
+        return int(planner.count), max(0, int(planner.count) - 1)
+    data = ob.PlannerData(si)
+    planner.getPlannerData(data)
+    return int(data.numVertices()), int(data.numEdges())

@@ -1,0 +1,157 @@
+"""Post-processing of a joint-space path: shortcut simplification, metrics, time parameterisation.
+
+Simplification never leaves the free space: every shortcut edge is checked with the same batched
+edge check (and resolution) as the planner's motion validator before it replaces a sub-path.
+
+Time parameterisation: each segment between consecutive waypoints is a straight joint-space line
+traversed with a synchronised trapezoidal (or triangular) speed profile that starts and ends at
+rest, so every joint stays within ``velocity_limit × velocity_scaling`` and
+``acceleration_limit × acceleration_scaling`` exactly. Stopping at waypoints costs time but is
+safe for any path; shortcutting first keeps the number of stops small.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from maru_planner.planning.types import Trajectory
+
+
+def path_length(path: np.ndarray) -> float:
+    """Sum of Euclidean joint-space segment lengths (rad)."""
+    if len(path) < 2:
+        return 0.0
+    return float(np.linalg.norm(np.diff(path, axis=0), axis=1).sum())
+
+
+def smoothness(path: np.ndarray) -> float:
+    """OMPL's ``PathGeometric::smoothness``: Σ (2·turn angle / (a + b))² over waypoint triples (0 = straight)."""
+    total = 0.0
+    for i in range(2, len(path)):
+        a = np.linalg.norm(path[i - 1] - path[i - 2])
+        b = np.linalg.norm(path[i] - path[i - 1])
+        if a < 1e-12 or b < 1e-12:
+            continue
+        c = np.linalg.norm(path[i] - path[i - 2])
+        cos_value = (a * a + b * b - c * c) / (2.0 * a * b)
+        if -1.0 < cos_value < 1.0:
+            angle = math.pi - math.acos(cos_value)
+            k = 2.0 * angle / (a + b)
+            total += k * k
+    return float(total)
+
+
+def drop_collinear(path: np.ndarray, tol: float = 1e-9) -> np.ndarray:
+    """Remove interior waypoints lying on the straight line between their neighbours (no checks needed)."""
+    if len(path) < 3:
+        return path
+    keep = [0]
+    for i in range(1, len(path) - 1):
+        a = path[i] - path[keep[-1]]
+        b = path[i + 1] - path[i]
+        na, nb = np.linalg.norm(a), np.linalg.norm(b)
+        if na < tol:
+            continue
+        if nb > tol and abs(float(a @ b) - na * nb) <= tol * max(1.0, na * nb):
+            continue
+        keep.append(i)
+    keep.append(len(path) - 1)
+    return path[keep]
+
+
+def shortcut(path: np.ndarray, edge_valid, rng: np.random.Generator, deadline: float, max_tries: int = 200):
+    """Random shortcutting: join two random waypoints when the straight edge between them is free.
+
+    ``edge_valid(qa, qb)`` is the batched motion check. The direct start→goal edge is tried first.
+    Returns (path, edge checks made).
+    """
+    path = drop_collinear(np.asarray(path, float))
+    checks = 0
+    if len(path) > 2:
+        checks += 1
+        if edge_valid(path[0], path[-1]):
+            return path[[0, -1]], checks
+    failures = 0
+    while len(path) > 2 and failures < max_tries and time.monotonic() < deadline:
+        i, j = sorted(rng.choice(len(path), size=2, replace=False))
+        if j - i < 2:
+            failures += 1
+            continue
+        checks += 1
+        if edge_valid(path[i], path[j]):
+            path = np.vstack([path[: i + 1], path[j:]])
+            failures = 0
+        else:
+            failures += 1
+    return drop_collinear(path), checks
+
+
+def _segment_profile(delta: np.ndarray, vmax: np.ndarray, amax: np.ndarray):
+    """Duration and (s_dot_max, s_ddot_max, t_accel) of a rest-to-rest move along ``delta``."""
+    moving = np.abs(delta) > 1e-12
+    if not moving.any():
+        return 0.0, 0.0, 0.0, 0.0
+    sd = float(np.min(vmax[moving] / np.abs(delta[moving])))
+    sdd = float(np.min(amax[moving] / np.abs(delta[moving])))
+    if sd * sd / sdd >= 1.0:  # triangular: the peak speed is never reached
+        ta = math.sqrt(1.0 / sdd)
+        return 2.0 * ta, sdd * ta, sdd, ta
+    ta = sd / sdd
+    return 1.0 / sd + ta, sd, sdd, ta
+
+
+def _sample_segment(t: np.ndarray, duration: float, sd: float, sdd: float, ta: float):
+    """s(t), ṡ(t), s̈(t) of the trapezoid on [0, duration]."""
+    s = np.empty_like(t)
+    v = np.empty_like(t)
+    a = np.empty_like(t)
+    acc = t < ta
+    dec = t > duration - ta
+    cruise = ~(acc | dec)
+    s[acc], v[acc], a[acc] = 0.5 * sdd * t[acc] ** 2, sdd * t[acc], sdd
+    tc = t[cruise]
+    s[cruise], v[cruise], a[cruise] = 0.5 * sdd * ta**2 + sd * (tc - ta), sd, 0.0
+    td = duration - t[dec]
+    s[dec], v[dec], a[dec] = 1.0 - 0.5 * sdd * td**2, sdd * td, -sdd
+    return np.clip(s, 0.0, 1.0), v, a
+
+
+def time_parameterize(
+    path: np.ndarray,
+    joint_names,
+    velocity_limits,
+    acceleration_limits,
+    velocity_scaling: float = 1.0,
+    acceleration_scaling: float = 1.0,
+    dt: float = 0.05,
+) -> Trajectory:
+    """Rest-to-rest trapezoidal trajectory through ``path`` sampled every ``dt`` s (+ every waypoint)."""
+    vmax = np.asarray(velocity_limits, float) * velocity_scaling
+    amax = np.asarray(acceleration_limits, float) * acceleration_scaling
+    times, pos, vel, acc = [np.zeros(1)], [path[:1]], [np.zeros((1, path.shape[1]))], [np.zeros((1, path.shape[1]))]
+    t0 = 0.0
+    for k in range(len(path) - 1):
+        delta = path[k + 1] - path[k]
+        duration, sd, sdd, ta = _segment_profile(delta, vmax, amax)
+        if duration <= 0.0:
+            continue
+        n = max(1, math.ceil(duration / dt))
+        t = np.linspace(0.0, duration, n + 1)[1:]
+        s, v, a = _sample_segment(t, duration, sd, sdd, ta)
+        times.append(t0 + t)
+        pos.append(path[k] + s[:, None] * delta)
+        vel.append(v[:, None] * delta)
+        acc.append(a[:, None] * delta)
+        t0 += duration
+    velocities = np.vstack(vel)
+    velocities[-1] = 0.0
+    return Trajectory(
+        joint_names=list(joint_names),
+        times=np.concatenate(times),
+        positions=np.vstack(pos),
+        velocities=velocities,
+        accelerations=np.vstack(acc),
+    )

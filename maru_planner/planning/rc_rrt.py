@@ -1,0 +1,299 @@
+"""RC-RRT: Cheng & LaValle's resolution-complete RRT (ICRA 2002) as an ``ompl.base.Planner``.
+
+Faithful to the paper's ingredients (SPEC.md, Paper 000):
+
+* **Discrete inputs.** Each node has ``m = 2·dim`` extension inputs: move one joint by ±``step``.
+  All nodes therefore lie on the lattice ``start + step·Z^dim`` clipped to the joint limits, a
+  finite set; this is where resolution completeness comes from.
+* **EXPANDED bookkeeping.** ``expanded[x, u]`` is set once input u was tried from node x, so an
+  input is never applied twice from the same node. Inputs leading outside the limits, or to a
+  lattice point already in the tree, are marked expanded when found (they can add nothing).
+* **Constraint-violation frequency σ(x).** When input u from x collides, σ(x) += 1/m, its parent's
+  σ += 1/m², the grandparent's 1/m³ … (clipped to 1): regions that keep colliding are avoided.
+* **Modified NEAREST_NEIGHBOR.** Only nodes with untried inputs are candidates; the ``candidates``
+  nearest are visited in order and x is accepted with probability 1 − σ(x) (draw r, accept if
+  r > σ(x)); if none is accepted, the nearest candidate is taken.
+* **Goal bias.** With probability ``goal_bias`` the sample is the goal. The best untried input
+  toward the sample is applied (the one whose successor is closest to it).
+* When a new node lies within ``goal_range`` (L∞, radians) of the goal, the straight edge to the
+  goal is checked; a free edge ends the search.
+
+If every node runs out of inputs the lattice reachable from the start has been exhausted: the
+planner returns INFEASIBLE ("no path at this resolution") — the resolution-complete guarantee.
+
+Nearest neighbours come from a k-d tree (:mod:`maru_planner.planning.kdtree`). Edges are checked
+through an :class:`~maru_planner.planning.space.EdgeChecker` (one batched call per edge) when
+given, else through the SpaceInformation's motion validator.
+
+``getPlannerData`` works when called from Python (``planner.getPlannerData(data)``); OMPL 2.0.1's
+nanobind trampoline cannot pass a ``PlannerData&`` from C++ to Python, so do not go through
+``SimpleSetup.getPlannerData`` for this planner.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from ompl import base as ob
+from ompl import geometric as og
+from ompl import util as ou
+
+from maru_planner.planning.kdtree import GrowingKDTree
+
+PARAM_DEFAULTS = {
+    "step": 0.1,
+    "goal_bias": 0.1,
+    "candidates": 8,
+    "goal_range": 0.3,
+    "seed": None,
+}
+
+_SAMPLE_BATCH = 512
+
+
+class RCRRT(ob.Planner):
+    """Resolution-complete RRT (see module doc). Named parameters: see ``PARAM_DEFAULTS``."""
+
+    def __init__(self, si, edge_checker=None, name: str = "RCRRT"):
+        super().__init__(si, name)
+        self._si = si
+        self._edges = edge_checker
+        self.param_values = dict(PARAM_DEFAULTS)
+        self._seed_rng = ou.RNG()
+        self.exhausted = False
+        self.iterations = 0
+        self.collisions = 0
+        self._reset_tree(si.getStateDimension())
+
+    # --- named parameters -------------------------------------------------------------------
+    @staticmethod
+    def param_names() -> list[str]:
+        return list(PARAM_DEFAULTS)
+
+    def set_param(self, name: str, value) -> None:
+        if name not in PARAM_DEFAULTS:
+            raise KeyError(f"RCRRT has no parameter {name!r}; known: {', '.join(PARAM_DEFAULTS)}")
+        if name == "step" and not float(value) > 0:
+            raise ValueError(f"RCRRT step must be > 0, got {value}")
+        if name == "goal_bias" and not 0.0 <= float(value) <= 1.0:
+            raise ValueError(f"RCRRT goal_bias must be in [0, 1], got {value}")
+        if name == "candidates" and int(value) < 1:
+            raise ValueError(f"RCRRT candidates must be >= 1, got {value}")
+        self.param_values[name] = value
+
+    def get_param(self, name: str):
+        if name not in PARAM_DEFAULTS:
+            raise KeyError(f"RCRRT has no parameter {name!r}; known: {', '.join(PARAM_DEFAULTS)}")
+        return self.param_values[name]
+
+    # --- OMPL planner interface ------------------------------------------------------------
+    def clear(self):
+        self._reset_tree(self.dim)
+        self.exhausted = False
+        self.iterations = 0
+        self.collisions = 0
+
+    def solve(self, ptc):
+        space = self._si.getStateSpace()
+        self.dim = dim = space.getDimension()
+        bounds = space.getBounds()
+        self.lower = np.array([bounds.low[i] for i in range(dim)])
+        self.upper = np.array([bounds.high[i] for i in range(dim)])
+        pis = self.getPlannerInputStates()
+        start_state = pis.nextStart()
+        goal_state = pis.nextGoal()
+        if start_state is None or goal_state is None:
+            return ob.PlannerStatus(ob.PlannerStatus.INVALID_START if start_state is None else ob.PlannerStatus.INVALID_GOAL)
+        start = np.array([start_state[i] for i in range(dim)])
+        goal = np.array([goal_state[i] for i in range(dim)])
+        return self._search(start, goal, ptc)
+
+    def getPlannerData(self, data):  # noqa: N802 (OMPL's name)
+        """Tree vertices (start tagged as start, goal as goal) and parent→child edges."""
+        # PlannerData keeps pointers to the states: they must outlive it (owned by the planner).
+        self._data_states = [self._ompl_state(self.X[i]) for i in range(self.count)]
+        ids = []
+        for i in range(self.count):
+            v = ob.PlannerDataVertex(self._data_states[i])
+            if i == 0:
+                ids.append(data.addStartVertex(v))
+            elif self.goal_node == i:
+                ids.append(data.addGoalVertex(v))
+            else:
+                ids.append(data.addVertex(v))
+        for i in range(1, self.count):
+            data.addEdge(ids[self.parent[i]], ids[i])
+
+    # --- tree storage ----------------------------------------------------------------------
+    def _reset_tree(self, dim: int, capacity: int = 1024) -> None:
+        self.dim = dim
+        m = 2 * dim
+        self.X = np.zeros((capacity, dim))
+        self.parent = np.full(capacity, -1, dtype=int)
+        self.expanded = np.zeros((capacity, m), dtype=bool)
+        self.untried = np.zeros(capacity, dtype=int)
+        self.sigma = np.zeros(capacity)
+        self.active = np.zeros(capacity, dtype=bool)
+        self.lattice: dict[tuple, int] = {}
+        self.keys: list[tuple] = []
+        self.count = 0
+        self.goal_node = -1
+        self.nn = GrowingKDTree(dim)
+        self._data_states = []
+
+    def _grow(self) -> None:
+        cap = 2 * len(self.X)
+        for name in ("X", "parent", "expanded", "untried", "sigma", "active"):
+            old = getattr(self, name)
+            new = np.zeros((cap,) + old.shape[1:], dtype=old.dtype)
+            if name == "parent":
+                new[:] = -1
+            new[: len(old)] = old
+            setattr(self, name, new)
+
+    def _add_node(self, x: np.ndarray, key: tuple | None, parent: int) -> int:
+        if self.count == len(self.X):
+            self._grow()
+        i = self.count
+        self.count += 1
+        self.X[i] = x
+        self.parent[i] = parent
+        self.keys.append(key)
+        if key is None:  # the goal node: never extended
+            self.expanded[i] = True
+            self.untried[i] = 0
+            return i
+        self.lattice[key] = i
+        self._mark_known_inputs(i, x, key)
+        self.active[i] = self.untried[i] > 0
+        self.nn.add(i)
+        return i
+
+    def _mark_known_inputs(self, i: int, x: np.ndarray, key: tuple) -> None:
+        """Inputs leaving the limits or reaching a lattice point already in the tree are spent."""
+        step = self._step
+        exp = self.expanded[i]
+        for axis in range(self.dim):
+            for sign, u in ((1, 2 * axis), (-1, 2 * axis + 1)):
+                target = x[axis] + sign * step
+                if target > self.upper[axis] + 1e-12 or target < self.lower[axis] - 1e-12:
+                    exp[u] = True
+                    continue
+                nkey = key[:axis] + (key[axis] + sign,) + key[axis + 1 :]
+                j = self.lattice.get(nkey)
+                if j is not None:
+                    exp[u] = True
+                    back = u ^ 1
+                    if not self.expanded[j, back]:
+                        self._spend(j, back)
+        self.untried[i] = int((~exp).sum())
+
+    def _spend(self, i: int, u: int) -> None:
+        self.expanded[i, u] = True
+        self.untried[i] -= 1
+        if self.untried[i] <= 0:
+            self.active[i] = False
+
+    def _raise_sigma(self, i: int) -> None:
+        inc = 1.0 / (2 * self.dim)
+        while i >= 0 and inc > 1e-9:
+            self.sigma[i] = min(1.0, self.sigma[i] + inc)
+            inc /= 2 * self.dim
+            i = self.parent[i]
+
+    # --- the search ------------------------------------------------------------------------
+    def _search(self, start: np.ndarray, goal: np.ndarray, ptc):
+        p = self.param_values
+        self._step = float(p["step"])
+        goal_bias = float(p["goal_bias"])
+        k = int(p["candidates"])
+        goal_range = float(p["goal_range"])
+        seed = p["seed"]
+        if seed is None:
+            seed = self._seed_rng.uniformInt(0, 2**31 - 2)
+        rng = np.random.default_rng(int(seed))
+        self._reset_tree(self.dim)
+        self.exhausted = False
+        root = self._add_node(start, (0,) * self.dim, -1)
+        if self._goal_reachable(root, goal, goal_range):
+            return self._finish(root, goal)
+        samples = rng.uniform(self.lower, self.upper, size=(_SAMPLE_BATCH, self.dim))
+        coins = rng.random(_SAMPLE_BATCH)
+        cursor = 0
+        while not ptc():
+            if cursor == _SAMPLE_BATCH:
+                samples = rng.uniform(self.lower, self.upper, size=(_SAMPLE_BATCH, self.dim))
+                coins = rng.random(_SAMPLE_BATCH)
+                cursor = 0
+            target = goal if coins[cursor] < goal_bias else samples[cursor]
+            cursor += 1
+            self.iterations += 1
+            near = self._select(target, k, rng)
+            if near < 0:
+                self.exhausted = True
+                return ob.PlannerStatus(ob.PlannerStatus.INFEASIBLE)
+            new = self._extend(near, target)
+            if new >= 0 and self._goal_reachable(new, goal, goal_range):
+                return self._finish(new, goal)
+        return ob.PlannerStatus(ob.PlannerStatus.TIMEOUT)
+
+    def _select(self, target: np.ndarray, k: int, rng) -> int:
+        """Modified NEAREST_NEIGHBOR: nearest nodes with untried inputs, accepted w.p. 1 − σ."""
+        cands = self.nn.query(target, k, self.X, self.active, self.count)
+        if len(cands) == 0:
+            return -1
+        draws = rng.random(len(cands))
+        accepted = np.flatnonzero(draws > self.sigma[cands])
+        return int(cands[accepted[0]] if len(accepted) else cands[0])
+
+    def best_input(self, i: int, target: np.ndarray) -> int:
+        """Untried input of node i whose successor is closest to ``target``."""
+        diff = target - self.X[i]
+        score = np.empty(2 * self.dim)
+        score[0::2] = diff
+        score[1::2] = -diff
+        score[self.expanded[i]] = -np.inf
+        return int(np.argmax(score))
+
+    def _extend(self, i: int, target: np.ndarray) -> int:
+        u = self.best_input(i, target)
+        self._spend(i, u)
+        axis, sign = u >> 1, (1 if u % 2 == 0 else -1)
+        x = self.X[i].copy()
+        x[axis] += sign * self._step
+        key = self.keys[i]
+        key = key[:axis] + (key[axis] + sign,) + key[axis + 1 :]
+        if not self._edge_valid(self.X[i], x):
+            self.collisions += 1
+            self._raise_sigma(i)
+            return -1
+        return self._add_node(x, key, i)
+
+    def _goal_reachable(self, i: int, goal: np.ndarray, goal_range: float) -> bool:
+        x = self.X[i]
+        if np.max(np.abs(goal - x)) > goal_range:
+            return False
+        return self._edge_valid(x, goal)
+
+    def _finish(self, i: int, goal: np.ndarray):
+        self.goal_node = self._add_node(goal, None, i)
+        chain = []
+        j = self.goal_node
+        while j >= 0:
+            chain.append(j)
+            j = self.parent[j]
+        path = og.PathGeometric(self._si)
+        for j in reversed(chain):
+            path.append(self._ompl_state(self.X[j]))
+        self.getProblemDefinition().addSolutionPath(path, False, 0.0, self.getName())
+        return ob.PlannerStatus(ob.PlannerStatus.EXACT_SOLUTION)
+
+    def _edge_valid(self, a: np.ndarray, b: np.ndarray) -> bool:
+        if self._edges is not None:
+            return self._edges.edge_valid(a, b)
+        return bool(self._si.checkMotion(self._ompl_state(a), self._ompl_state(b)))
+
+    def _ompl_state(self, x: np.ndarray):
+        s = self._si.allocState()
+        for d in range(self.dim):
+            s[d] = float(x[d])
+        return s

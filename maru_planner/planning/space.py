@@ -1,0 +1,122 @@
+"""OMPL glue: a group's joint-limit box as a state space, a validity checker and a batched edge validator.
+
+Motion resolution (the one number that decides what "collision-free edge" means): an edge
+q_a → q_b is checked at ``n = ceil(max_i |q_b,i − q_a,i| / resolution)`` evenly spaced states
+(q_a excluded, q_b included), i.e. no joint moves more than ``resolution`` radians between two
+checked states (an L∞ step in joint space). All n states go to the checker in ONE call,
+``checker.first_invalid(Q)``, so an edge costs one Python→checker round trip however long it is.
+
+The checker protocol (any object with these methods works: the pinocchio/coal checker, the
+sphere checker, the 2-D toy checkers of the tests): ``is_valid(q)``, ``first_invalid(Q)`` (index
+of the first invalid row or -1), ``colliding_pairs(q)``, ``check_count`` and ``reset_count()``,
+all on full robot configurations.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from ompl import base as ob
+
+
+class GroupSpace:
+    """A planning group's joints as an OMPL ``RealVectorStateSpace`` bounded by the joint limits.
+
+    ``base`` is the full robot configuration that supplies the joints outside the group.
+    """
+
+    def __init__(self, joint_names, indices, lower, upper, base):
+        self.joint_names = list(joint_names)
+        self.indices = np.asarray(indices, dtype=int)
+        self.lower = np.asarray(lower, dtype=float)
+        self.upper = np.asarray(upper, dtype=float)
+        self.base = np.asarray(base, dtype=float).copy()
+        self.dim = len(self.joint_names)
+        self.space = ob.RealVectorStateSpace(self.dim)
+        bounds = ob.RealVectorBounds(self.dim)
+        for i in range(self.dim):
+            bounds.setLow(i, float(self.lower[i]))
+            bounds.setHigh(i, float(self.upper[i]))
+            self.space.setDimensionName(i, self.joint_names[i])
+        self.space.setBounds(bounds)
+
+    def to_array(self, state) -> np.ndarray:
+        return np.array([state[i] for i in range(self.dim)])
+
+    def to_state(self, q, state=None):
+        if state is None:
+            state = self.space.allocState()
+        for i in range(self.dim):
+            state[i] = float(q[i])
+        return state
+
+    def full(self, q_group: np.ndarray) -> np.ndarray:
+        """Full robot configuration(s) for group configuration(s) (1-D or rows)."""
+        q_group = np.asarray(q_group, dtype=float)
+        if q_group.ndim == 1:
+            q = self.base.copy()
+            q[self.indices] = q_group
+            return q
+        Q = np.repeat(self.base[None, :], len(q_group), axis=0)
+        Q[:, self.indices] = q_group
+        return Q
+
+
+def edge_states(qa: np.ndarray, qb: np.ndarray, resolution: float) -> np.ndarray:
+    """States checked for the edge qa → qb at ``resolution`` (qa excluded, qb included)."""
+    steps = max(1, math.ceil(float(np.max(np.abs(qb - qa))) / resolution))
+    t = np.arange(1, steps + 1, dtype=float)[:, None] / steps
+    return qa + t * (qb - qa)
+
+
+class EdgeChecker:
+    """Numpy-side validity of states, edges and paths of one group against a checker."""
+
+    def __init__(self, group_space: GroupSpace, checker, resolution: float):
+        if not resolution > 0:
+            raise ValueError(f"motion resolution must be > 0, got {resolution}")
+        self.gs = group_space
+        self.checker = checker
+        self.resolution = float(resolution)
+        self.edges_checked = 0
+
+    def state_valid(self, q: np.ndarray) -> bool:
+        return bool(self.checker.is_valid(self.gs.full(q)))
+
+    def first_invalid(self, qa: np.ndarray, qb: np.ndarray) -> int:
+        """Index of the first colliding state along qa → qb (-1 if the edge is free)."""
+        self.edges_checked += 1
+        return int(self.checker.first_invalid(self.gs.full(edge_states(qa, qb, self.resolution))))
+
+    def edge_valid(self, qa: np.ndarray, qb: np.ndarray) -> bool:
+        return self.first_invalid(qa, qb) < 0
+
+    def path_valid(self, path: np.ndarray) -> bool:
+        """All edges of ``path`` in one batched call (the start state is checked too)."""
+        chunks = [path[:1]] + [edge_states(path[i], path[i + 1], self.resolution) for i in range(len(path) - 1)]
+        return int(self.checker.first_invalid(self.gs.full(np.vstack(chunks)))) < 0
+
+
+class BatchedMotionValidator(ob.MotionValidator):
+    """OMPL motion validator: one ``checker.first_invalid`` call per edge (see module doc)."""
+
+    def __init__(self, si, edge_checker: EdgeChecker):
+        super().__init__(si)
+        self.edges = edge_checker
+        self._gs = edge_checker.gs
+
+    def checkMotion(self, s1, s2, *_):  # noqa: N802 (OMPL's name)
+        return self.edges.edge_valid(self._gs.to_array(s1), self._gs.to_array(s2))
+
+
+def make_validity_fn(edge_checker: EdgeChecker):
+    """A Python state-validity callable for ``SpaceInformation.setStateValidityChecker``."""
+    gs = edge_checker.gs
+    checker = edge_checker.checker
+    dim = gs.dim
+
+    def is_valid(state) -> bool:
+        return bool(checker.is_valid(gs.full(np.array([state[i] for i in range(dim)]))))
+
+    return is_valid

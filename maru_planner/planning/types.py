@@ -1,0 +1,161 @@
+"""Request, result, status and statistics of a motion-planning call (MoveIt-like, no ROS)."""
+
+from __future__ import annotations
+
+import enum
+import math
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from maru_planner import errors
+
+
+class PlanStatus(enum.Enum):
+    """Outcome of :meth:`MotionPlanner.plan`; every failure has its own code."""
+
+    SUCCESS = "SUCCESS"
+    PLANNING_FAILED = "PLANNING_FAILED"
+    TIMED_OUT = "TIMED_OUT"
+    INVALID_GROUP = "INVALID_GROUP"
+    INVALID_PLANNER = "INVALID_PLANNER"
+    INVALID_JOINT_NAMES = "INVALID_JOINT_NAMES"
+    INVALID_JOINT_COUNT = "INVALID_JOINT_COUNT"
+    INVALID_STATE = "INVALID_STATE"
+    START_IN_COLLISION = "START_IN_COLLISION"
+    GOAL_IN_COLLISION = "GOAL_IN_COLLISION"
+    NO_IK_SOLUTION = "NO_IK_SOLUTION"
+    INVALID_SCENE = "INVALID_SCENE"
+    INVALID_REQUEST = "INVALID_REQUEST"
+    NO_START_STATE = "NO_START_STATE"
+
+
+# Most specific class first: the first isinstance match wins.
+_STATUS_OF_ERROR: list[tuple[type[errors.MaruError], PlanStatus]] = [
+    (errors.InvalidGroup, PlanStatus.INVALID_GROUP),
+    (errors.InvalidPlanner, PlanStatus.INVALID_PLANNER),
+    (errors.InvalidJointNames, PlanStatus.INVALID_JOINT_NAMES),
+    (errors.InvalidJointCount, PlanStatus.INVALID_JOINT_COUNT),
+    (errors.InvalidState, PlanStatus.INVALID_STATE),
+    (errors.NoStartState, PlanStatus.NO_START_STATE),
+    (errors.InvalidRequest, PlanStatus.INVALID_REQUEST),
+    (errors.StartInCollision, PlanStatus.START_IN_COLLISION),
+    (errors.GoalInCollision, PlanStatus.GOAL_IN_COLLISION),
+    (errors.NoIKSolution, PlanStatus.NO_IK_SOLUTION),
+    (errors.InvalidScene, PlanStatus.INVALID_SCENE),
+    (errors.PlanningTimedOut, PlanStatus.TIMED_OUT),
+    (errors.PlanningFailed, PlanStatus.PLANNING_FAILED),
+]
+
+
+def status_of_error(error: BaseException) -> PlanStatus:
+    """The status code a typed error maps to (PLANNING_FAILED for anything unknown)."""
+    for cls, status in _STATUS_OF_ERROR:
+        if isinstance(error, cls):
+            return status
+    return PlanStatus.PLANNING_FAILED
+
+
+@dataclass
+class MotionRequest:
+    """One planning query.
+
+    ``start`` maps joint names to values (the full robot state is fine: joints outside
+    the group are held fixed at these values). The goal is either ``goal_joints`` (all
+    joints of the group) or ``goal_poses`` ({frame: 4x4 homogeneous matrix}, solved by IK
+    first). ``seed=None`` draws a random seed (reported in the stats).
+    """
+
+    group: str
+    start: dict[str, float] | None = None
+    goal_joints: dict[str, float] | None = None
+    goal_poses: dict[str, np.ndarray] | None = None
+    planner_id: str = ""
+    time_budget: float = 5.0
+    seed: int | None = None
+    attempts: int = 1
+    velocity_scaling: float = 1.0
+    acceleration_scaling: float = 1.0
+    simplify: bool = True
+
+
+@dataclass
+class Trajectory:
+    """Time-parameterised joint trajectory; rows are samples, columns follow ``joint_names``."""
+
+    joint_names: list[str]
+    times: np.ndarray
+    positions: np.ndarray
+    velocities: np.ndarray
+    accelerations: np.ndarray
+
+    @property
+    def duration(self) -> float:
+        return float(self.times[-1]) if len(self.times) else 0.0
+
+    def to_dict(self) -> dict:
+        return {
+            "joint_names": list(self.joint_names),
+            "times": self.times.tolist(),
+            "positions": self.positions.tolist(),
+            "velocities": self.velocities.tolist(),
+            "accelerations": self.accelerations.tolist(),
+        }
+
+
+@dataclass
+class PlanStats:
+    """What a planning call cost and produced. Times are seconds, lengths radians."""
+
+    planner_id: str = ""
+    nodes: int = 0
+    edges: int = 0
+    collision_checks: int = 0
+    path_length: float = 0.0
+    waypoints: int = 0
+    smoothness: float = 0.0
+    validation_time: float = 0.0
+    ik_time: float = 0.0
+    solve_time: float = 0.0
+    simplify_time: float = 0.0
+    parameterize_time: float = 0.0
+    total_time: float = 0.0
+    seed: int | None = None
+    roadmap_build_time: float = 0.0
+    roadmap_reused: bool = False
+    attempts_used: int = 0
+    raw_waypoints: int = 0
+    raw_path_length: float = 0.0
+
+    def to_dict(self) -> dict:
+        return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in asdict(self).items()}
+
+
+@dataclass
+class MotionResult:
+    """Answer to a :class:`MotionRequest`; ``plan`` never raises, it sets ``status``."""
+
+    status: PlanStatus
+    message: str = ""
+    error: BaseException | None = None
+    joint_names: list[str] = field(default_factory=list)
+    path: np.ndarray | None = None
+    trajectory: Trajectory | None = None
+    stats: PlanStats = field(default_factory=PlanStats)
+
+    @property
+    def success(self) -> bool:
+        return self.status is PlanStatus.SUCCESS
+
+    def to_json_dict(self) -> dict:
+        """The ``maru-plan`` JSON shape."""
+        return {
+            "success": self.success,
+            "status": self.status.value,
+            "message": self.message,
+            "joint_names": list(self.joint_names),
+            "path": [] if self.path is None else self.path.tolist(),
+            "trajectory": None if self.trajectory is None else self.trajectory.to_dict(),
+            "stats": self.stats.to_dict(),
+            "seed": self.stats.seed,
+        }

@@ -1,0 +1,247 @@
+"""OMPL glue, post-processing and the MotionPlanner facade on a 2-D toy robot (no robot model needed)."""
+
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+import pytest
+from ompl import geometric as og
+from planning_toys import BoxWorldChecker, ToyRobot, maze_checker
+
+from maru_planner import errors
+from maru_planner.planning import PLANNER_IDS, MotionPlanner, MotionRequest, PlannerConfig, PlanStatus, postprocess
+from maru_planner.planning.space import BatchedMotionValidator, EdgeChecker, GroupSpace, edge_states
+from maru_planner.planning.types import status_of_error
+
+START = {"j0": 0.05, "j1": 0.05}
+GOAL = {"j0": 0.95, "j1": 0.95}
+
+
+class CountingChecker(BoxWorldChecker):
+    def __init__(self, boxes):
+        super().__init__(boxes)
+        self.batch_calls = 0
+
+    def first_invalid(self, Q):
+        self.batch_calls += 1
+        return super().first_invalid(Q)
+
+
+def planner_for(checker=None, **config):
+    config.setdefault("resolution", 0.01)
+    config.setdefault("planner_params", {"RCRRT": {"step": 0.05}})
+    config.setdefault("prm_roadmap_nodes", 300)
+    return MotionPlanner(ToyRobot(2), checker or maze_checker(), PlannerConfig(**config))
+
+
+def request(**kw):
+    kw.setdefault("group", "all")
+    kw.setdefault("start", dict(START))
+    kw.setdefault("goal_joints", dict(GOAL))
+    kw.setdefault("planner_id", "RRTConnect")
+    kw.setdefault("time_budget", 3.0)
+    kw.setdefault("seed", 1)
+    return MotionRequest(**kw)
+
+
+# --- glue ------------------------------------------------------------------------------------
+def test_edge_states_respect_the_resolution():
+    qa, qb = np.array([0.0, 0.0]), np.array([0.33, -0.1])
+    Q = edge_states(qa, qb, 0.02)
+    assert np.allclose(Q[-1], qb)
+    steps = np.abs(np.diff(np.vstack([qa, Q]), axis=0))
+    assert steps.max() <= 0.02 + 1e-12
+    assert len(Q) == 17  # ceil(0.33 / 0.02)
+
+
+def test_group_space_fills_joints_outside_the_group():
+    gs = GroupSpace(["b"], [1], [-1], [1], [0.3, 0.0, 0.7])
+    assert np.allclose(gs.full(np.array([0.5])), [0.3, 0.5, 0.7])
+    assert np.allclose(gs.full(np.array([[0.1], [0.2]])), [[0.3, 0.1, 0.7], [0.3, 0.2, 0.7]])
+    assert gs.space.getBounds().low[0] == -1
+
+
+def test_motion_validator_checks_an_edge_in_one_batched_call():
+    checker = CountingChecker([((0.4, 0.4), (0.6, 0.6))])
+    gs = GroupSpace(["x", "y"], [0, 1], [0, 0], [1, 1], [0, 0])
+    edges = EdgeChecker(gs, checker, 0.01)
+    ss = og.SimpleSetup(gs.space)
+    validator = BatchedMotionValidator(ss.getSpaceInformation(), edges)
+    assert not validator.checkMotion(gs.to_state([0.1, 0.1]), gs.to_state([0.9, 0.9]))
+    assert validator.checkMotion(gs.to_state([0.1, 0.1]), gs.to_state([0.9, 0.1]))
+    assert checker.batch_calls == 2
+
+
+# --- post-processing -------------------------------------------------------------------------
+def test_shortcut_stays_collision_free_and_shortens():
+    checker = maze_checker()
+    gs = GroupSpace(["x", "y"], [0, 1], [0, 0], [1, 1], [0, 0])
+    edges = EdgeChecker(gs, checker, 0.01)
+    zigzag = np.array([[0.05, 0.05], [0.1, 0.9], [0.12, 0.85], [0.15, 0.9], [0.4, 0.9], [0.42, 0.1], [0.45, 0.15]])
+    assert edges.path_valid(zigzag)
+    short, checks = postprocess.shortcut(zigzag, edges.edge_valid, np.random.default_rng(0), 1e18, 50)
+    assert checks > 0
+    assert edges.path_valid(short)
+    assert postprocess.path_length(short) < postprocess.path_length(zigzag)
+    assert np.allclose(short[0], zigzag[0]) and np.allclose(short[-1], zigzag[-1])
+
+
+def test_time_parameterisation_respects_scaled_limits():
+    path = np.array([[0.0, 0.0], [1.0, 0.2], [1.0, 1.2], [1.01, 1.2]])
+    vmax, amax = np.array([1.0, 0.5]), np.array([2.0, 1.0])
+    traj = postprocess.time_parameterize(path, ["a", "b"], vmax, amax, 0.5, 0.25, dt=0.01)
+    assert np.all(np.diff(traj.times) > 0)
+    assert np.allclose(traj.positions[0], path[0]) and np.allclose(traj.positions[-1], path[-1])
+    assert np.all(np.abs(traj.velocities) <= vmax * 0.5 + 1e-9)
+    assert np.all(np.abs(traj.accelerations) <= amax * 0.25 + 1e-9)
+    assert np.allclose(traj.velocities[-1], 0.0)
+    for q in path:  # every waypoint is passed exactly
+        assert np.min(np.linalg.norm(traj.positions - q, axis=1)) < 1e-9
+    # finite differences agree with the reported velocities
+    fd = np.diff(traj.positions, axis=0) / np.diff(traj.times)[:, None]
+    mid = 0.5 * (traj.velocities[1:] + traj.velocities[:-1])
+    assert np.max(np.abs(fd - mid)) < 0.05
+
+
+def test_smoothness_is_zero_for_a_straight_line_and_positive_for_a_corner():
+    assert postprocess.smoothness(np.array([[0, 0], [1, 0], [2, 0]], float)) == 0.0
+    assert postprocess.smoothness(np.array([[0, 0], [1, 0], [1, 1]], float)) > 0.0
+
+
+# --- facade: every planner -------------------------------------------------------------------
+@pytest.mark.parametrize("planner_id", [p for p in PLANNER_IDS if p != "RRT"])
+def test_every_planner_solves_the_maze(planner_id):
+    mp = planner_for()
+    res = mp.plan(request(planner_id=planner_id))
+    assert res.status is PlanStatus.SUCCESS, res.message
+    assert res.success
+    assert res.joint_names == ["j0", "j1"]
+    assert np.allclose(res.path[0], [0.05, 0.05]) and np.allclose(res.path[-1], [0.95, 0.95])
+    gs = GroupSpace(["j0", "j1"], [0, 1], [0, 0], [1, 1], [0.5, 0.5])
+    assert EdgeChecker(gs, maze_checker(), 0.01).path_valid(res.path)
+    s = res.stats
+    assert s.planner_id == planner_id and s.nodes > 0 and s.collision_checks > 0
+    assert s.waypoints == len(res.path) and s.path_length > 0 and s.total_time >= s.solve_time > 0
+    assert res.trajectory.positions.shape[1] == 2
+    js = res.to_json_dict()
+    assert set(js) == {"success", "status", "message", "joint_names", "path", "trajectory", "stats", "seed"}
+    assert js["status"] == "SUCCESS" and js["seed"] == 1
+
+
+def test_plain_rrt_without_goal_bias_reports_a_timeout():
+    res = planner_for().plan(request(planner_id="RRT", time_budget=0.3))
+    assert res.status is PlanStatus.TIMED_OUT
+    assert "RRT" in res.message and isinstance(res.error, errors.PlanningTimedOut)
+
+
+@pytest.mark.parametrize("planner_id", ["RRTConnect", "GoalBiasedRRT", "RCRRT"])
+def test_same_seed_same_path(planner_id):
+    mp = planner_for()
+    a = mp.plan(request(planner_id=planner_id, seed=5))
+    b = mp.plan(request(planner_id=planner_id, seed=5))
+    assert a.success and b.success
+    assert np.array_equal(a.path, b.path)
+
+
+def test_rcrrt_reports_no_path_at_its_resolution():
+    from planning_toys import closed_maze_checker
+
+    res = planner_for(closed_maze_checker()).plan(request(planner_id="RCRRT", time_budget=20.0))
+    assert res.status is PlanStatus.PLANNING_FAILED
+    assert "no path exists at step 0.05" in res.message
+
+
+# --- facade: fail-fast pre-checks ------------------------------------------------------------
+@pytest.mark.parametrize(
+    "kwargs, status, words",
+    [
+        ({"group": "legs"}, PlanStatus.INVALID_GROUP, "legs"),
+        ({"planner_id": "AStar"}, PlanStatus.INVALID_PLANNER, "AStar"),
+        ({"start": {"j0": 0.1, "knee": 0.2}}, PlanStatus.INVALID_JOINT_NAMES, "knee"),
+        ({"start": {"j0": 0.1}}, PlanStatus.INVALID_JOINT_NAMES, "j1"),
+        ({"goal_joints": {"j0": 0.9}}, PlanStatus.INVALID_JOINT_COUNT, "j1"),
+        ({"goal_joints": {"j0": float("nan"), "j1": 0.9}}, PlanStatus.INVALID_STATE, "j0"),
+        ({"start": {"j0": 0.05, "j1": 1.5}}, PlanStatus.INVALID_STATE, "j1 = 1.5000 is outside"),
+        ({"start": {"j0": 0.25, "j1": 0.05}}, PlanStatus.START_IN_COLLISION, "box0"),
+        ({"goal_joints": {"j0": 0.55, "j1": 0.5}}, PlanStatus.GOAL_IN_COLLISION, "box1"),
+        ({"start": None}, PlanStatus.NO_START_STATE, "start"),
+        ({"goal_joints": None}, PlanStatus.INVALID_REQUEST, "goal"),
+        ({"time_budget": 0.0}, PlanStatus.INVALID_REQUEST, "time_budget"),
+        ({"time_budget": float("inf")}, PlanStatus.INVALID_REQUEST, "time_budget"),
+        ({"attempts": 0}, PlanStatus.INVALID_REQUEST, "attempts"),
+        ({"velocity_scaling": 1.5}, PlanStatus.INVALID_REQUEST, "velocity_scaling"),
+        ({"goal_poses": {"tool": np.eye(4)}}, PlanStatus.INVALID_REQUEST, "either"),
+    ],
+)
+def test_bad_requests_fail_fast_with_a_code_and_message(kwargs, status, words):
+    checker = maze_checker()
+    res = planner_for(checker).plan(request(**kwargs))
+    assert res.status is status, res.message
+    assert words in res.message
+    assert not res.success and res.path is None
+    assert res.error is not None and status_of_error(res.error) is status
+    if status is PlanStatus.START_IN_COLLISION:
+        assert res.error.pairs == [("robot", "box0")]
+
+
+def test_a_broken_checker_is_reported_not_raised():
+    class Broken(BoxWorldChecker):
+        def first_invalid(self, Q):
+            raise RuntimeError("checker exploded")
+
+    res = planner_for(Broken([])).plan(request())
+    assert res.status is PlanStatus.PLANNING_FAILED and "checker exploded" in res.message
+
+
+def test_start_equal_goal_is_a_trivial_success():
+    res = planner_for().plan(request(goal_joints=dict(START)))
+    assert res.success and len(res.path) == 2 and res.trajectory.duration == 0.0
+
+
+# --- PRM roadmap reuse -----------------------------------------------------------------------
+class Scene:
+    def __init__(self, boxes):
+        self.boxes = boxes
+
+
+def test_prm_roadmap_is_reused_and_revalidated_after_a_scene_change():
+    walls = maze_checker().boxes
+    mp = planner_for(BoxWorldChecker(walls))
+    first = mp.plan(request(planner_id="PRM"))
+    assert first.success and first.stats.roadmap_build_time > 0 and not first.stats.roadmap_reused
+    second = mp.plan(request(planner_id="PRM", goal_joints={"j0": 0.95, "j1": 0.5}, seed=2))
+    assert second.success and second.stats.roadmap_reused and second.stats.roadmap_build_time == 0.0
+    assert second.stats.nodes >= first.stats.nodes
+    # An obstacle far from everything the roadmap touches: nothing invalid, roadmap kept.
+    mp.set_scene(Scene(list(walls) + [((5.0, 5.0), (6.0, 6.0))]))
+    third = mp.plan(request(planner_id="PRM", seed=3))
+    report = mp.last_revalidation
+    assert report.still_valid and report.vertices >= first.stats.nodes and report.states_checked > report.vertices
+    assert third.success and third.stats.roadmap_reused and third.stats.roadmap_build_time == 0.0
+    # An obstacle in the middle of the free space: roadmap pieces die, it is rebuilt.
+    mp.set_scene(Scene(list(walls) + [((0.35, 0.3), (0.45, 0.95))]))
+    fourth = mp.plan(request(planner_id="PRM", goal_joints={"j0": 0.95, "j1": 0.95}, seed=4))
+    assert not mp.last_revalidation.still_valid
+    assert fourth.stats.roadmap_build_time > 0 and not fourth.stats.roadmap_reused
+    if fourth.success:
+        gs = GroupSpace(["j0", "j1"], [0, 1], [0, 0], [1, 1], [0.5, 0.5])
+        assert EdgeChecker(gs, mp.checker, 0.01).path_valid(fourth.path)
+
+
+# --- threads ---------------------------------------------------------------------------------
+def test_concurrent_plans_from_several_threads():
+    mp = planner_for()
+    results = {}
+
+    def work(k):
+        results[k] = mp.plan(request(planner_id=("RRTConnect", "RCRRT")[k % 2], seed=k))
+
+    threads = [threading.Thread(target=work, args=(k,)) for k in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(60)
+    assert len(results) == 4 and all(r.success for r in results.values())
+    again = mp.plan(request(planner_id="RCRRT", seed=1))
+    assert np.array_equal(again.path, results[1].path)
