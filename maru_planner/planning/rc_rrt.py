@@ -102,7 +102,8 @@ class RCRRT(ob.Planner):
         start_state = pis.nextStart()
         goal_state = pis.nextGoal()
         if start_state is None or goal_state is None:
-            return ob.PlannerStatus(ob.PlannerStatus.INVALID_START if start_state is None else ob.PlannerStatus.INVALID_GOAL)
+            missing = ob.PlannerStatus.INVALID_START if start_state is None else ob.PlannerStatus.INVALID_GOAL
+            return ob.PlannerStatus(missing)
         start = np.array([start_state[i] for i in range(dim)])
         goal = np.array([goal_state[i] for i in range(dim)])
         return self._search(start, goal, ptc)
