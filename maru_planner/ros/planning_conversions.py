@@ -118,6 +118,15 @@ def joint_state_values(msg, what: str = "start_state") -> dict[str, float]:
     return named_values(msg.name, msg.position, what)
 
 
+def configuration(robot, values: dict[str, float]) -> np.ndarray:
+    """Full robot configuration (``robot.neutral()`` with ``values`` set by joint name)."""
+    q = np.asarray(robot.neutral(), dtype=float).copy()
+    known = [name for name in values if name in set(robot.joint_names)]
+    if known:
+        q[robot.joint_indices(known)] = [values[name] for name in known]
+    return q
+
+
 def joint_state_msg(names, positions, stamp=None):
     """``sensor_msgs/JointState`` with positions only."""
     from sensor_msgs.msg import JointState
@@ -248,7 +257,12 @@ def primitive_to_obstacle(name: str, shape: SolidPrimitive, pose: Pose) -> dict:
 
 
 def obstacle_to_msg(obstacle: dict, frame_id: str) -> SceneObstacle:
-    """``SceneObstacle`` (operation ADD) of a scene obstacle dict; meshes become their bounding box."""
+    """``SceneObstacle`` (operation ADD) of a scene obstacle dict.
+
+    A mesh has no ``SolidPrimitive``: its shape type is left 0 (the scene YAML carries it).
+    """
+    from maru_planner.scene import pose_matrix
+
     msg = SceneObstacle(name=obstacle["name"], operation=SceneObstacle.ADD)
     msg.header.frame_id = frame_id
     kind = obstacle["type"]
@@ -258,10 +272,10 @@ def obstacle_to_msg(obstacle: dict, frame_id: str) -> SceneObstacle:
     elif kind == "cylinder":
         msg.shape.type = SolidPrimitive.CYLINDER
         msg.shape.dimensions = [float(obstacle["length"]), float(obstacle["radius"])]
-    else:
+    elif kind == "box":
         msg.shape.type = SolidPrimitive.BOX
-        msg.shape.dimensions = [float(v) for v in obstacle.get("size", [0.0, 0.0, 0.0])]
-    msg.pose = matrix_to_pose(obstacle["pose"])
+        msg.shape.dimensions = [float(v) for v in obstacle["size"]]
+    msg.pose = matrix_to_pose(pose_matrix(obstacle.get("pose"), f"obstacle '{obstacle['name']}'"))
     return msg
 
 

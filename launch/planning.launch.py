@@ -1,0 +1,44 @@
+"""Start planning_node with config/planner.yaml (ros2 launch maru_planner planning.launch.py).
+
+Arguments: ``params_file`` (default: the installed config/planner.yaml), ``namespace`` (services and
+topics are relative, so a namespace moves them), ``scene_file`` (overrides the yaml's scene).
+"""
+
+import os
+
+from ament_index_python.packages import get_package_share_directory
+from launch.actions import DeclareLaunchArgument
+from launch.conditions import IfCondition
+from launch.substitutions import LaunchConfiguration, PythonExpression
+from launch_ros.actions import Node
+
+from launch import LaunchDescription
+
+
+def generate_launch_description():
+    share = get_package_share_directory("maru_planner")
+    params_file = LaunchConfiguration("params_file")
+    namespace = LaunchConfiguration("namespace")
+    scene_file = LaunchConfiguration("scene_file")
+    common = {
+        "package": "maru_planner",
+        "executable": "planning_node",
+        "name": "planning_node",
+        "namespace": namespace,
+        "output": "screen",
+    }
+    has_scene = PythonExpression(["'", scene_file, "' != ''"])
+    no_scene = PythonExpression(["'", scene_file, "' == ''"])
+    return LaunchDescription(
+        [
+            DeclareLaunchArgument(
+                "params_file",
+                default_value=os.path.join(share, "config", "planner.yaml"),
+                description="planning_node parameters",
+            ),
+            DeclareLaunchArgument("namespace", default_value="", description="namespace of the node"),
+            DeclareLaunchArgument("scene_file", default_value="", description="scene YAML (empty: from params)"),
+            Node(**common, parameters=[params_file], condition=IfCondition(no_scene)),
+            Node(**common, parameters=[params_file, {"scene_file": scene_file}], condition=IfCondition(has_scene)),
+        ]
+    )

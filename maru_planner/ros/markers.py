@@ -1,0 +1,79 @@
+"""RViz markers of the planning node: scene obstacles and the hands' paths of the last plan."""
+
+from __future__ import annotations
+
+import numpy as np
+from geometry_msgs.msg import Point
+from std_msgs.msg import ColorRGBA
+from visualization_msgs.msg import Marker, MarkerArray
+
+from maru_planner.ros import planning_conversions as conv
+
+OBSTACLE_COLOR = ColorRGBA(r=0.8, g=0.5, b=0.2, a=0.6)
+HAND_COLORS = {"right": ColorRGBA(r=0.9, g=0.1, b=0.1, a=1.0), "left": ColorRGBA(r=0.1, g=0.3, b=0.9, a=1.0)}
+DEFAULT_HAND_COLOR = ColorRGBA(r=0.1, g=0.7, b=0.1, a=1.0)
+HAND_PATH_WIDTH = 0.01
+
+
+def scene_markers(scene_dict: dict, frame_id: str, stamp) -> MarkerArray:
+    """A DELETEALL followed by one marker per primitive obstacle (namespace ``scene``)."""
+    markers = MarkerArray()
+    clear = Marker(action=Marker.DELETEALL)
+    clear.header.frame_id = frame_id
+    markers.markers.append(clear)
+    for index, obstacle in enumerate(scene_dict.get("obstacles", [])):
+        marker = _obstacle_marker(obstacle, frame_id, stamp, index)
+        if marker is not None:
+            markers.markers.append(marker)
+    return markers
+
+
+def _obstacle_marker(obstacle: dict, frame_id: str, stamp, index: int) -> Marker | None:
+    msg = conv.obstacle_to_msg(obstacle, frame_id)
+    kind = obstacle["type"]
+    marker = Marker(ns="scene", id=index, action=Marker.ADD, color=OBSTACLE_COLOR, text=obstacle["name"])
+    marker.header.frame_id = frame_id
+    marker.header.stamp = stamp
+    marker.pose = msg.pose
+    if kind == "sphere":
+        marker.type = Marker.SPHERE
+        d = 2.0 * float(obstacle["radius"])
+        marker.scale.x = marker.scale.y = marker.scale.z = d
+    elif kind == "cylinder":
+        marker.type = Marker.CYLINDER
+        d = 2.0 * float(obstacle["radius"])
+        marker.scale.x, marker.scale.y, marker.scale.z = d, d, float(obstacle["length"])
+    elif kind == "box":
+        marker.type = Marker.CUBE
+        marker.scale.x, marker.scale.y, marker.scale.z = (float(v) for v in obstacle["size"])
+    else:
+        return None
+    return marker
+
+
+def hand_paths(robot, trajectory, start: dict[str, float]) -> dict[str, np.ndarray]:
+    """Positions (n x 3) of each end effector along the trajectory (other joints held at ``start``)."""
+    base = dict(start)
+    paths: dict[str, list] = {side: [] for side in robot.end_effectors}
+    for row in np.asarray(trajectory.positions, dtype=float):
+        state = dict(base)
+        state.update(zip(trajectory.joint_names, row, strict=True))
+        q = conv.configuration(robot, state)
+        for side, frame in robot.end_effectors.items():
+            paths[side].append(np.asarray(robot.frame_pose(q, frame))[:3, 3])
+    return {side: np.array(points) for side, points in paths.items()}
+
+
+def plan_markers(robot, trajectory, start: dict[str, float], frame_id: str, stamp) -> MarkerArray:
+    """One LINE_STRIP per end effector along the trajectory (namespace ``hand_path``)."""
+    markers = MarkerArray()
+    for index, (side, points) in enumerate(sorted(hand_paths(robot, trajectory, start).items())):
+        marker = Marker(ns="hand_path", id=index, type=Marker.LINE_STRIP, action=Marker.ADD, text=side)
+        marker.header.frame_id = frame_id
+        marker.header.stamp = stamp
+        marker.pose.orientation.w = 1.0
+        marker.scale.x = HAND_PATH_WIDTH
+        marker.color = HAND_COLORS.get(side, DEFAULT_HAND_COLOR)
+        marker.points = [Point(x=float(p[0]), y=float(p[1]), z=float(p[2])) for p in points]
+        markers.markers.append(marker)
+    return markers

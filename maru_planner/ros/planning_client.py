@@ -1,0 +1,223 @@
+"""A small synchronous client for ``planning_node`` (demo, benchmarks, scripts).
+
+>>> from maru_planner.ros.planning_client import PlanningClient
+>>> with PlanningClient() as client:            # own node, spun in a background thread
+...     response = client.plan(goal_joints={"waist_yaw": 0.9, ...}, start={...}, planner_id="RRTConnect")
+...     response.error.code == PlanningError.SUCCESS, response.trajectory
+
+Call ``maru_planner.ros.env.configure_loopback_dds()`` and ``rclpy.init()`` first
+(or pass ``init=True``). Every method returns the service response as is; a
+call that gets no answer within ``timeout`` raises ``TimeoutError``.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+
+import rclpy
+from rclpy.executors import SingleThreadedExecutor
+from sensor_msgs.msg import JointState
+
+from maru_planner.ros import planning_conversions as conv
+from maru_planner_interfaces.msg import SceneObstacle
+from maru_planner_interfaces.srv import ApplyScene, ComputeIK, GetScene, PlanMotion
+
+
+class PlanningClient:
+    """Clients of ``plan_motion``, ``compute_ik``, ``apply_scene`` and ``get_scene``.
+
+    ``node``: an existing node that someone else spins (an executor thread); if None the
+    client makes its own node and spins it in a daemon thread. ``namespace``: where the
+    planning node's services live (``""`` = the root namespace).
+    """
+
+    def __init__(self, node=None, namespace: str = "", *, node_name: str = "planning_client", init: bool = False):
+        if init and not rclpy.ok():
+            from maru_planner.ros.env import configure_loopback_dds
+
+            configure_loopback_dds()
+            rclpy.init()
+        self._owns_node = node is None
+        self.node = node if node is not None else rclpy.create_node(node_name)
+        prefix = namespace.rstrip("/") + "/" if namespace else ""
+        self.plan_client = self.node.create_client(PlanMotion, prefix + "plan_motion")
+        self.ik_client = self.node.create_client(ComputeIK, prefix + "compute_ik")
+        self.apply_client = self.node.create_client(ApplyScene, prefix + "apply_scene")
+        self.scene_client = self.node.create_client(GetScene, prefix + "get_scene")
+        self._executor = None
+        if self._owns_node:
+            self._executor = SingleThreadedExecutor()
+            self._executor.add_node(self.node)
+            self._thread = threading.Thread(target=self._executor.spin, daemon=True)
+            self._thread.start()
+
+    # ------------------------------------------------------------ calls
+
+    def call(self, client, request, timeout: float = 60.0):
+        """Send ``request`` and wait for the response (the node must be spun by an executor)."""
+        return call_service(client, request, timeout)
+
+    def plan(
+        self,
+        goal_joints: dict[str, float] | None = None,
+        *,
+        goal_poses: dict | None = None,
+        start: dict[str, float] | None = None,
+        group: str = "",
+        planner_id: str = "",
+        time_budget: float = 5.0,
+        seed: int = -1,
+        attempts: int = 1,
+        velocity_scaling: float = 1.0,
+        acceleration_scaling: float = 1.0,
+        frame_id: str = "base_link",
+        timeout: float | None = None,
+    ) -> PlanMotion.Response:
+        """Plan to ``goal_joints`` ({joint: rad}) or ``goal_poses`` ({link: 4x4 or Pose}).
+
+        ``start`` None = the node uses the latest /joint_states. Returns the response;
+        check ``response.error.code == PlanningError.SUCCESS``.
+        """
+        request = plan_request(
+            goal_joints,
+            goal_poses=goal_poses,
+            start=start,
+            group=group,
+            planner_id=planner_id,
+            time_budget=time_budget,
+            seed=seed,
+            attempts=attempts,
+            velocity_scaling=velocity_scaling,
+            acceleration_scaling=acceleration_scaling,
+            frame_id=frame_id,
+        )
+        return self.call(self.plan_client, request, timeout or time_budget + 30.0)
+
+    def compute_ik(
+        self,
+        goal_poses: dict,
+        *,
+        group: str = "",
+        seed: dict[str, float] | None = None,
+        avoid_collisions: bool = True,
+        ik_timeout: float = 0.0,
+        frame_id: str = "base_link",
+        timeout: float = 30.0,
+    ) -> ComputeIK.Response:
+        """Joint state reaching ``goal_poses`` ({link: 4x4 or Pose}); ``seed`` None = latest /joint_states."""
+        request = ComputeIK.Request(group=group, timeout=float(ik_timeout), avoid_collisions=avoid_collisions)
+        request.links, request.poses = _stamped_poses(goal_poses, frame_id)
+        if seed:
+            request.seed_state = _joint_state(seed)
+        return self.call(self.ik_client, request, timeout)
+
+    def apply_scene(self, obstacles: list[SceneObstacle] = (), *, clear: bool = False, timeout: float = 30.0):
+        """Add/move/remove ``SceneObstacle`` messages (after an optional clear)."""
+        return self.call(self.apply_client, ApplyScene.Request(clear=clear, obstacles=list(obstacles)), timeout)
+
+    def add_obstacle(self, name: str, shape: str, dimensions, pose, frame_id: str = "base_link", **kwargs):
+        """Add (or replace) a ``box`` [x, y, z], ``sphere`` [r] or ``cylinder`` [height, r] at ``pose`` (4x4)."""
+        return self.apply_scene([obstacle_msg(name, shape, dimensions, pose, frame_id)], **kwargs)
+
+    def remove_obstacle(self, name: str, **kwargs):
+        return self.apply_scene([SceneObstacle(name=name, operation=SceneObstacle.REMOVE)], **kwargs)
+
+    def get_scene(self, timeout: float = 30.0) -> GetScene.Response:
+        return self.call(self.scene_client, GetScene.Request(), timeout)
+
+    # ------------------------------------------------------------ lifetime
+
+    def close(self) -> None:
+        if self._owns_node:
+            self._executor.shutdown(timeout_sec=2.0)
+            self.node.destroy_node()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+def call_service(client, request, timeout: float = 60.0):
+    """Call ``client`` and wait for the answer; its node must be spun by an executor thread."""
+    if not client.wait_for_service(timeout_sec=timeout):
+        raise TimeoutError(f"service {client.srv_name} not available after {timeout} s")
+    future = client.call_async(request)
+    deadline = time.monotonic() + timeout
+    while not future.done():
+        if time.monotonic() > deadline:
+            client.remove_pending_request(future)
+            raise TimeoutError(f"no response from {client.srv_name} within {timeout} s")
+        time.sleep(0.0002)
+    return future.result()
+
+
+def plan_request(
+    goal_joints: dict[str, float] | None = None,
+    *,
+    goal_poses: dict | None = None,
+    start: dict[str, float] | None = None,
+    group: str = "",
+    planner_id: str = "",
+    time_budget: float = 5.0,
+    seed: int = -1,
+    attempts: int = 1,
+    velocity_scaling: float = 1.0,
+    acceleration_scaling: float = 1.0,
+    frame_id: str = "base_link",
+) -> PlanMotion.Request:
+    """A ``PlanMotion.Request`` from plain Python values."""
+    request = PlanMotion.Request(
+        group=group,
+        planner_id=planner_id,
+        allowed_planning_time=float(time_budget),
+        num_attempts=int(attempts),
+        seed=int(seed),
+        max_velocity_scaling_factor=float(velocity_scaling),
+        max_acceleration_scaling_factor=float(acceleration_scaling),
+    )
+    if start:
+        request.start_state = _joint_state(start)
+    if goal_joints:
+        request.goal_joint_names = list(goal_joints)
+        request.goal_positions = [float(v) for v in goal_joints.values()]
+    if goal_poses:
+        request.goal_links, request.goal_poses = _stamped_poses(goal_poses, frame_id)
+    return request
+
+
+def obstacle_msg(name: str, shape: str, dimensions, pose, frame_id: str = "base_link") -> SceneObstacle:
+    """``SceneObstacle`` ADD of a primitive (``pose`` a 4x4 matrix or a ``geometry_msgs/Pose``)."""
+    from shape_msgs.msg import SolidPrimitive
+
+    types = {"box": SolidPrimitive.BOX, "sphere": SolidPrimitive.SPHERE, "cylinder": SolidPrimitive.CYLINDER}
+    msg = SceneObstacle(name=name, operation=SceneObstacle.ADD)
+    msg.header.frame_id = frame_id
+    msg.shape.type = types.get(shape, 0)
+    msg.shape.dimensions = [float(v) for v in dimensions]
+    msg.pose = _pose(pose)
+    return msg
+
+
+def _joint_state(values: dict[str, float]) -> JointState:
+    return conv.joint_state_msg(list(values), list(values.values()))
+
+
+def _pose(pose):
+    from geometry_msgs.msg import Pose
+
+    return pose if isinstance(pose, Pose) else conv.matrix_to_pose(pose)
+
+
+def _stamped_poses(poses: dict, frame_id: str):
+    from geometry_msgs.msg import PoseStamped
+
+    links, stamped = [], []
+    for link, pose in poses.items():
+        msg = PoseStamped(pose=_pose(pose))
+        msg.header.frame_id = frame_id
+        links.append(link)
+        stamped.append(msg)
+    return links, stamped
