@@ -1,0 +1,169 @@
+"""CollisionChecker: robot self-collision (SRDF-filtered) + robot-vs-scene, on Pinocchio + coal.
+
+One Pinocchio ``Data`` and one ``GeometryData`` are built per scene and reused
+for every check. The geometry model (robot geometry + one object per
+obstacle) and its pair list are rebuilt from scratch whenever the scene
+changes (``set_scene`` or any edit that bumps ``scene.version``), so a removed
+obstacle never leaves a stale pair behind. Robot-vs-scene pairs come first in
+the pair list: in planning they are the ones that usually fail, and
+``stop_at_first_collision`` then returns early.
+"""
+
+from __future__ import annotations
+
+from itertools import combinations
+
+import coal
+import numpy as np
+import pinocchio as pin
+
+from maru_planner.robot.model import RobotModel
+from maru_planner.scene import Obstacle, Scene
+
+
+def obstacle_geometry(obstacle: Obstacle) -> coal.CollisionGeometry:
+    """The coal shape of an obstacle (cylinders along local z, centred)."""
+    if obstacle.type == "box":
+        return coal.Box(*obstacle.size)
+    if obstacle.type == "sphere":
+        return coal.Sphere(obstacle.radius)
+    if obstacle.type == "cylinder":
+        return coal.Cylinder(obstacle.radius, obstacle.length)
+    loader = coal.MeshLoader()
+    return loader.load(obstacle.path, np.asarray(obstacle.scale, dtype=float))
+
+
+def self_collision_pairs(robot: RobotModel) -> list[tuple[int, int]]:
+    """Geometry index pairs to check for self-collision.
+
+    Excluded: geometries on the same rigid body, link pairs disabled in the
+    SRDF and -- for robots without any disabled pair -- parent/child bodies.
+    """
+    model, geoms = robot.model, robot.collision_model.geometryObjects
+    disabled = robot.srdf.disabled_pairs
+    links = [model.frames[g.parentFrame].name for g in geoms]
+    pairs = []
+    for i, j in combinations(range(len(geoms)), 2):
+        ji, jj = geoms[i].parentJoint, geoms[j].parentJoint
+        if ji == jj or frozenset((links[i], links[j])) in disabled:
+            continue
+        if not disabled and (model.parents[ji] == jj or model.parents[jj] == ji):
+            continue
+        pairs.append((i, j))
+    return pairs
+
+
+class CollisionChecker:
+    """Validity of full robot configurations against self-collision and a scene."""
+
+    def __init__(self, robot: RobotModel, scene: Scene | None = None, *, padding: float = 0.0):
+        """``padding`` (m) is added to every pair's security margin: closer than that counts as collision."""
+        self.robot = robot
+        self.padding = float(padding)
+        self.check_count = 0
+        self._self_pairs = self_collision_pairs(robot)
+        self._model = robot.model
+        self._data = robot.model.createData()
+        self._scene: Scene | None = None
+        self._scene_version = -1
+        self.set_scene(scene if scene is not None else Scene())
+
+    # -------------------------------------------------------------- scene --
+    @property
+    def scene(self) -> Scene:
+        return self._scene
+
+    def set_scene(self, scene: Scene) -> None:
+        """Use ``scene`` (later edits to it are picked up automatically)."""
+        self._scene = scene
+        self._build()
+
+    def _build(self) -> None:
+        geom_model = self.robot.collision_model.copy()
+        n_robot = geom_model.ngeoms
+        names = [self._model.frames[g.parentFrame].name for g in geom_model.geometryObjects]
+        for obstacle in self._scene.obstacles.values():
+            placement = pin.SE3(obstacle.pose[:3, :3].copy(), obstacle.pose[:3, 3].copy())
+            obj = pin.GeometryObject(f"scene/{obstacle.name}", 0, 0, placement, obstacle_geometry(obstacle))
+            geom_model.addGeometryObject(obj)
+            names.append(obstacle.name)
+        moving = [i for i in range(n_robot) if geom_model.geometryObjects[i].parentJoint != 0]
+        scene_pairs = [(i, k) for k in range(n_robot, geom_model.ngeoms) for i in moving]
+        pairs = scene_pairs + self._self_pairs
+        geom_model.setCollisionPairs(np.zeros((geom_model.ngeoms, geom_model.ngeoms), dtype=bool), False)
+        for i, j in pairs:
+            geom_model.addCollisionPair(pin.CollisionPair(i, j))
+        self._geom_model = geom_model
+        self._geom_data = pin.GeometryData(geom_model)
+        for request in self._geom_data.collisionRequests:
+            request.security_margin = self.padding
+            request.enable_contact = False
+        self._pair_names = [(names[i], names[j]) for i, j in pairs]
+        self._scene_version = self._scene.version
+
+    def _sync(self) -> None:
+        if self._scene.version != self._scene_version:
+            self._build()
+
+    @property
+    def n_pairs(self) -> int:
+        """Number of geometry pairs checked per configuration."""
+        self._sync()
+        return len(self._pair_names)
+
+    # ------------------------------------------------------------- checks --
+    def is_valid(self, q: np.ndarray) -> bool:
+        """True if ``q`` (full configuration) is free of self- and scene collision."""
+        self._sync()
+        self.check_count += 1
+        return not pin.computeCollisions(self._model, self._data, self._geom_model, self._geom_data, q, True)
+
+    def are_valid(self, Q: np.ndarray) -> np.ndarray:
+        """Validity of each row of ``Q`` (n, nq)."""
+        self._sync()
+        Q = np.asarray(Q, dtype=float)
+        out = np.empty(len(Q), dtype=bool)
+        model, data, gm, gd = self._model, self._data, self._geom_model, self._geom_data
+        for k, q in enumerate(Q):
+            out[k] = not pin.computeCollisions(model, data, gm, gd, q, True)
+        self.check_count += len(Q)
+        return out
+
+    def first_invalid(self, Q: np.ndarray) -> int:
+        """Index of the first invalid row of ``Q`` (-1 if all valid); stops at the first hit."""
+        self._sync()
+        model, data, gm, gd = self._model, self._data, self._geom_model, self._geom_data
+        for k, q in enumerate(np.asarray(Q, dtype=float)):
+            self.check_count += 1
+            if pin.computeCollisions(model, data, gm, gd, q, True):
+                return k
+        return -1
+
+    def colliding_pairs(self, q: np.ndarray) -> list[tuple[str, str]]:
+        """Names (link or obstacle) of every colliding pair at ``q``; empty if valid."""
+        self._sync()
+        self.check_count += 1
+        pin.computeCollisions(self._model, self._data, self._geom_model, self._geom_data, q, False)
+        hits = [self._pair_names[k] for k, r in enumerate(self._geom_data.collisionResults) if r.isCollision()]
+        return list(dict.fromkeys(hits))
+
+    def clearance(self, q: np.ndarray) -> float:
+        """Minimum distance over all checked pairs (m); <= 0 when in collision."""
+        self._sync()
+        self.check_count += 1
+        if not self._pair_names:
+            return float("inf")
+        pin.computeDistances(self._model, self._data, self._geom_model, self._geom_data, q)
+        return float(min(r.min_distance for r in self._geom_data.distanceResults)) - self.padding
+
+    def closest_pair(self, q: np.ndarray) -> tuple[tuple[str, str], float]:
+        """(names, distance) of the closest pair at ``q``."""
+        self._sync()
+        self.check_count += 1
+        pin.computeDistances(self._model, self._data, self._geom_model, self._geom_data, q)
+        d = [r.min_distance for r in self._geom_data.distanceResults]
+        k = int(np.argmin(d))
+        return self._pair_names[k], float(d[k])
+
+    def reset_count(self) -> None:
+        self.check_count = 0
