@@ -262,7 +262,9 @@ GROUPS: dict[str, list[str]] = {
     "upper_body": ["waist_yaw", *ARM_JOINTS["r"], *ARM_JOINTS["l"]],
 }
 ARM_DOWN = (-HALF_PI, HALF_PI, HALF_PI, 0.0, -HALF_PI, -HALF_PI)  # paper's 6-DOF goal: arm hanging down
-NAMED_STATES = {"home": {"waist_yaw": 0.0, **dict(zip(ARM_JOINTS["r"], ARM_DOWN)), **dict(zip(ARM_JOINTS["l"], ARM_DOWN))}}
+NAMED_STATES = {
+    "home": {"waist_yaw": 0.0, **dict(zip(ARM_JOINTS["r"], ARM_DOWN)), **dict(zip(ARM_JOINTS["l"], ARM_DOWN))}
+}
 DISABLED_PAIR_SAMPLES = 20000
 DISABLED_PAIR_SEED = 7
 

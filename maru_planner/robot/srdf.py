@@ -53,9 +53,9 @@ def parse_srdf(source: str | Path, chain_joints: Callable[[str, str], list[str]]
     for name in elements:
         info.groups[name] = _resolve_group(name, elements, chain_joints)
     for state in root.findall("group_state"):
-        values = {  # multi-value joints (a free-flyer's 7 numbers) are not planning joints: skipped
-            j.attrib["name"]: float(j.attrib["value"]) for j in state.findall("joint") if " " not in j.attrib["value"].strip()
-        }
+        # multi-value joints (a free-flyer's 7 numbers) are not planning joints: skipped
+        scalar = [j for j in state.findall("joint") if " " not in j.attrib["value"].strip()]
+        values = {j.attrib["name"]: float(j.attrib["value"]) for j in scalar}
         info.group_states[state.attrib["name"]] = values
     for ee in root.findall("end_effector"):
         info.end_effectors[ee.attrib["name"]] = ee.attrib["parent_link"]
