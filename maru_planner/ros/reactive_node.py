@@ -1,0 +1,307 @@
+"""reactive_node: the modified elastic strip (paper 001) driven by /scan.
+
+Subscribes ``/scan`` (LaserScan), ``/odom`` (Odometry), ``/plan`` (Path, the
+initial path) and ``/goal_pose`` (PoseStamped). Every valid scan gives exactly
+one update: a ``/cmd_vel`` Twist, the strip on ``~/strip`` (nav_msgs/Path),
+arm joint commands on ``~/arm_command`` (JointTrajectory) and, when someone
+listens, markers on ``~/markers``.
+
+Malformed scans are dropped with a throttled warning; a scan older than
+``stale_scan_timeout`` stops the base (zero Twist). With
+``use_message_stamps`` (default) every time the node uses comes from message
+stamps, so replaying the same bag gives the same commands; otherwise the node
+clock is used and a watchdog also stops the base when scans stop arriving.
+
+Parameters: ``config/reactive.yaml``; the elastic-strip ones are the fields of
+:class:`maru_planner.reactive.StripParams` and are declared from it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+
+import numpy as np
+import rclpy
+import yaml
+from geometry_msgs.msg import PoseStamped, Twist
+from nav_msgs.msg import Odometry, Path
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import LaserScan
+from trajectory_msgs.msg import JointTrajectory
+from visualization_msgs.msg import MarkerArray
+
+from maru_planner.errors import MaruError
+from maru_planner.reactive import ElasticStripController, ScanError, StripParams
+from maru_planner.reactive.description import arm_joint_names
+from maru_planner.ros import reactive_conversions as conv
+from maru_planner.ros.env import configure_loopback_dds
+
+NODE_PARAMETERS = {
+    "use_message_stamps": True,
+    "stale_scan_timeout": 0.5,
+    "odom_sync": True,
+    "odom_frame": "odom",
+    "base_frame": "base_link",
+    "scan_reliability": "best_effort",
+    "publish_arm": True,
+    "warn_throttle_period": 2.0,
+    "goal_path_tolerance": 0.25,
+    "status_period": 30.0,
+}
+
+
+class ThrottledWarnings:
+    """Warn at most once per period per key, saying how many were suppressed meanwhile."""
+
+    def __init__(self, logger, period_s: float):
+        self._logger, self._period = logger, float(period_s)
+        self._last: dict[str, float] = {}
+        self._suppressed: dict[str, int] = {}
+
+    def warn(self, key: str, message: str) -> None:
+        now = time.monotonic()
+        if now - self._last.get(key, -math.inf) < self._period:
+            self._suppressed[key] = self._suppressed.get(key, 0) + 1
+            return
+        skipped = self._suppressed.pop(key, 0)
+        suffix = f" ({skipped} more since last warning)" if skipped else ""
+        self._last[key] = now
+        self._logger.warning(message + suffix)
+
+
+def _strip_param_defaults() -> dict[str, object]:
+    """ROS-parameter defaults for every StripParams field (tuples become lists)."""
+    defaults = {}
+    for f in dataclasses.fields(StripParams):
+        value = f.default if f.default is not dataclasses.MISSING else f.default_factory()  # type: ignore[misc]
+        defaults[f.name] = list(value) if isinstance(value, tuple) else value
+    return defaults
+
+
+def strip_params_from_config(path) -> StripParams:
+    """StripParams from a ``--params-file`` YAML (``reactive_node: ros__parameters:``), defaults elsewhere.
+
+    Lets tools outside ROS (the bag recorder, benchmarks) run the controller
+    exactly as the node configured from the same file would.
+    """
+    with open(path) as stream:
+        params = (yaml.safe_load(stream) or {}).get("reactive_node", {}).get("ros__parameters", {})
+    return StripParams.from_dict({k: v for k, v in params.items() if k not in NODE_PARAMETERS})
+
+
+class ReactiveNode(Node):
+    """Convert messages, call the elastic-strip controller, publish its commands."""
+
+    def __init__(self, **kwargs):
+        super().__init__("reactive_node", **kwargs)
+        self._strip_defaults = _strip_param_defaults()
+        for name, default in {**self._strip_defaults, **NODE_PARAMETERS}.items():
+            self.declare_parameter(name, default)
+        self.params = self._read_strip_params()
+        self.controller = ElasticStripController(self.params)
+        self.warnings = ThrottledWarnings(self.get_logger(), self._param("warn_throttle_period"))
+        self.use_stamps = bool(self._param("use_message_stamps"))
+        self.stale_timeout = float(self._param("stale_scan_timeout"))
+        self.odom_frame = str(self._param("odom_frame"))
+
+        self.pose: conv.Pose2D | None = None
+        self.odom_stamp: float | None = None
+        self.pending = None  # (LaserScanData, header stamp) waiting for its odometry
+        self.odom_sync = bool(self._param("odom_sync"))
+        self.newest_stamp = -math.inf  # newest message stamp seen (seconds), the clock in stamp mode
+        self.path: np.ndarray | None = None
+        self.last_arm_stamp: float | None = None
+        self.last_scan_received = time.monotonic()
+        self.base_stopped = True
+        self.counts = {"scans": 0, "updates": 0, "dropped": 0, "stale": 0}
+        self._goal_logged = False
+
+        self._setup_arm()
+        self._setup_topics()
+
+    # ------------------------------------------------------------ set-up
+    def _param(self, name: str):
+        return self.get_parameter(name).value
+
+    def _read_strip_params(self) -> StripParams:
+        try:
+            return StripParams.from_dict({name: self._param(name) for name in self._strip_defaults})
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"invalid reactive_node parameters: {exc}") from exc
+
+    def _setup_arm(self) -> None:
+        self.arm_names: list[str] = []
+        if self._param("publish_arm"):
+            self.arm_names = arm_joint_names("left") + arm_joint_names("right")
+
+    def _setup_topics(self) -> None:
+        reliability = str(self._param("scan_reliability"))
+        if reliability not in ("best_effort", "reliable"):
+            raise ValueError(f"scan_reliability must be 'best_effort' or 'reliable', not {reliability!r}")
+        scan_qos = QoSProfile(
+            depth=5,
+            reliability=ReliabilityPolicy.RELIABLE if reliability == "reliable" else ReliabilityPolicy.BEST_EFFORT,
+        )
+        # Creation order matters: when several messages are ready at once the executor takes them in
+        # this order, so an odometry / goal / plan sent before a scan is applied before that scan.
+        self.create_subscription(Odometry, "/odom", self.on_odom, 10)
+        self.create_subscription(PoseStamped, "/goal_pose", self.on_goal, 10)
+        self.create_subscription(Path, "/plan", self.on_plan, 10)
+        self.create_subscription(LaserScan, "/scan", self.on_scan, scan_qos)
+        self.cmd_pub = self.create_publisher(Twist, "/cmd_vel", 10)
+        self.strip_pub = self.create_publisher(Path, "~/strip", 10)
+        self.arm_pub = self.create_publisher(JointTrajectory, "~/arm_command", 10)
+        self.marker_pub = self.create_publisher(MarkerArray, "~/markers", 10)
+        if not self.use_stamps:
+            self.create_timer(max(self.stale_timeout / 2.0, 0.01), self.on_watchdog)
+        if float(self._param("status_period")) > 0.0:
+            self.create_timer(float(self._param("status_period")), self.log_status)
+
+    def log_status(self) -> None:
+        self.get_logger().info(self.status())
+
+    def status(self) -> str:
+        return "scans {scans}, updates {updates}, dropped {dropped}, stale {stale}".format(**self.counts)
+
+    # ------------------------------------------------------------ inputs
+    def _now(self) -> float:
+        if self.use_stamps:
+            return self.newest_stamp
+        return self.get_clock().now().nanoseconds / conv.NS_PER_S
+
+    def _see_stamp(self, stamp) -> None:
+        self.newest_stamp = max(self.newest_stamp, conv.stamp_to_s(stamp))
+
+    def on_odom(self, msg: Odometry) -> None:
+        self.pose = conv.pose_from_odom(msg)
+        self.odom_stamp = conv.stamp_to_s(msg.header.stamp)
+        self._see_stamp(msg.header.stamp)
+        self._process_pending(force=False)
+
+    def on_goal(self, msg: PoseStamped) -> None:
+        """A new goal; a /plan already received that ends there stays the initial path, else a straight line."""
+        goal = conv.pose_from_pose_stamped(msg)
+        tolerance = float(self._param("goal_path_tolerance"))
+        if self.path is not None and np.hypot(*(self.path[-1, :2] - np.asarray(goal[:2]))) <= tolerance:
+            self.controller.set_path(self.path)
+        else:
+            self.path = None
+            self.controller.set_goal(goal)
+        self._goal_logged = False
+        self.get_logger().info(f"goal ({goal[0]:.2f}, {goal[1]:.2f}, {goal[2]:.2f})")
+
+    def on_plan(self, msg: Path) -> None:
+        """The initial path; its last pose becomes the goal (eq. 36-44 deform it from here on)."""
+        points = conv.path_points_from_msg(msg)
+        if len(points) < 2 or not np.all(np.isfinite(points)):
+            self.warnings.warn("plan", f"ignored /plan with {len(points)} poses (need >= 2 finite poses)")
+            return
+        self.path = points
+        self.controller.set_path(points)
+        self._goal_logged = False
+        self.get_logger().info(f"initial path with {len(points)} poses to ({points[-1, 0]:.2f}, {points[-1, 1]:.2f})")
+
+    # ------------------------------------------------------------ the update
+    def on_scan(self, msg: LaserScan) -> None:
+        """Validate, then wait (at most until the next scan) for the odometry of the scan's time."""
+        self.counts["scans"] += 1
+        try:
+            stamp = conv.stamp_to_s(msg.header.stamp) if self.use_stamps else self._now()
+            scan = conv.scan_from_msg(msg, stamp=stamp)
+        except ScanError as exc:
+            self.counts["dropped"] += 1
+            self.warnings.warn("malformed", f"dropped malformed scan: {exc}")
+            return
+        if self.use_stamps:
+            self._see_stamp(msg.header.stamp)
+        self.last_scan_received = time.monotonic()
+        self._process_pending(force=True)
+        self.pending = (scan, conv.stamp_to_s(msg.header.stamp))
+        self._process_pending(force=not self.odom_sync)
+
+    def _process_pending(self, force: bool) -> None:
+        """Run the update for the waiting scan once odometry stamped at or after it is in (or when forced).
+
+        Pairing each scan with the odometry of its own time, whatever order the two
+        arrive in, is what makes a replayed bag give the same commands every time.
+        """
+        if self.pending is None:
+            return
+        scan, header_stamp = self.pending
+        if not force and (self.odom_stamp is None or self.odom_stamp < header_stamp):
+            return
+        self.pending = None
+        scan_age = self._now() - header_stamp
+        if scan_age > self.stale_timeout:
+            self.counts["stale"] += 1
+            self.warnings.warn("stale", f"scan is {scan_age:.3f} s old (> {self.stale_timeout} s): stopping the base")
+            self._stop_base()
+            return
+        if self.pose is None or not self.controller.has_goal:
+            missing = "odometry" if self.pose is None else "a goal"
+            self.warnings.warn("waiting", f"no {missing} yet: holding still")
+            self._stop_base()
+            return
+        try:
+            self._update(scan, scan.stamp)
+        except (MaruError, ValueError, RuntimeError) as exc:
+            self.warnings.warn("update", f"update failed, stopping the base: {exc}")
+            self._stop_base()
+
+    def _update(self, scan, stamp: float) -> None:
+        out = self.controller.update(pose=self.pose, scan=scan)
+        self.counts["updates"] += 1
+        self.cmd_pub.publish(conv.twist_msg(out.v, out.w))
+        self.base_stopped = out.v == 0.0 and out.w == 0.0
+        self.strip_pub.publish(conv.path_msg(np.asarray(out.strip), self.odom_frame, stamp))
+        self._publish_arm(out, stamp)
+        if self.marker_pub.get_subscription_count() > 0:
+            self.marker_pub.publish(
+                conv.strip_markers(out.strip, out.obstacle_points, out.target, self.odom_frame, stamp)
+            )
+        if out.reached_goal and not self._goal_logged:
+            self.get_logger().info("goal reached")
+            self._goal_logged = True
+
+    def _publish_arm(self, out, stamp: float) -> None:
+        if not self.arm_names or out.arm_joint_steps is None or out.arm_joint_positions is None:
+            return
+        period = 0.1 if self.last_arm_stamp is None else max(stamp - self.last_arm_stamp, 1e-3)
+        self.last_arm_stamp = stamp
+        self.arm_pub.publish(
+            conv.arm_trajectory_msg(self.arm_names, out.arm_joint_positions, out.arm_joint_steps, period, stamp)
+        )
+
+    def _stop_base(self) -> None:
+        self.cmd_pub.publish(conv.twist_msg(0.0, 0.0))
+        self.base_stopped = True
+
+    def on_watchdog(self) -> None:
+        """Clock mode only: stop the base once when scans stop arriving."""
+        silent = time.monotonic() - self.last_scan_received
+        if not self.base_stopped and silent > self.stale_timeout:
+            self.warnings.warn("silent", f"no scan for {silent:.2f} s: stopping the base")
+            self._stop_base()
+
+
+def main(args=None):
+    configure_loopback_dds()
+    rclpy.init(args=args)
+    node = ReactiveNode()
+    try:
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        node.get_logger().info(node.status())
+        node.destroy_node()
+        if rclpy.ok():
+            rclpy.shutdown()
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,341 @@
+"""reactive_node: message conversions (no DDS) and the node end to end (a subprocess on loopback DDS).
+
+``ReactiveClient`` is the test side of the node's topics; the replay and
+closed-loop tests (test_reactive_replay.py) use it too. It sends inputs
+lock-step (the next scan goes out once the last one's Twist is back), and
+the node holds each scan until odometry of the scan's time has arrived, so
+a scan is always paired with the odometry sent with it.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from maru_planner.paths import config_path
+
+pytestmark = pytest.mark.ros
+
+NODE_MODULE = "maru_planner.ros.reactive_node"
+REPO_ROOT = Path(__file__).resolve().parent.parent
+
+
+def reactive_params_file(tmp_path: Path, **overrides) -> Path:
+    """config/reactive.yaml with ``overrides`` applied, written to a temporary file."""
+    data = yaml.safe_load(config_path("reactive.yaml").read_text())
+    data["reactive_node"]["ros__parameters"].update(overrides)
+    path = tmp_path / f"reactive_{len(list(tmp_path.glob('reactive_*.yaml')))}.yaml"
+    path.write_text(yaml.safe_dump(data))
+    return path
+
+
+def shipped_params() -> dict:
+    return yaml.safe_load(config_path("reactive.yaml").read_text())["reactive_node"]["ros__parameters"]
+
+
+class ReactiveClient:
+    """Publishers for the node's inputs and recorders of its outputs."""
+
+    def __init__(self, spinning):
+        from geometry_msgs.msg import PoseStamped, Twist
+        from nav_msgs.msg import Odometry, Path
+        from rclpy.qos import QoSProfile, ReliabilityPolicy
+        from sensor_msgs.msg import LaserScan
+        from trajectory_msgs.msg import JointTrajectory
+
+        reliable = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)
+        self.spinning = spinning
+        node = self.node = spinning.node
+        self.scan_pub = node.create_publisher(LaserScan, "/scan", reliable)
+        self.odom_pub = node.create_publisher(Odometry, "/odom", reliable)
+        self.plan_pub = node.create_publisher(Path, "/plan", reliable)
+        self.goal_pub = node.create_publisher(PoseStamped, "/goal_pose", reliable)
+        self._lock = threading.Lock()
+        self.twists: list = []
+        self.strips: list = []
+        self.arm: list = []
+        node.create_subscription(Twist, "/cmd_vel", self._keep(self.twists), reliable)
+        node.create_subscription(Path, "/reactive_node/strip", self._keep(self.strips), reliable)
+        node.create_subscription(JointTrajectory, "/reactive_node/arm_command", self._keep(self.arm), reliable)
+
+    def _keep(self, store: list):
+        def callback(msg):
+            with self._lock:
+                store.append(msg)
+
+        return callback
+
+    def wait_connected(self, timeout: float = 30.0) -> None:
+        pubs = (self.scan_pub, self.odom_pub, self.plan_pub, self.goal_pub)
+        ok = self.spinning.wait_for(lambda: all(p.get_subscription_count() > 0 for p in pubs), timeout=timeout)
+        assert ok, "reactive_node did not subscribe to /scan, /odom, /plan and /goal_pose"
+
+    def send_and_confirm(self, publisher, msg, process, marker: str, timeout: float = 20.0) -> None:
+        """Publish a goal or plan and wait until the node's log shows it was applied (``marker`` once more)."""
+        before = process.log().count(marker)
+        publisher.publish(msg)
+        ok = self.spinning.wait_for(lambda: process.log().count(marker) > before, timeout=timeout)
+        assert ok, f"reactive_node did not apply {publisher.topic_name}:\n{process.log()[-1500:]}"
+
+    def twist_count(self) -> int:
+        with self._lock:
+            return len(self.twists)
+
+    def step(self, odom, scan, timeout: float = 20.0):
+        """Send odometry and a scan of the same time; return the Twist the scan produced."""
+        before = self.twist_count()
+        if odom is not None:
+            self.odom_pub.publish(odom)
+        self.scan_pub.publish(scan)
+        assert self.spinning.wait_for(lambda: self.twist_count() > before, timeout=timeout), "no /cmd_vel for scan"
+        with self._lock:
+            return self.twists[before]
+
+
+def twist_pairs(twists) -> list[tuple[float, float]]:
+    return [(t.linear.x, t.angular.z) for t in twists]
+
+
+# ---------------------------------------------------------------- conversions, no DDS
+def test_scan_conversion_round_trip_and_rep117_beams():
+    from maru_planner.reactive import LaserScanData
+    from maru_planner.ros import reactive_conversions as conv
+
+    ranges = np.array([1.0, np.inf, np.nan, 0.01, 11.0, 2.5])
+    data = LaserScanData(-0.5, 0.2, ranges, 0.05, 10.0, stamp=12.25)
+    msg = conv.scan_msg(data, "laser_link", scan_time=0.1)
+    assert msg.header.frame_id == "laser_link"
+    assert (msg.header.stamp.sec, msg.header.stamp.nanosec) == (12, 250_000_000)
+    assert msg.angle_max == pytest.approx(0.5)
+    back = conv.scan_from_msg(msg)
+    assert back.stamp == pytest.approx(12.25) and back.angle_max == pytest.approx(0.5)
+    np.testing.assert_array_equal(np.isnan(back.ranges), np.isnan(ranges))
+    assert back.ranges[0] == 1.0 and math.isinf(back.ranges[1])
+    assert conv.scan_from_msg(msg, stamp=3.0).stamp == 3.0
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "match"),
+    [
+        ("angle_increment", 0.0, "angle_increment is 0"),
+        ("angle_min", float("nan"), "angle_min is not finite"),
+        ("angle_max", 2.0, "ranges but"),
+        ("range_max", 0.01, "range limits"),
+        ("intensities", [1.0, 2.0], "intensities"),
+        ("ranges", [], "empty|ranges but"),
+    ],
+)
+def test_malformed_scan_messages_raise_scan_error(field, value, match):
+    from sensor_msgs.msg import LaserScan
+
+    from maru_planner.reactive import ScanError
+    from maru_planner.ros import reactive_conversions as conv
+
+    msg = LaserScan()
+    msg.angle_min, msg.angle_max, msg.angle_increment = -0.5, 0.5, 0.25
+    msg.range_min, msg.range_max = 0.05, 10.0
+    msg.ranges = [1.0] * 5
+    conv.scan_from_msg(msg)
+    setattr(msg, field, value)
+    with pytest.raises(ScanError, match=match):
+        conv.scan_from_msg(msg)
+
+
+def test_pose_path_twist_and_arm_conversions():
+    from maru_planner.ros import reactive_conversions as conv
+
+    odom = conv.odom_msg((1.0, -2.0, 2.5), 0.3, -0.4, 7.5, "odom", "base_link")
+    assert conv.pose_from_odom(odom) == pytest.approx((1.0, -2.0, 2.5))
+    assert odom.child_frame_id == "base_link" and odom.twist.twist.angular.z == -0.4
+    goal = conv.pose_stamped_msg((3.0, 4.0, -3.0), "map", 1.0)
+    assert conv.pose_from_pose_stamped(goal) == pytest.approx((3.0, 4.0, -3.0))
+
+    path = conv.path_msg(np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]]), "odom", 2.0)
+    points = conv.path_points_from_msg(path)
+    np.testing.assert_allclose(points, [[0, 0, 0], [1, 0, math.pi / 2], [1, 1, math.pi / 2]], atol=1e-12)
+    assert conv.path_points_from_msg(conv.path_msg(np.zeros((0, 2)), "odom", 0.0)).shape == (0, 3)
+
+    twist = conv.twist_msg(0.2, -0.1)
+    assert (twist.linear.x, twist.angular.z, twist.linear.y) == (0.2, -0.1, 0.0)
+    traj = conv.arm_trajectory_msg(["a", "b"], np.array([0.1, 0.2]), np.array([0.01, -0.02]), 0.1, 3.0)
+    assert traj.joint_names == ["a", "b"] and len(traj.points) == 1
+    assert traj.points[0].positions == pytest.approx([0.1, 0.2])
+    assert traj.points[0].velocities == pytest.approx([0.1, -0.2])
+    assert traj.points[0].time_from_start.nanosec == 100_000_000
+
+    markers = conv.strip_markers(np.array([[0, 0], [1, 0]]), np.array([[2.0, 1.0]]), np.array([1.0, 0.0]), "odom", 0)
+    assert [m.ns for m in markers.markers] == ["strip", "vias", "obstacles", "target"]
+    assert markers.markers[2].points[0].x == 2.0
+
+
+def test_bag_records_decode_to_rclpy_messages():
+    from maru_planner.ros import reactive_conversions as conv
+
+    odom = conv.odom_msg((1.0, 2.0, 0.5), 0.0, 0.0, 1.0, "odom", "base_link")
+    from rclpy.serialization import serialize_message
+
+    back = conv.decode_bag_record("nav_msgs/msg/Odometry", serialize_message(odom))
+    assert conv.pose_from_odom(back) == pytest.approx((1.0, 2.0, 0.5))
+    with pytest.raises(ValueError, match="no rclpy class"):
+        conv.decode_bag_record("tf2_msgs/msg/TFMessage", b"")
+
+
+def test_throttled_warnings_count_what_they_suppress():
+    from maru_planner.ros.reactive_node import ThrottledWarnings
+
+    class Logger:
+        def __init__(self):
+            self.lines = []
+
+        def warning(self, text):
+            self.lines.append(text)
+
+    logger = Logger()
+    warnings = ThrottledWarnings(logger, period_s=3600.0)
+    for _ in range(5):
+        warnings.warn("scan", "bad scan")
+    warnings.warn("other", "other problem")
+    assert logger.lines == ["bad scan", "other problem"]
+    warnings._last["scan"] -= 7200.0
+    warnings.warn("scan", "bad scan")
+    assert logger.lines[-1] == "bad scan (4 more since last warning)"
+
+
+def test_shipped_config_declares_only_known_parameters():
+    from maru_planner.reactive import StripParams
+    from maru_planner.ros.reactive_node import NODE_PARAMETERS, strip_params_from_config
+
+    params = shipped_params()
+    known = {f for f in StripParams.__dataclass_fields__} | set(NODE_PARAMETERS)
+    assert set(params) <= known, f"unknown keys in config/reactive.yaml: {set(params) - known}"
+    strip = strip_params_from_config(config_path("reactive.yaml"))
+    assert (strip.k_r, strip.k_c) == (0.5, 0.3)
+    assert strip.strip == "modified"
+
+
+# ---------------------------------------------------------------- the node as a process
+def synthetic_scan(stamp: float, circles=(), pose=(0.0, 0.0, 0.0), laser_x: float = 0.22, beams: int = 361):
+    """An LMS200-like scan (180 deg, 0.5 deg) from a robot at ``pose`` seeing circles (x, y, r) in the world."""
+    from maru_planner.reactive import LaserScanData
+    from maru_planner.ros import reactive_conversions as conv
+
+    angles = -math.pi / 2 + np.arange(beams) * (math.pi / (beams - 1))
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    origin = np.array([pose[0] + c * laser_x, pose[1] + s * laser_x])
+    dirs = np.stack([np.cos(angles + pose[2]), np.sin(angles + pose[2])], axis=1)
+    ranges = np.full(beams, np.inf)
+    for cx, cy, r in circles:
+        rel = np.array([cx, cy]) - origin
+        along = dirs @ rel
+        miss2 = rel @ rel - along**2
+        hit = (miss2 <= r * r) & (along > 0)
+        ranges[hit] = np.minimum(ranges[hit], along[hit] - np.sqrt(r * r - miss2[hit]))
+    data = LaserScanData(-math.pi / 2, math.pi / (beams - 1), ranges, 0.05, 10.0, stamp=stamp)
+    return conv.scan_msg(data, "laser_link", scan_time=0.1)
+
+
+def _odom(pose, stamp):
+    from maru_planner.ros import reactive_conversions as conv
+
+    return conv.odom_msg(pose, 0.0, 0.0, stamp, "odom", "base_link")
+
+
+def _malformed_scans(stamp: float):
+    zero_increment = synthetic_scan(stamp)
+    zero_increment.angle_increment = 0.0
+    nan_angle = synthetic_scan(stamp)
+    nan_angle.angle_min = float("nan")
+    short = synthetic_scan(stamp)
+    short.ranges = short.ranges[:100]
+    return [zero_increment, nan_angle, short]
+
+
+OBSTACLE = (1.6, 0.25, 0.3)  # a post a little left of the straight line to the goal
+
+
+@pytest.fixture(scope="module")
+def reactive_node(node_process, tmp_path_factory):
+    overrides = reactive_params_file(
+        tmp_path_factory.mktemp("reactive_params"), scan_reliability="reliable", status_period=0.5
+    )
+    args = ["--ros-args", "--params-file", str(config_path("reactive.yaml")), "--params-file", str(overrides)]
+    return node_process(NODE_MODULE, args)
+
+
+@pytest.fixture(scope="module")
+def client(reactive_node, rclpy_session):
+    from conftest import SpinningNode
+
+    spinning = SpinningNode("reactive_node_test_client")
+    client = ReactiveClient(spinning)
+    client.wait_connected()
+    yield client
+    spinning.destroy()
+
+
+def test_node_holds_still_without_a_goal(client, reactive_node):
+    twist = client.step(_odom((0.0, 0.0, 0.0), 1.0), synthetic_scan(1.0, [OBSTACLE]))
+    assert (twist.linear.x, twist.angular.z) == (0.0, 0.0)
+    assert client.strips == [], "no strip before there is a goal"
+    assert reactive_node.alive()
+
+
+def test_each_scan_gives_one_bounded_twist_strip_and_arm_command(client, reactive_node):
+    from maru_planner.ros import reactive_conversions as conv
+
+    limits = shipped_params()
+    goal = conv.pose_stamped_msg((4.0, 0.0, 0.0), "odom", 1.05)
+    client.send_and_confirm(client.goal_pub, goal, reactive_node, "goal (")
+    twists = [
+        client.step(_odom((0.0, 0.0, 0.0), t), synthetic_scan(t, [OBSTACLE]))
+        for t in (1.1, 1.2, 1.3, 1.4, 1.5)
+    ]
+    assert all(abs(t.linear.x) <= limits["max_linear"] + 1e-9 for t in twists)
+    assert all(abs(t.angular.z) <= limits["max_angular"] + 1e-9 for t in twists)
+    assert any(t.linear.x > 0.0 for t in twists), "a free goal 4 m ahead must get the base moving"
+    # the post sits left of the line to the goal: the commands turn right, away from it
+    assert twists[-1].angular.z < 0.0
+    assert client.spinning.wait_for(lambda: len(client.strips) >= 5 and len(client.arm) >= 5)
+    assert [round(conv.stamp_to_s(s.header.stamp), 3) for s in client.strips[-5:]] == [1.1, 1.2, 1.3, 1.4, 1.5]
+    strip = conv.path_points_from_msg(client.strips[-1])
+    assert 3 <= len(strip) <= limits["num_vias"] and client.strips[-1].header.frame_id == "odom"
+    assert strip[-1, :2] == pytest.approx((4.0, 0.0)), "a 4 m path fits in the strip: it ends at the goal"
+    cx, cy, r = OBSTACLE
+    assert np.min(np.hypot(strip[:, 0] - cx, strip[:, 1] - cy)) > r, "the strip must not pass through the post"
+    arm = client.arm[-1]
+    assert len(arm.joint_names) == 14 and arm.joint_names[0] == "left_arm_joint1"
+    assert len(arm.points[0].positions) == 14
+    assert all(abs(v) * 0.1 <= 0.05 + 1e-9 for v in arm.points[0].velocities), "arm steps within the step limit"
+
+
+def test_malformed_scans_are_dropped_and_the_node_keeps_serving(client, reactive_node):
+    for bad in _malformed_scans(1.55):
+        client.scan_pub.publish(bad)
+    twist = client.step(_odom((0.0, 0.0, 0.0), 1.6), synthetic_scan(1.6, [OBSTACLE]))
+    assert twist.linear.x > 0.0
+    assert reactive_node.alive()
+    assert client.spinning.wait_for(lambda: "dropped malformed scan" in reactive_node.log(), timeout=10)
+
+
+def test_a_stale_scan_stops_the_base(client, reactive_node):
+    moving = client.step(_odom((0.0, 0.0, 0.0), 1.7), synthetic_scan(1.7, [OBSTACLE]))
+    assert moving.linear.x > 0.0
+    stale = client.step(_odom((0.0, 0.0, 0.0), 3.0), synthetic_scan(2.0, [OBSTACLE]))
+    assert (stale.linear.x, stale.angular.z) == (0.0, 0.0)
+    fresh = client.step(_odom((0.0, 0.0, 0.0), 3.1), synthetic_scan(3.1, [OBSTACLE]))
+    assert fresh.linear.x > 0.0
+    assert client.spinning.wait_for(lambda: "stopping the base" in reactive_node.log(), timeout=10)
+
+
+def test_status_counts_match_what_was_sent(client, reactive_node):
+    """1 scan without goal + 5 + 1 + 3 (stale test) valid scans, 3 malformed, 1 stale: exactly one Twist each."""
+    expected_twists = 1 + 5 + 1 + 3
+    assert client.spinning.wait_for(lambda: client.twist_count() >= expected_twists)
+    status = "scans 13, updates 8, dropped 3, stale 1"
+    assert client.spinning.wait_for(lambda: status in reactive_node.log(), timeout=20), reactive_node.log()[-2000:]
+    assert client.twist_count() == expected_twists
