@@ -108,12 +108,13 @@ def _heap_pop(keys, gs, ids, size):
 
 
 @_njit
-def _astar_kernel(blocked, sr, sc, gr, gc):
+def _astar_kernel(blocked, sr, sc, gr, gc, cell_cost, use_cost):
     """A* on a grid padded with one blocked cell on every side.
 
     ``blocked`` is the padded (height + 2, width + 2) array; cells are given in
     padded coordinates. Returns (parent array over padded cells, goal cost or
-    -1, expansions).
+    -1, expansions). With ``use_cost``, entering a cell adds ``cell_cost``
+    (padded, >= 0) to the move cost: the heuristic stays admissible.
     """
     height, width = blocked.shape
     flat = blocked.ravel()
@@ -159,6 +160,8 @@ def _astar_kernel(blocked, sr, sc, gr, gc):
                 ng = g + sqrt2
             else:
                 ng = g + 1.0
+            if use_cost:
+                ng += cell_cost.ravel()[nb]
             if ng < g_best[nb]:
                 g_best[nb] = ng
                 parent[nb] = node
@@ -221,8 +224,12 @@ def _trace_dict(parent: dict, goal: tuple) -> np.ndarray:
     return np.array(cells, dtype=np.int64).reshape(-1, 2)
 
 
-def astar_2d(occupied, start_cell, goal_cell, *, use_numba: bool = True) -> AStarResult:
-    """Optimal 8-connected A* without corner cutting on a boolean occupancy array."""
+def astar_2d(occupied, start_cell, goal_cell, *, use_numba: bool = True, cell_cost=None) -> AStarResult:
+    """Optimal 8-connected A* without corner cutting on a boolean occupancy array.
+
+    ``cell_cost`` (optional, float >= 0, same shape) is added when entering a
+    cell (numba kernel only), e.g. to keep a guide path away from narrow parts.
+    """
     blocked = np.ascontiguousarray(occupied, dtype=np.bool_)
     if blocked.ndim != 2:
         raise ValueError(f"occupied must be 2-D, got shape {blocked.shape}")
@@ -237,11 +244,17 @@ def astar_2d(occupied, start_cell, goal_cell, *, use_numba: bool = True) -> ASta
     if use_numba and HAVE_NUMBA:
         padded = np.ones((height + 2, width + 2), dtype=np.bool_)
         padded[1:-1, 1:-1] = blocked
-        parent, cost, expansions = _astar_kernel(padded, sr + 1, sc + 1, gr + 1, gc + 1)
+        use_cost = cell_cost is not None
+        extra = np.zeros((1, 1)) if not use_cost else np.pad(np.asarray(cell_cost, dtype=float), 1)
+        if use_cost and extra.shape != padded.shape:
+            raise ValueError(f"cell_cost has shape {np.shape(cell_cost)}, occupied has {blocked.shape}")
+        parent, cost, expansions = _astar_kernel(padded, sr + 1, sc + 1, gr + 1, gc + 1, extra, use_cost)
         if cost < 0:
             return empty._replace(expansions=int(expansions))
         path = _trace_flat(parent, (gr + 1) * (width + 2) + gc + 1, width + 2) - 1
         return AStarResult(path, float(cost), int(expansions))
+    if cell_cost is not None:
+        raise ValueError("cell_cost needs the numba kernel")
     parent, cost, expansions = _astar_python(blocked, sr, sc, gr, gc)
     if cost < 0:
         return empty._replace(expansions=expansions)
@@ -255,3 +268,50 @@ def path_cost(cells: np.ndarray) -> float:
         return 0.0
     steps = np.abs(np.diff(cells, axis=0)).sum(axis=1)
     return float(np.sum(np.where(steps == 2, SQRT2, 1.0)))
+
+
+class GridAStarPlanner:
+    """2-D A* for a disc (or point) robot: obstacles grown by ``inflation_radius`` metres.
+
+    With a polygonal footprint and no radius given, the radius is the
+    footprint's circumradius, so the path is valid at any heading (headings are
+    interpolated from the start's to the goal's along the path).
+    """
+
+    def __init__(self, footprint=None, inflation_radius: float | None = None):
+        from maru_planner.base.se2 import footprint_radii
+
+        if inflation_radius is None:
+            inflation_radius = footprint_radii(footprint)[1] if footprint is not None else 0.0
+        if not (math.isfinite(inflation_radius) and inflation_radius >= 0):
+            raise ValueError(f"inflation_radius must be finite and >= 0, got {inflation_radius}")
+        self.inflation_radius = float(inflation_radius)
+
+    def plan(self, grid, start, goal):
+        import time
+
+        from maru_planner.base import common
+        from maru_planner.base import result as R
+
+        t0 = time.perf_counter()
+        stats = {"expansions": 0, "collision_checks": 0, "planning_time": 0.0, "deciding_stage": "astar"}
+        try:
+            common.check_grid(grid)
+            start, goal = common.as_pose(start, "start"), common.as_pose(goal, "goal")
+            s_cell, g_cell = common.pose_cell(grid, start, "start"), common.pose_cell(grid, goal, "goal")
+            grown = grid.inflate(self.inflation_radius) if self.inflation_radius > 0 else grid
+            for name, pose, cell in (("start", start, s_cell), ("goal", goal, g_cell)):
+                if grown.occupied[cell]:
+                    raise common.occupied_error(name, pose, f"within {self.inflation_radius:.3f} m of an obstacle")
+        except common.RequestError as exc:
+            stats["planning_time"] = time.perf_counter() - t0
+            return common.failure(exc.status, str(exc), stats)
+        path, cost, expansions = astar_2d(grown.occupied, s_cell, g_cell)
+        stats.update(expansions=expansions, collision_checks=8 * expansions, planning_time=time.perf_counter() - t0)
+        layers = {"grown": grown.occupied}
+        if len(path) == 0:
+            return common.failure(R.NO_PATH, "no path: A* exhausted the free cells of the grown map", stats, layers)
+        stats["cost"] = cost * grid.resolution
+        return R.BasePlanResult(
+            R.SOLVED, "solved by 2-D A*", common.cells_to_path(grid, path, start[2], goal[2]), stats, layers
+        )

@@ -1,0 +1,191 @@
+"""SE(2) A*, MSPP (ECA / BAA / full / local), registry and CLI on small maps."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from maru_planner.base import registry
+from maru_planner.base import result as R
+from maru_planner.base.grid import OccupancyGrid
+from maru_planner.base.mspp import MultiStagePlanner
+from maru_planner.base.scenes import build_all, table1
+from maru_planner.base.se2 import (
+    SE2AStarPlanner,
+    cspace_layers,
+    footprint_cells,
+    footprint_collides,
+    footprint_radii,
+    rectangle,
+)
+from maru_planner.errors import InvalidPlanner, InvalidRequest
+
+ROBOT = rectangle(0.9, 0.3)
+SCENES = build_all()
+
+
+def assert_valid_path(grid, footprint, path, start, goal):
+    """Every pose collision-free at its own heading, 8-adjacent cells, ends at start/goal cells."""
+    assert len(path) >= 1
+    cells = np.array([grid.world_to_cell(x, y) for x, y, _ in path])
+    assert tuple(cells[0]) == grid.world_to_cell(*start[:2])
+    assert tuple(cells[-1]) == grid.world_to_cell(*goal[:2])
+    assert np.abs(np.diff(cells, axis=0)).max(initial=0) <= 1
+    for (row, col), theta in zip(cells, path[:, 2], strict=True):
+        assert not footprint_collides(grid.occupied, footprint, grid.resolution, row, col, theta)
+
+
+def test_footprint_radii_of_centred_rectangle():
+    r_in, r_out = footprint_radii(ROBOT)
+    assert r_in == pytest.approx(0.15)
+    assert r_out == pytest.approx(math.hypot(0.45, 0.15))
+    assert footprint_radii(rectangle(1.0, 1.0) + [2.0, 0.0])[0] == 0.0  # reference point outside
+
+
+def test_footprint_cells_rotate_with_heading():
+    along_x = footprint_cells(ROBOT, 0.0, 0.1)
+    along_y = footprint_cells(ROBOT, math.pi / 2, 0.1)
+    assert np.ptp(along_x[:, 1]) == 8 and np.ptp(along_x[:, 0]) == 2
+    assert np.ptp(along_y[:, 0]) == 8 and np.ptp(along_y[:, 1]) == 2
+
+
+def test_cspace_layer_is_the_footprint_dilation():
+    occ = np.zeros((30, 30), bool)
+    occ[15, 15] = True
+    layers = cspace_layers(occ, ROBOT, 0.1, 8)
+    for k in (0, 2, 3):
+        expected = np.zeros_like(occ)
+        for row in range(30):
+            for col in range(30):
+                expected[row, col] = footprint_collides(occ, ROBOT, 0.1, row, col, 2 * math.pi * k / 8)
+        assert np.array_equal(layers[k], expected)
+
+
+@pytest.mark.parametrize(
+    "name, status, stage",
+    [
+        ("easy", R.SOLVED, "BAA"),
+        ("medium", R.SOLVED, "full"),
+        ("hard", R.SOLVED, "full"),
+        ("impossible", R.NO_PATH_PROVEN, "ECA"),
+    ],
+)
+def test_mspp_table1_stages(name, status, stage):
+    grid, prob = SCENES[name]
+    result = MultiStagePlanner(prob["footprint"]).plan(grid, prob["start"], prob["goal"])
+    assert result.status == status, result.message
+    assert result.stats["deciding_stage"] == stage
+    assert [s["name"] for s in result.stats["stages"]][-1] == stage
+    assert {"eca", "baa"} <= set(result.layers) or stage == "ECA"
+    if status == R.SOLVED:
+        assert_valid_path(grid, prob["footprint"], result.path, prob["start"], prob["goal"])
+    else:
+        assert "enclosed" in result.message and len(result.path) == 0
+
+
+@pytest.mark.parametrize("name", ["easy", "medium", "hard", "impossible"])
+def test_full_se2_agrees_with_mspp_on_solvability(name):
+    grid, prob = SCENES[name]
+    full = SE2AStarPlanner(prob["footprint"]).plan(grid, prob["start"], prob["goal"])
+    assert full.success == (name != "impossible")
+    assert full.stats["collision_checks"] > 0 and full.stats["expansions"] > 0
+    if full.success:
+        assert_valid_path(grid, prob["footprint"], full.path, prob["start"], prob["goal"])
+    else:
+        assert full.status == R.NO_PATH
+
+
+@pytest.mark.parametrize("name", ["medium", "hard", "house"])
+def test_mspp_local_paths_are_valid_and_local(name):
+    grid, prob = SCENES[name]
+    result = MultiStagePlanner(prob["footprint"], local=True).plan(grid, prob["start"], prob["goal"])
+    assert result.success, result.message
+    assert result.stats["deciding_stage"] == "local"
+    assert len(result.layers["windows"]) >= 1
+    assert_valid_path(grid, prob["footprint"], result.path, prob["start"], prob["goal"])
+    full = SE2AStarPlanner(prob["footprint"]).plan(grid, prob["start"], prob["goal"])
+    assert result.stats["expansions"] < full.stats["expansions"] or name == "medium"
+
+
+def test_se2_finds_the_optimal_heading_change_in_open_space():
+    grid = OccupancyGrid(np.zeros((20, 20), bool), 0.1)
+    planner = SE2AStarPlanner(ROBOT, headings=16)
+    result = planner.plan(grid, (1.0, 1.0, 0.0), (1.0, 1.0, math.pi / 2))
+    # four quarter-turn steps in place, nothing else
+    assert result.success and len(result.path) == 5
+    assert result.stats["cost"] == pytest.approx(4 * planner.rotation_weight * 2 * math.pi / 16)
+
+
+def test_se2_must_turn_to_pass_a_slot():
+    occ = np.zeros((30, 30), bool)
+    occ[15, :] = True
+    occ[15, 14:17] = False  # a 0.3 m slot in a wall along x
+    grid = OccupancyGrid(occ, 0.1)
+    robot = rectangle(0.6, 0.2)
+    result = SE2AStarPlanner(robot, headings=16).plan(grid, (1.55, 0.55, 0.0), (1.55, 2.55, 0.0))
+    assert result.success
+    assert_valid_path(grid, robot, result.path, (1.55, 0.55), (1.55, 2.55))
+    crossing = [theta for x, y, theta in result.path if abs(y - 1.55) < 1e-9]
+    assert crossing and all(abs(math.sin(t)) > 0.7 for t in crossing)  # not along the wall
+
+
+@pytest.mark.parametrize("planner_id", ["astar", "se2", "mspp", "mspp_local"])
+def test_bad_requests_get_status_not_exceptions(planner_id):
+    grid = table1("easy")
+    cases = {
+        R.INVALID_REQUEST: ((float("nan"), 2.0, 0.0), (5.0, 2.0, 0.0)),
+        R.GOAL_OUTSIDE_MAP: ((1.0, 2.0, 0.0), (50.0, 2.0, 0.0)),
+        R.START_OUTSIDE_MAP: ((-1.0, 2.0, 0.0), (5.0, 2.0, 0.0)),
+        R.START_OCCUPIED: ((3.0, 0.5, 0.0), (5.0, 2.0, 0.0)),
+        R.GOAL_OCCUPIED: ((1.0, 2.0, 0.0), (0.05, 0.05, 0.0)),
+    }
+    for status, (start, goal) in cases.items():
+        result = registry.plan(planner_id, grid, start, goal, ROBOT)
+        assert result.status == status, (status, result.message)
+        assert result.message and len(result.path) == 0
+
+
+def test_registry_rejects_unknown_planner_and_bad_params():
+    with pytest.raises(InvalidPlanner, match="unknown base planner 'rrt'"):
+        registry.plan("rrt", table1("easy"), (1, 2, 0), (5, 2, 0), ROBOT)
+    with pytest.raises(InvalidRequest, match="headings"):
+        registry.plan("se2", table1("easy"), (1, 2, 0), (5, 2, 0), ROBOT, headings=0)
+    with pytest.raises(InvalidRequest, match="footprint"):
+        registry.plan("mspp", table1("easy"), (1, 2, 0), (5, 2, 0), [[0, 0], [1, 1]])
+
+
+def test_astar_planner_uses_circumradius():
+    grid, prob = SCENES["medium"]
+    result = registry.plan("astar", grid, prob["start"], prob["goal"], prob["footprint"])
+    assert result.status == R.NO_PATH  # the 0.6 m passage is narrower than 2 R_max
+    easy = registry.plan("astar", SCENES["easy"][0], prob["start"], prob["goal"], prob["footprint"])
+    assert easy.success
+    assert_valid_path(SCENES["easy"][0], prob["footprint"], easy.path, prob["start"], prob["goal"])
+
+
+def test_timeout_is_reported():
+    grid, prob = SCENES["house"]
+    result = SE2AStarPlanner(prob["footprint"], time_limit=1e-4).plan(grid, prob["start"], prob["goal"])
+    assert result.status == R.TIMED_OUT
+
+
+def test_cli_writes_json_and_png(tmp_path):
+    from maru_planner.base.cli import main
+    from maru_planner.paths import config_path
+
+    out, png = tmp_path / "o.json", tmp_path / "o.png"
+    code = main(["--map", str(config_path("maps", "paper002_medium.yaml")), "--planner", "mspp",
+                 "--start", "1", "2", "0", "--goal", "5", "2", "0", "--footprint",
+                 "0.45,0.15 -0.45,0.15 -0.45,-0.15 0.45,-0.15", "--json", str(out), "--png", str(png)])
+    assert code == 0
+    data = json.loads(out.read_text())
+    assert set(data) == {"success", "status", "message", "path", "stats"}
+    assert data["success"] and data["status"] == "solved" and data["stats"]["deciding_stage"] == "full"
+    assert len(data["path"][0]) == 3 and png.stat().st_size > 1000
+    code = main(["--map", str(config_path("maps", "paper002_impossible.yaml")), "--start", "1", "2", "0",
+                 "--goal", "5", "2", "0", "--json", str(out)])
+    assert code == 1 and json.loads(out.read_text())["status"] == "no_path_proven"
+    assert main(["--map", str(tmp_path / "missing.yaml"), "--start", "1", "2", "0", "--goal", "5", "2", "0"]) == 2
