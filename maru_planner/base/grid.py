@@ -102,9 +102,14 @@ class OccupancyGrid:
         return c * dx + s * dy, -s * dx + c * dy
 
     def world_to_cell(self, x: float, y: float) -> tuple[int, int]:
-        """Map-frame point (metres) -> (row, col); may lie outside the map."""
+        """Map-frame point (metres) -> (row, col); may lie outside the map.
+
+        A point within 1e-6 cell of a cell's lower edge belongs to that cell
+        (so 1.0 m is cell 10 at 0.1 m despite rounding).
+        """
         gx, gy = self.world_to_grid_frame(x, y)
-        return int(math.floor(gy / self.resolution)), int(math.floor(gx / self.resolution))
+        eps = 1e-6
+        return int(math.floor(gy / self.resolution + eps)), int(math.floor(gx / self.resolution + eps))
 
     def cell_to_world(self, row: float, col: float) -> tuple[float, float]:
         """(row, col) -> map-frame centre of that cell (metres)."""

@@ -1,0 +1,120 @@
+"""Message <-> core conversions for base_planner_node (nav_msgs maps, poses, paths, error codes)."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+from geometry_msgs.msg import Point32, PoseStamped
+from nav_msgs.msg import OccupancyGrid as OccupancyGridMsg
+from nav_msgs.msg import Path
+
+from maru_planner.base import result as R
+from maru_planner.base.grid import OccupancyGrid
+from maru_planner_interfaces.srv import PlanBasePath
+
+E = PlanBasePath.Response
+STATUS_TO_ERROR = {
+    R.SOLVED: E.NONE,
+    R.NO_PATH: E.NO_VALID_PATH,
+    R.NO_PATH_PROVEN: E.NO_PATH_PROVEN,
+    R.START_OCCUPIED: E.START_OCCUPIED,
+    R.GOAL_OCCUPIED: E.GOAL_OCCUPIED,
+    R.START_OUTSIDE_MAP: E.START_OUTSIDE_MAP,
+    R.GOAL_OUTSIDE_MAP: E.GOAL_OUTSIDE_MAP,
+    R.TIMED_OUT: E.TIMEOUT,
+    R.INVALID_REQUEST: E.INVALID_REQUEST,
+}
+
+
+def yaw_from_quaternion(q) -> float:
+    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+
+
+def set_yaw(q, yaw: float) -> None:
+    q.x, q.y, q.z, q.w = 0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0)
+
+
+def grid_from_msg(msg: OccupancyGridMsg, *, occupied_threshold: int = 65, unknown_is_occupied: bool = True):
+    """nav_msgs/OccupancyGrid -> OccupancyGrid; ValueError naming what is wrong."""
+    info = msg.info
+    if not (math.isfinite(info.resolution) and info.resolution > 0):
+        raise ValueError(f"map resolution must be > 0, got {info.resolution}")
+    p = info.origin.position
+    origin = (p.x, p.y, yaw_from_quaternion(info.origin.orientation))
+    if not all(math.isfinite(v) for v in origin):
+        raise ValueError(f"map origin is not finite: {origin}")
+    # resolution is a float32 in the message: recover the decimal map_server wrote (0.1, not 0.100000001)
+    resolution = float(f"{info.resolution:.7g}")
+    return OccupancyGrid.from_values(
+        np.asarray(msg.data, dtype=np.int8),
+        info.width,
+        info.height,
+        resolution,
+        origin,
+        occupied_threshold=occupied_threshold,
+        unknown_is_occupied=unknown_is_occupied,
+        frame_id=msg.header.frame_id or "map",
+    )
+
+
+def grid_to_msg(grid: OccupancyGrid, occupied: np.ndarray, stamp, frame_id: str) -> OccupancyGridMsg:
+    """A grown map as nav_msgs/OccupancyGrid (100 grown/occupied, 0 free)."""
+    msg = OccupancyGridMsg()
+    msg.header.stamp = stamp
+    msg.header.frame_id = frame_id
+    msg.info.resolution = float(grid.resolution)
+    msg.info.width, msg.info.height = grid.width, grid.height
+    msg.info.origin.position.x, msg.info.origin.position.y = grid.origin[0], grid.origin[1]
+    set_yaw(msg.info.origin.orientation, grid.origin[2])
+    msg.data = np.where(np.asarray(occupied, dtype=bool), 100, 0).astype(np.int8).ravel().tolist()
+    return msg
+
+
+def pose_from_msg(pose: PoseStamped) -> tuple[float, float, float]:
+    p, q = pose.pose.position, pose.pose.orientation
+    if not all(math.isfinite(v) for v in (q.x, q.y, q.z, q.w)):
+        return (p.x, p.y, math.nan)
+    return (p.x, p.y, yaw_from_quaternion(q))
+
+
+def path_to_msg(path: np.ndarray, stamp, frame_id: str) -> Path:
+    msg = Path()
+    msg.header.stamp = stamp
+    msg.header.frame_id = frame_id
+    for x, y, theta in np.asarray(path).reshape(-1, 3):
+        pose = PoseStamped()
+        pose.header = msg.header
+        pose.pose.position.x, pose.pose.position.y = float(x), float(y)
+        set_yaw(pose.pose.orientation, float(theta))
+        msg.poses.append(pose)
+    return msg
+
+
+def footprint_from_points(points: list[Point32]) -> np.ndarray:
+    return np.array([[p.x, p.y] for p in points], dtype=float).reshape(-1, 2)
+
+
+def footprint_from_param(values) -> np.ndarray:
+    values = [float(v) for v in values]
+    if len(values) % 2:
+        raise ValueError(f"footprint parameter needs x, y pairs, got {len(values)} numbers")
+    return np.array(values).reshape(-1, 2)
+
+
+def stats_json(stats: dict) -> str:
+    def clean(v):
+        if isinstance(v, dict):
+            return {k: clean(x) for k, x in v.items()}
+        if isinstance(v, list | tuple):
+            return [clean(x) for x in v]
+        if isinstance(v, np.ndarray):
+            return clean(v.tolist())
+        if isinstance(v, np.generic):
+            return clean(v.item())
+        if isinstance(v, float) and not math.isfinite(v):
+            return None
+        return v
+
+    return json.dumps(clean(stats))

@@ -1,0 +1,191 @@
+"""base_planner_node end to end: a subprocess on loopback DDS, real rclpy clients, bad input included."""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+
+import pytest
+
+from maru_planner.base.scenes import table1
+from maru_planner.paths import config_path
+
+pytestmark = pytest.mark.ros
+
+NODE_MODULE = "maru_planner.ros.base_planner_node"
+START, GOAL = (1.0, 2.0, 0.0), (5.0, 2.0, 0.0)
+
+
+@pytest.fixture(scope="module")
+def node(node_process):
+    proc = node_process(NODE_MODULE, ["--ros-args", "--params-file", str(config_path("base_planner.yaml"))])
+    return proc
+
+
+class Client:
+    def __init__(self, spinning, proc):
+        from nav_msgs.msg import OccupancyGrid, Path
+        from nav_msgs.srv import GetPlan
+        from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+
+        from maru_planner_interfaces.srv import PlanBasePath
+
+        self.spinning, self.proc = spinning, proc
+        node = spinning.node
+        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL,
+                             reliability=ReliabilityPolicy.RELIABLE)
+        self.map_pub = node.create_publisher(OccupancyGrid, "/map", latched)
+        self.plan_client = node.create_client(PlanBasePath, "/plan_base_path")
+        self.get_plan_client = node.create_client(GetPlan, "/make_plan")
+        self.paths, self.eca_maps = [], []
+        node.create_subscription(Path, "/plan", self.paths.append, latched)
+        node.create_subscription(OccupancyGrid, "/base_planner_node/eca_map", self.eca_maps.append, latched)
+
+    def publish_map(self, msg, expect_log: str):
+        before = self.proc.log().count(expect_log)
+        self.map_pub.publish(msg)
+        assert self.spinning.wait_for(lambda: self.proc.log().count(expect_log) > before, timeout=20), self.proc.log()
+
+    def request(self, start=START, goal=GOAL, planner_id="", footprint=None, frame="map", time_limit=0.0):
+        from geometry_msgs.msg import Point32
+
+        from maru_planner_interfaces.srv import PlanBasePath
+
+        req = PlanBasePath.Request()
+        req.planner_id = planner_id
+        req.footprint = [Point32(x=float(x), y=float(y)) for x, y in (footprint or [])]
+        req.start, req.goal = pose_msg(start, frame), pose_msg(goal, frame)
+        req.allowed_planning_time = time_limit
+        return self.spinning.call(self.plan_client, req, timeout=60)
+
+
+def pose_msg(pose, frame="map"):
+    from geometry_msgs.msg import PoseStamped
+
+    msg = PoseStamped()
+    msg.header.frame_id = frame
+    msg.pose.position.x, msg.pose.position.y = float(pose[0]), float(pose[1])
+    msg.pose.orientation.z, msg.pose.orientation.w = math.sin(pose[2] / 2), math.cos(pose[2] / 2)
+    return msg
+
+
+def map_msg(grid, *, width=None, height=None, data=None):
+    from maru_planner.ros.base_conversions import grid_to_msg
+
+    msg = grid_to_msg(grid, grid.occupied, None or _zero_stamp(), "map")
+    if width is not None:
+        msg.info.width = width
+    if height is not None:
+        msg.info.height = height
+    if data is not None:
+        msg.data = data
+    return msg
+
+
+def _zero_stamp():
+    from builtin_interfaces.msg import Time
+
+    return Time()
+
+
+@pytest.fixture
+def client(spinning_node, node):
+    return Client(spinning_node, node)
+
+
+def test_no_map_yet(client):
+    from maru_planner_interfaces.srv import PlanBasePath
+
+    response = client.request()
+    assert response.error_code == PlanBasePath.Response.NO_MAP
+    assert "no map" in response.error_msg
+
+
+def test_plan_on_medium_map_through_both_services(client):
+    from nav_msgs.srv import GetPlan
+
+    from maru_planner_interfaces.srv import PlanBasePath
+
+    client.publish_map(map_msg(table1("medium")), "map 60 x 40 cells")
+    response = client.request(planner_id="mspp")
+    assert response.error_code == PlanBasePath.Response.NONE, response.error_msg
+    assert response.deciding_stage == "full" and response.expansions > 0 and response.collision_checks > 0
+    poses = response.path.poses
+    assert len(poses) > 10 and response.path.header.frame_id == "map"
+    assert abs(poses[0].pose.position.x - 1.05) < 1e-9 and abs(poses[-1].pose.position.x - 5.05) < 1e-9
+    stats = json.loads(response.stats_json)
+    assert [s["name"] for s in stats["stages"]] == ["ECA", "BAA", "full"]
+    assert client.spinning.wait_for(lambda: len(client.paths) >= 1)
+    assert len(client.paths[-1].poses) == len(poses)
+    # grown maps are published to subscribers
+    assert client.spinning.wait_for(lambda: len(client.eca_maps) >= 1 or client.request().error_code != 0, 5)
+    client.request()
+    assert client.spinning.wait_for(lambda: len(client.eca_maps) >= 1)
+    assert sum(v == 100 for v in client.eca_maps[-1].data) > sum(v == 100 for v in map_msg(table1("medium")).data)
+
+    req = GetPlan.Request()
+    req.start, req.goal = pose_msg(START), pose_msg(GOAL)
+    plan = client.spinning.call(client.get_plan_client, req, timeout=60).plan
+    assert len(plan.poses) == len(poses)
+    req.goal = pose_msg((float("nan"), 2.0, 0.0))
+    assert len(client.spinning.call(client.get_plan_client, req, timeout=60).plan.poses) == 0
+
+
+@pytest.mark.parametrize("planner_id", ["astar", "se2", "mspp_local"])
+def test_other_planners(client, planner_id):
+    from maru_planner_interfaces.srv import PlanBasePath
+
+    response = client.request(planner_id=planner_id)
+    expected = PlanBasePath.Response.NO_VALID_PATH if planner_id == "astar" else PlanBasePath.Response.NONE
+    assert response.error_code == expected, response.error_msg
+
+
+def test_bad_requests_keep_the_node_serving(client):
+    from maru_planner_interfaces.srv import PlanBasePath
+
+    E = PlanBasePath.Response
+    cases = [
+        (dict(start=(float("nan"), 2.0, 0.0)), E.INVALID_REQUEST, "NaN"),
+        (dict(goal=(40.0, 2.0, 0.0)), E.GOAL_OUTSIDE_MAP, "outside the map"),
+        (dict(start=(-3.0, 2.0, 0.0)), E.START_OUTSIDE_MAP, "outside the map"),
+        (dict(start=(3.0, 0.5, 0.0)), E.START_OCCUPIED, "collision"),
+        (dict(goal=(3.0, 3.5, 0.0)), E.GOAL_OCCUPIED, "collision"),
+        (dict(planner_id="rrt_star"), E.INVALID_PLANNER, "rrt_star"),
+        (dict(footprint=[(0, 0), (1, 0)]), E.INVALID_REQUEST, "footprint"),
+        (dict(frame="odom"), E.INVALID_REQUEST, "odom"),
+        (dict(time_limit=-1.0), E.INVALID_REQUEST, "allowed_planning_time"),
+    ]
+    for kwargs, code, text in cases:
+        response = client.request(**kwargs)
+        assert response.error_code == code, (kwargs, response.error_code, response.error_msg)
+        assert text in response.error_msg and len(response.path.poses) == 0
+    assert client.request().error_code == E.NONE
+    assert client.proc.alive()
+
+
+def test_impossible_problem_is_proven_by_eca(client):
+    from maru_planner_interfaces.srv import PlanBasePath
+
+    client.publish_map(map_msg(table1("impossible")), "map 60 x 40 cells")
+    t0 = time.monotonic()
+    response = client.request()
+    assert response.error_code == PlanBasePath.Response.NO_PATH_PROVEN, response.error_msg
+    assert response.deciding_stage == "ECA" and "enclosed" in response.error_msg
+    assert time.monotonic() - t0 < 30
+
+
+def test_bad_maps_are_rejected_and_a_good_one_recovers(client):
+    from maru_planner_interfaces.srv import PlanBasePath
+
+    E = PlanBasePath.Response
+    client.publish_map(map_msg(table1("easy"), width=0, height=0, data=[]), "the last map was rejected")
+    response = client.request()
+    assert response.error_code == E.NO_MAP and "empty" in response.error_msg
+    client.publish_map(map_msg(table1("easy"), data=[0] * 100), "the last map was rejected")
+    response = client.request()
+    assert response.error_code == E.NO_MAP and "100 values" in response.error_msg
+    client.publish_map(map_msg(table1("easy")), "map 60 x 40 cells")
+    response = client.request()
+    assert response.error_code == E.NONE and response.deciding_stage == "BAA"
+    assert client.proc.alive()
