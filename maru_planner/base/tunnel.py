@@ -111,10 +111,15 @@ class BigCellGrid:
         self.size = size
         h, w = occupied.shape
         self.shape = (-(-h // size), -(-w // size))
-        padded = np.ones((self.shape[0] * size, self.shape[1] * size), dtype=bool)
-        padded[:h, :w] = occupied
-        counts = padded.reshape(self.shape[0], size, self.shape[1], size).sum(axis=(1, 3))
-        self.obstacle_count = counts.astype(np.uint16)
+        dtype = np.uint8 if size * size <= 255 else np.uint16
+        # Counted one row of big cells at a time: no full-size copy of the map.
+        self.obstacle_count = np.empty(self.shape, dtype=dtype)
+        strip = np.ones((size, self.shape[1] * size), dtype=bool)
+        for i in range(self.shape[0]):
+            rows = occupied[i * size : (i + 1) * size]
+            strip[:] = True
+            strip[: len(rows), :w] = rows
+            self.obstacle_count[i] = strip.reshape(size, self.shape[1], size).sum(axis=(0, 2))
         self.full = self.obstacle_count == size * size
         self.diagonal = max(float(np.hypot(self.shape[0] - 1, self.shape[1] - 1)), 1.0)
 
@@ -420,23 +425,52 @@ def cells_to_path(cells: np.ndarray, to_world, start_theta: float, goal_theta: f
     return np.column_stack([xy, theta])
 
 
-def plan_tunnel(grid, start, goal, robot_radius: float = 0.25, **params) -> res.BasePlanResult:
-    """Tunnel planner on an ``OccupancyGrid`` (world poses (x, y, θ); obstacles grown by ``robot_radius``)."""
-    planner = TunnelPlanner(**params)
-    t0 = time.perf_counter()
-    grown = grid.inflate(robot_radius) if robot_radius > 0 else grid
-    occupied = np.asarray(grown.occupied, dtype=bool)
-    start_cell, goal_cell = grid.world_to_cell(start[0], start[1]), grid.world_to_cell(goal[0], goal[1])
-    plan = planner.plan_cells(occupied, start_cell, goal_cell)
-    path = cells_to_path(plan.waypoints, grid.cell_to_world, float(start[2]), float(goal[2]))
-    if len(path):
-        path[0, :2] = start[0], start[1]
-        path[-1, :2] = goal[0], goal[1]
-    stats = dict(plan.stats)
-    stats["planning_time"] = time.perf_counter() - t0
-    stats["collision_checks"] = stats["expansions"]
-    last = plan.attempts[-1] if plan.attempts else None
-    stats["deciding_stage"] = f"tunnel b={last.big_cell_size}" if last else "tunnel"
-    layers = {"inflated": occupied, "attempts": plan.attempts, "raw_cells": plan.raw_cells,
-              "waypoints": plan.waypoints}
-    return res.BasePlanResult(plan.status, plan.message, path, stats, layers)
+class TunnelGridPlanner:
+    """Registry entry ``tunnel``: the tunnel planner on an ``OccupancyGrid`` for a disc robot.
+
+    Obstacles are grown by ``robot_radius`` metres (default: the footprint's
+    circumradius, 0.25 m without a footprint — the paper's robot). Other
+    keyword arguments are :class:`TunnelParams` fields.
+    """
+
+    def __init__(self, footprint=None, robot_radius: float | None = None, **params):
+        if robot_radius is None:
+            robot_radius = 0.25
+            if footprint is not None and len(np.asarray(footprint)):
+                robot_radius = float(np.max(np.linalg.norm(np.asarray(footprint, dtype=float)[:, :2], axis=1)))
+        if not (math.isfinite(robot_radius) and robot_radius >= 0):
+            raise ValueError(f"robot_radius must be finite and >= 0, got {robot_radius}")
+        self.robot_radius = float(robot_radius)
+        self.planner = TunnelPlanner(**params)
+
+    def plan(self, grid, start, goal) -> res.BasePlanResult:
+        from maru_planner.base import common
+
+        t0 = time.perf_counter()
+        stats = {"expansions": 0, "collision_checks": 0, "planning_time": 0.0, "deciding_stage": "tunnel"}
+        try:
+            common.check_grid(grid)
+            start, goal = common.as_pose(start, "start"), common.as_pose(goal, "goal")
+            s_cell, g_cell = common.pose_cell(grid, start, "start"), common.pose_cell(grid, goal, "goal")
+            grown = grid.inflate(self.robot_radius) if self.robot_radius > 0 else grid
+            for name, pose, cell in (("start", start, s_cell), ("goal", goal, g_cell)):
+                if grown.occupied[cell]:
+                    raise common.occupied_error(name, pose, f"within {self.robot_radius:.3f} m of an obstacle")
+        except common.RequestError as exc:
+            stats["planning_time"] = time.perf_counter() - t0
+            return common.failure(exc.status, str(exc), stats)
+        plan = self.planner.plan_cells(grown.occupied, s_cell, g_cell)
+        path = cells_to_path(plan.waypoints, grid.cell_to_world, start[2], goal[2])
+        if len(path):
+            path[0, :2] = start[:2]
+            path[-1, :2] = goal[:2]
+        stats.update(plan.stats)
+        stats["planning_time"] = time.perf_counter() - t0
+        stats["collision_checks"] = stats["expansions"]
+        last = plan.attempts[-1] if plan.attempts else None
+        stats["deciding_stage"] = f"tunnel b={last.big_cell_size}" if last else "tunnel"
+        if len(path) > 1:
+            stats["cost"] = float(np.sum(np.linalg.norm(np.diff(path[:, :2], axis=0), axis=1)))
+        layers = {"grown": grown.occupied, "attempts": plan.attempts, "raw_cells": plan.raw_cells,
+                  "waypoints": plan.waypoints}
+        return res.BasePlanResult(plan.status, plan.message, path, stats, layers)

@@ -1,0 +1,91 @@
+"""Registry entries ``biped_track`` and ``biped_wall``: the biped planners behind the common interface.
+
+``factory(footprint, world=None, **params).plan(grid, start, goal)``:
+
+* with ``world`` (a 3-D world YAML path or a :class:`BipedWorld`) the 2-D map
+  is the world's 3-D → 2-D mapping and the robot is the world's; ``grid`` may be
+  None (the CLI's ``--world``) and is otherwise ignored;
+* without it, ``grid`` is taken as an already mapped 2-D map (every occupied
+  cell a line obstacle) and the gait rectangle is the footprint's bounding box
+  (length along x, width along y; no body overhang).
+
+Other keyword arguments are :class:`TrackParams` / :class:`WallParams` fields.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+
+from maru_planner.base import result as res
+from maru_planner.base.biped.mapping import BipedMap2D, map_3d_to_2d
+from maru_planner.base.biped.track import TrackFollowingPlanner
+from maru_planner.base.biped.wall import VirtualWallPlanner
+from maru_planner.base.biped.world import BipedRobot, BipedWorld, load_world
+
+
+def robot_from_footprint(footprint) -> BipedRobot:
+    pts = np.asarray(footprint, dtype=float).reshape(-1, 2)
+    if len(pts) < 3:
+        raise ValueError("a biped planner needs a footprint polygon (its bounding box is the gait rectangle)")
+    length, width = float(np.ptp(pts[:, 0])), float(np.ptp(pts[:, 1]))
+    return BipedRobot(gait_length=length, gait_width=width, body_left=width / 2, body_right=width / 2)
+
+
+def map_from_grid(grid) -> BipedMap2D:
+    if abs(grid.origin[2]) > 1e-9:
+        raise ValueError("biped planners need a map whose origin yaw is 0")
+    occupied = np.asarray(grid.occupied, dtype=bool)
+    return BipedMap2D(occupied.copy(), np.zeros_like(occupied), grid.resolution, (grid.origin[0], grid.origin[1]))
+
+
+class BipedGridPlanner:
+    """One of the two biped planners, on a 3-D world or on a plain grid."""
+
+    KINDS = {"track": TrackFollowingPlanner, "wall": VirtualWallPlanner}
+
+    def __init__(self, kind: str, footprint=None, world=None, **params):
+        if kind not in self.KINDS:
+            raise ValueError(f"unknown biped planner kind {kind!r}")
+        self.kind = kind
+        if isinstance(world, str | Path) and str(world):
+            world = load_world(world)
+        self.world: BipedWorld | None = world if isinstance(world, BipedWorld) else None
+        self.map2d = map_3d_to_2d(self.world) if self.world is not None else None
+        self.robot = self.world.robot if self.world is not None else (
+            robot_from_footprint(footprint) if footprint is not None else BipedRobot())
+        self.planner = self.KINDS[kind](self.robot, **params)
+
+    def plan(self, grid, start, goal) -> res.BasePlanResult:
+        from maru_planner.base import common
+
+        t0 = time.perf_counter()
+        stats = {"expansions": 0, "collision_checks": 0, "planning_time": 0.0, "deciding_stage": f"biped_{self.kind}"}
+        try:
+            start, goal = common.as_pose(start, "start"), common.as_pose(goal, "goal")
+            if self.map2d is not None:
+                m = self.map2d
+            else:
+                common.check_grid(grid)
+                m = map_from_grid(grid)
+        except common.RequestError as exc:
+            stats["planning_time"] = time.perf_counter() - t0
+            return common.failure(exc.status, str(exc), stats)
+        except ValueError as exc:
+            return common.failure(res.INVALID_REQUEST, str(exc), stats)
+        result = self.planner.plan(m, start, goal)
+        result.stats["planning_time"] = time.perf_counter() - t0
+        result.stats["mapping"] = "3d_world" if self.world is not None else "grid"
+        if self.world is not None:
+            result.layers["world"] = self.world
+        return result
+
+
+def biped_track(footprint=None, **params) -> BipedGridPlanner:
+    return BipedGridPlanner("track", footprint, **params)
+
+
+def biped_wall(footprint=None, **params) -> BipedGridPlanner:
+    return BipedGridPlanner("wall", footprint, **params)
