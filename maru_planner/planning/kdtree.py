@@ -2,8 +2,8 @@
 
 OMPL's ``NearestNeighbors`` structures are not exposed in its Python bindings, so RC-RRT uses
 scipy's ``cKDTree`` rebuilt with doubling: nodes added since the last build sit in a small tail
-searched by brute force; the tree is rebuilt (over active nodes only) when the tail grows as
-large as the tree. Queries skip retired (exhausted) nodes.
+searched by brute force; the tree is rebuilt (over active nodes only) when the tail holds more
+than ``MAX_TAIL`` nodes. Queries skip retired (exhausted) nodes.
 """
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-MIN_TAIL = 64
+MAX_TAIL = 256
 
 
 class GrowingKDTree:
@@ -36,7 +36,7 @@ class GrowingKDTree:
 
     def query(self, target: np.ndarray, k: int, points: np.ndarray, active: np.ndarray, count: int) -> np.ndarray:
         """Ids of up to ``k`` active nodes nearest to ``target``, nearest first."""
-        if len(self._tail) > max(MIN_TAIL, len(self._tree_ids)):
+        if len(self._tail) > MAX_TAIL:
             self._rebuild(points, active, count)
         cand_ids: list[np.ndarray] = []
         cand_d: list[np.ndarray] = []
@@ -45,7 +45,8 @@ class GrowingKDTree:
             tail = tail[active[tail]]
             if len(tail):
                 cand_ids.append(tail)
-                cand_d.append(np.linalg.norm(points[tail] - target, axis=1))
+                diff = points[tail] - target
+                cand_d.append(np.sqrt(np.einsum("ij,ij->i", diff, diff)))
         if self._tree is not None:
             ids, dists = self._query_tree(target, k, active)
             cand_ids.append(ids)
@@ -54,8 +55,10 @@ class GrowingKDTree:
             return np.zeros(0, dtype=int)
         ids = np.concatenate(cand_ids)
         dists = np.concatenate(cand_d)
-        order = np.argsort(dists, kind="stable")[:k]
-        return ids[order]
+        if len(dists) > k:
+            part = np.argpartition(dists, k - 1)[:k]
+            ids, dists = ids[part], dists[part]
+        return ids[np.argsort(dists, kind="stable")]
 
     def _query_tree(self, target, k, active):
         n = len(self._tree_ids)

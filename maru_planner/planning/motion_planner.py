@@ -295,26 +295,31 @@ class MotionPlanner:
             )
         return None, None
 
+    def _scene_key(self) -> tuple:
+        """Changes whenever the scene does: a set_scene call or an edit that bumps ``scene.version``."""
+        scene = getattr(self.checker, "scene", None) or self.scene
+        return (self._scene_epoch, id(scene), getattr(scene, "version", None))
+
     def _roadmap_for(self, gs: GroupSpace, params) -> Roadmap:
         outside = np.setdiff1d(np.arange(len(gs.base)), gs.indices)
         key = (tuple(gs.indices), tuple(np.round(gs.base[outside], 9)), self.config.resolution, tuple(params.items()))
         roadmap = self._roadmaps.get(key)
         if roadmap is None:
             roadmap = Roadmap(gs, self.checker, self.config.resolution, params["max_nearest_neighbors"])
-            roadmap.scene_epoch = self._scene_epoch
+            roadmap.scene_epoch = self._scene_key()
             self._roadmaps = {key: roadmap}  # one roadmap at a time: bounded memory
         return roadmap
 
     def _search_prm(self, gs, start, goal, params, search_deadline, stats):
         roadmap = self._roadmap_for(gs, params)
-        if roadmap.scene_epoch != self._scene_epoch:
+        if roadmap.scene_epoch != self._scene_key():
             report = roadmap.revalidate()
             self.last_revalidation = report
             stats.validation_time += report.seconds
             if not report.still_valid:
                 self._roadmaps.clear()
                 roadmap = self._roadmap_for(gs, params)
-            roadmap.scene_epoch = self._scene_epoch
+            roadmap.scene_epoch = self._scene_key()
         stats.roadmap_reused = roadmap.queries > 0
         if roadmap.milestones < self.config.prm_roadmap_nodes:
             before = roadmap.build_time

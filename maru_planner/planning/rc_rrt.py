@@ -40,10 +40,10 @@ from ompl import util as ou
 from maru_planner.planning.kdtree import GrowingKDTree
 
 PARAM_DEFAULTS = {
-    "step": 0.1,
+    "step": 0.3,
     "goal_bias": 0.1,
     "candidates": 8,
-    "goal_range": 0.3,
+    "goal_range": 1.5,
     "seed": None,
 }
 

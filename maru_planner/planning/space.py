@@ -5,6 +5,9 @@ q_a → q_b is checked at ``n = ceil(max_i |q_b,i − q_a,i| / resolution)`` eve
 (q_a excluded, q_b included), i.e. no joint moves more than ``resolution`` radians between two
 checked states (an L∞ step in joint space). All n states go to the checker in ONE call,
 ``checker.first_invalid(Q)``, so an edge costs one Python→checker round trip however long it is.
+They are passed end state first, then in bisection order (midpoint, quarter points, …), like
+OMPL's ``DiscreteMotionValidator``: a checker that stops at the first hit finds a blocked edge
+after few states.
 
 The checker protocol (any object with these methods works: the pinocchio/coal checker, the
 sphere checker, the 2-D toy checkers of the tests): ``is_valid(q)``, ``first_invalid(Q)`` (index
@@ -70,6 +73,32 @@ def edge_states(qa: np.ndarray, qb: np.ndarray, resolution: float) -> np.ndarray
     return qa + t * (qb - qa)
 
 
+_BISECTION_ORDERS: dict[int, np.ndarray] = {}
+
+
+def bisection_order(n: int) -> np.ndarray:
+    """Permutation of range(n): the last index, then interior points coarse to fine."""
+    order = _BISECTION_ORDERS.get(n)
+    if order is not None:
+        return order
+    seen = [n - 1]
+    queue = [(-1, n - 1)]  # open intervals (lo, hi) between already listed indices (-1 = the edge start)
+    while queue:
+        nxt = []
+        for lo, hi in queue:
+            if hi - lo < 2:
+                continue
+            mid = (lo + hi) // 2
+            seen.append(mid)
+            nxt.append((lo, mid))
+            nxt.append((mid, hi))
+        queue = nxt
+    order = np.array(seen, dtype=int)
+    if len(_BISECTION_ORDERS) < 4096:
+        _BISECTION_ORDERS[n] = order
+    return order
+
+
 class EdgeChecker:
     """Numpy-side validity of states, edges and paths of one group against a checker."""
 
@@ -87,7 +116,10 @@ class EdgeChecker:
     def first_invalid(self, qa: np.ndarray, qb: np.ndarray) -> int:
         """Index of the first colliding state along qa → qb (-1 if the edge is free)."""
         self.edges_checked += 1
-        return int(self.checker.first_invalid(self.gs.full(edge_states(qa, qb, self.resolution))))
+        states = edge_states(qa, qb, self.resolution)
+        order = bisection_order(len(states))
+        k = int(self.checker.first_invalid(self.gs.full(states[order])))
+        return int(order[k]) if k >= 0 else -1
 
     def edge_valid(self, qa: np.ndarray, qb: np.ndarray) -> bool:
         return self.first_invalid(qa, qb) < 0
