@@ -1,0 +1,262 @@
+"""Paper 003 benchmark: tunnel planner vs 2-D A* (house, generated maps 100² … 2000², MovingAI).
+
+    .venv/bin/python bench/paper003.py [--quick]
+
+For each query: planning time, expanded cells, peak memory of the planning
+call (tracemalloc, a separate run), path length / optimal (A*'s octile cost,
+or the MovingAI optimum). Both planners get the same already-grown map.
+A* runs twice: the same algorithm in pure Python (like the tunnel planner)
+and numba-compiled (what the package uses). tracemalloc does not see
+numba's internal allocations, so its numba memory is left out.
+Writes bench/results/paper003.{json,md,png} and paper003_house.png.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+import tracemalloc
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "bench"))
+
+from paper003_maps import HOUSE_GOAL, HOUSE_RADIUS, HOUSE_START, far_free_pair, rooms_map  # noqa: E402
+
+from maru_planner.base.astar import astar_2d  # noqa: E402
+from maru_planner.base.grid import OccupancyGrid  # noqa: E402
+from maru_planner.base.tunnel import TunnelPlanner  # noqa: E402
+
+RESULTS = ROOT / "bench" / "results"
+MOVINGAI = Path("/work/shared/benchmarks/movingai")
+MOVINGAI_MAPS = ["dao/arena.map", "dao/den312d.map", "dao/ost003d.map", "room/16room_000.map",
+                 "maze/maze512-4-0.map", "random/random512-20-0.map", "street/Berlin_0_256.map"]
+
+
+def log(msg: str) -> None:
+    print(msg, file=sys.stderr, flush=True)
+
+
+def polyline_length(cells: np.ndarray) -> float:
+    return float(np.sum(np.linalg.norm(np.diff(cells.astype(float), axis=0), axis=1))) if len(cells) > 1 else 0.0
+
+
+def peak_memory(fn) -> int:
+    tracemalloc.start()
+    tracemalloc.reset_peak()
+    base = tracemalloc.get_traced_memory()[0]
+    fn()
+    peak = tracemalloc.get_traced_memory()[1] - base
+    tracemalloc.stop()
+    return int(peak)
+
+
+def run_tunnel(occ, s, g, memory: bool) -> dict:
+    planner = TunnelPlanner()
+    t0 = time.perf_counter()
+    plan = planner.plan_cells(occ, s, g)
+    elapsed = time.perf_counter() - t0
+    row = {"planner": "tunnel", "success": plan.status == "solved", "time": elapsed,
+           "expanded": plan.stats["expansions"], "length": polyline_length(plan.waypoints),
+           "attempts": plan.stats["attempts"], "big_cell": plan.attempts[-1].big_cell_size if plan.attempts else None}
+    if memory:
+        row["peak_bytes"] = peak_memory(lambda: TunnelPlanner().plan_cells(occ, s, g))
+    return row, plan
+
+
+def run_astar(occ, s, g, use_numba: bool, memory: bool) -> dict:
+    t0 = time.perf_counter()
+    out = astar_2d(occ, s, g, use_numba=use_numba)
+    elapsed = time.perf_counter() - t0
+    row = {"planner": "astar_numba" if use_numba else "astar_python", "success": len(out.path) > 0,
+           "time": elapsed, "expanded": int(out.expansions), "length": float(out.cost) if len(out.path) else None}
+    if memory and not use_numba:
+        row["peak_bytes"] = peak_memory(lambda: astar_2d(occ, s, g, use_numba=False))
+    return row
+
+
+def compare(name: str, n_cells: int, occ, s, g, optimal: float | None, python_astar: bool, memory: bool = True):
+    rows = []
+    tunnel, plan = run_tunnel(occ, s, g, memory)
+    rows.append(tunnel)
+    rows.append(run_astar(occ, s, g, True, False))
+    if python_astar:
+        rows.append(run_astar(occ, s, g, False, memory))
+    best = optimal if optimal is not None else rows[1]["length"]
+    for row in rows:
+        row.update(map=name, cells=n_cells, start=list(s), goal=list(g))
+        row["ratio"] = row["length"] / best if row["success"] and best else None
+    return rows, plan
+
+
+def house(results: list) -> None:
+    grid = OccupancyGrid.from_yaml(ROOT / "config" / "maps" / "house_250.yaml")
+    grown = grid.inflate(HOUSE_RADIUS).occupied
+    s, g = grid.world_to_cell(*HOUSE_START[:2]), grid.world_to_cell(*HOUSE_GOAL[:2])
+    rows, plan = compare("house_250", grown.size, grown, s, g, None, True)
+    results.extend(dict(r, group="house") for r in rows)
+    from maru_planner.viz.tunnel import save_stages_png
+
+    save_stages_png(RESULTS / "paper003_house.png", grid.occupied, grown, plan.attempts, plan.raw_cells,
+                    plan.waypoints, s, g, "paper 003 house, 250×250 cells of 10 cm, robot radius 25 cm")
+
+
+def generated(results: list, sizes: list[int], python_limit: int) -> None:
+    for n in sizes:
+        occ = rooms_map(n, seed=n, room=25)
+        s, g = far_free_pair(occ)
+        log(f"  rooms {n}×{n} ...")
+        rows, _ = compare(f"rooms_{n}", n * n, occ, s, g, None, n <= python_limit)
+        results.extend(dict(r, group="generated") for r in rows)
+
+
+def read_movingai(path: Path):
+    lines = path.read_text().replace("\r", "").split("\n")
+    h = int(lines[1].split()[1])
+    w = int(lines[2].split()[1])
+    rows = lines[4 : 4 + h]
+    occ = np.array([[ch not in ".GS" for ch in row[:w]] for row in rows], dtype=bool)
+    scen = []
+    for line in (path.parent / (path.name + ".scen")).read_text().replace("\r", "").split("\n")[1:]:
+        parts = line.split("\t")
+        if len(parts) >= 9:
+            sx, sy, gx, gy = (int(v) for v in parts[4:8])
+            scen.append(((sy, sx), (gy, gx), float(parts[8])))
+    return occ, scen
+
+
+def movingai(results: list, maps: list[str], per_map: int) -> None:
+    for rel in maps:
+        path = MOVINGAI / rel
+        if not path.is_file():
+            log(f"  (missing {path}, skipped)")
+            continue
+        occ, scen = read_movingai(path)
+        picks = [scen[int(i)] for i in np.linspace(len(scen) // 2, len(scen) - 1, per_map)]
+        log(f"  movingai {rel} ({occ.shape[1]}×{occ.shape[0]}), {len(picks)} queries ...")
+        for s, g, optimal in picks:
+            rows, _ = compare(path.stem, occ.size, occ, s, g, optimal, False, memory=False)
+            results.extend(dict(r, group="movingai", optimal=optimal) for r in rows)
+
+
+def slope(xs, ys) -> float | None:
+    xs, ys = np.asarray(xs, float), np.asarray(ys, float)
+    ok = (xs > 0) & (ys > 0)
+    if ok.sum() < 2:
+        return None
+    return float(np.polyfit(np.log(xs[ok]), np.log(ys[ok]), 1)[0])
+
+
+def summarise(results: list) -> dict:
+    gen = [r for r in results if r["group"] == "generated"]
+    summary = {}
+    for planner in ("tunnel", "astar_python", "astar_numba"):
+        rows = [r for r in gen if r["planner"] == planner and r["success"]]
+        summary[planner] = {
+            "time_slope": slope([r["cells"] for r in rows], [r["time"] for r in rows]),
+            "memory_slope": slope([r["cells"] for r in rows], [r.get("peak_bytes", 0) for r in rows]),
+            "expanded_slope": slope([r["cells"] for r in rows], [r["expanded"] for r in rows]),
+        }
+    mai = [r for r in results if r["group"] == "movingai"]
+    for planner in ("tunnel", "astar_numba"):
+        rows = [r for r in mai if r["planner"] == planner]
+        ratios = [r["ratio"] for r in rows if r["ratio"]]
+        summary[f"movingai_{planner}"] = {
+            "queries": len(rows), "solved": sum(r["success"] for r in rows),
+            "mean_ratio": float(np.mean(ratios)) if ratios else None,
+            "max_ratio": float(np.max(ratios)) if ratios else None,
+            "mean_time": float(np.mean([r["time"] for r in rows])) if rows else None,
+            "mean_expanded": float(np.mean([r["expanded"] for r in rows])) if rows else None,
+        }
+    return summary
+
+
+def plot(results: list, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    gen = [r for r in results if r["group"] == "generated"]
+    fig, axes = plt.subplots(1, 3, figsize=(16, 4.6))
+    styles = {"tunnel": "o-", "astar_python": "s--", "astar_numba": "^:"}
+    for planner, style in styles.items():
+        rows = sorted((r for r in gen if r["planner"] == planner and r["success"]), key=lambda r: r["cells"])
+        if not rows:
+            continue
+        n = np.array([r["cells"] for r in rows], float)
+        axes[0].loglog(n, [r["time"] for r in rows], style, label=planner)
+        axes[1].loglog(n, [r["expanded"] for r in rows], style, label=planner)
+        mem = [(r["cells"], r["peak_bytes"]) for r in rows if r.get("peak_bytes")]
+        if mem:
+            axes[2].loglog(*zip(*mem), style, label=planner)
+    tunnel = sorted((r for r in gen if r["planner"] == "tunnel" and r["success"]), key=lambda r: r["cells"])
+    if tunnel:
+        n = np.array([r["cells"] for r in tunnel], float)
+        ref = n * np.log(n)
+        axes[0].loglog(n, ref * tunnel[0]["time"] / ref[0], "k-", lw=0.8, alpha=0.5, label="∝ N log N")
+        axes[1].loglog(n, ref * tunnel[0]["expanded"] / ref[0], "k-", lw=0.8, alpha=0.5, label="∝ N log N")
+        if tunnel[0].get("peak_bytes"):
+            axes[2].loglog(n, n * tunnel[0]["peak_bytes"] / n[0], "k-", lw=0.8, alpha=0.5, label="∝ N")
+    for ax, title in zip(axes, ("planning time [s]", "expanded cells", "peak memory [bytes] (tracemalloc)")):
+        ax.set_xlabel("grid cells N")
+        ax.set_title(title)
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=8)
+    fig.suptitle("paper 003: tunnel planner vs 2-D A* on generated room maps (100² … 2000²)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def fmt(v, spec=".3g"):
+    return "—" if v is None else format(v, spec)
+
+
+def table(results: list) -> str:
+    head = "| group | map | N cells | planner | ok | time [s] | expanded | peak mem [kB] | length / optimal |"
+    lines = [head, "|" + "---|" * 9]
+    for r in results:
+        mem = r.get("peak_bytes")
+        lines.append(f"| {r['group']} | {r['map']} | {r['cells']} | {r['planner']} | {'yes' if r['success'] else 'NO'} "
+                     f"| {r['time']:.4f} | {r['expanded']} | {fmt(mem / 1024 if mem else None, '.0f')} "
+                     f"| {fmt(r['ratio'], '.3f')} |")
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--quick", action="store_true", help="small sizes and few MovingAI queries")
+    args = parser.parse_args(argv)
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    sizes = [100, 200, 400] if args.quick else [100, 200, 500, 1000, 2000]
+    python_limit = 400 if args.quick else 1000
+    maps = MOVINGAI_MAPS[:2] if args.quick else MOVINGAI_MAPS
+    per_map = 3 if args.quick else 10
+    astar_2d(np.zeros((3, 3), bool), (0, 0), (2, 2))  # compile numba outside the timings
+    results: list = []
+    log("house map ...")
+    house(results)
+    log("generated maps ...")
+    generated(results, sizes, python_limit)
+    log("MovingAI maps ...")
+    movingai(results, maps, per_map)
+    summary = summarise(results)
+    plot(results, RESULTS / "paper003.png")
+    (RESULTS / "paper003.json").write_text(json.dumps({"quick": args.quick, "summary": summary, "results": results},
+                                                      indent=1, default=float))
+    md = ["# paper 003: tunnel planner vs 2-D A*", "", f"quick: {args.quick}", "", "## summary (log-log slopes vs N)",
+          "", "```", json.dumps(summary, indent=1), "```", "", "## all runs", "", table(results), ""]
+    (RESULTS / "paper003.md").write_text("\n".join(md))
+    print(table(results))
+    print(json.dumps(summary, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
