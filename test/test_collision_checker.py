@@ -94,3 +94,30 @@ def test_clearance_and_padding(robot):
     assert cc.closest_pair(home)[1] == pytest.approx(d)
     assert not CollisionChecker(robot, scene, padding=d + 0.01).is_valid(home)
     assert CollisionChecker(robot, scene, padding=max(d - 0.01, 0)).is_valid(home)
+
+
+def test_bisection_order_is_a_permutation_and_any_invalid_agrees(robot):
+    from maru_planner.collision.checker import bisection_order
+
+    for n in (0, 1, 2, 3, 10, 33):
+        assert sorted(bisection_order(n).tolist()) == list(range(n))
+    assert bisection_order(9)[:3].tolist() == [8, 0, 4]
+    cc = CollisionChecker(robot, Scene.from_yaml(config_path("scenes", "maru13_desk_box.yaml")))
+    line = np.linspace(START13, GOAL13, 41)
+    assert cc.any_invalid(line) and not cc.any_invalid(line[:1])
+    cc.reset_count()
+    cc.any_invalid(line)
+    assert cc.check_count == 3  # last, first, then the (colliding) middle
+
+
+@pytest.mark.parametrize("mode", ["naive", "aabb_tree"])
+def test_broadphase_agrees_with_pair_loop(robot, mode):
+    scene = Scene.from_yaml(config_path("scenes", "maru13_desk_box.yaml"))
+    fast, loop = CollisionChecker(robot, scene, broadphase=mode), CollisionChecker(robot, scene, broadphase="none")
+    rng = np.random.default_rng(5)
+    Q = np.array([robot.random_configuration(rng) for _ in range(300)])
+    clear = np.array([abs(loop.clearance(q)) > 1e-4 for q in Q])  # skip GJK-borderline contacts
+    np.testing.assert_array_equal(fast.are_valid(Q)[clear], loop.are_valid(Q)[clear])
+    assert CollisionChecker(robot, scene, padding=0.01).broadphase == "none"
+    with pytest.raises(ValueError, match="broadphase"):
+        CollisionChecker(robot, scene, broadphase="octree")

@@ -7,6 +7,15 @@ changes (``set_scene`` or any edit that bumps ``scene.version``), so a removed
 obstacle never leaves a stale pair behind. Robot-vs-scene pairs come first in
 the pair list: in planning they are the ones that usually fail, and
 ``stop_at_first_collision`` then returns early.
+
+Validity checks (``is_valid``, ``are_valid``, ``first_invalid``,
+``any_invalid``) go through a coal broad phase, which skips the narrow phase
+of every pair whose bounding boxes do not overlap -- most pairs, most of the
+time (bench/collision.py: 2-7x faster than ``pinocchio.computeCollisions``
+over the same pairs). ``broadphase="auto"`` picks the naive manager (AABB test
+per pair) for primitive-only robots and a dynamic AABB tree when the robot
+has meshes; with ``padding`` > 0 the plain pair loop is used (the broad
+phase's boxes are not inflated by the security margin).
 """
 
 from __future__ import annotations
@@ -33,6 +42,39 @@ def obstacle_geometry(obstacle: Obstacle) -> coal.CollisionGeometry:
     return loader.load(obstacle.path, np.asarray(obstacle.scale, dtype=float))
 
 
+BROADPHASES = {
+    "none": None,
+    "naive": pin.BroadPhaseManager_NaiveCollisionManager,
+    "aabb_tree": pin.BroadPhaseManager_DynamicAABBTreeCollisionManager,
+}
+_BISECTION_CACHE: dict[int, np.ndarray] = {}
+
+
+def bisection_order(n: int) -> np.ndarray:
+    """Indices 0..n-1: last, first, then midpoints of ever finer halves (cached per n)."""
+    order = _BISECTION_CACHE.get(n)
+    if order is None:
+        seen, out = set(), []
+        for k in (n - 1, 0):
+            if 0 <= k < n and k not in seen:
+                seen.add(k)
+                out.append(k)
+        segments = [(0, n - 1)]
+        while segments:
+            nxt = []
+            for a, b in segments:
+                if b - a < 2:
+                    continue
+                m = (a + b) // 2
+                if m not in seen:
+                    seen.add(m)
+                    out.append(m)
+                nxt += [(a, m), (m, b)]
+            segments = nxt
+        order = _BISECTION_CACHE[n] = np.array(out, dtype=int)
+    return order
+
+
 def self_collision_pairs(robot: RobotModel) -> list[tuple[int, int]]:
     """Geometry index pairs to check for self-collision.
 
@@ -56,10 +98,21 @@ def self_collision_pairs(robot: RobotModel) -> list[tuple[int, int]]:
 class CollisionChecker:
     """Validity of full robot configurations against self-collision and a scene."""
 
-    def __init__(self, robot: RobotModel, scene: Scene | None = None, *, padding: float = 0.0):
-        """``padding`` (m) is added to every pair's security margin: closer than that counts as collision."""
+    def __init__(
+        self, robot: RobotModel, scene: Scene | None = None, *, padding: float = 0.0, broadphase: str = "auto"
+    ):
+        """``padding`` (m) is added to every pair's security margin: closer than that counts as collision.
+
+        ``broadphase``: "auto", "naive", "aabb_tree" or "none" (pair loop only).
+        """
+        if broadphase != "auto" and broadphase not in BROADPHASES:
+            raise ValueError(f"broadphase must be 'auto' or one of {sorted(BROADPHASES)}, got {broadphase!r}")
         self.robot = robot
         self.padding = float(padding)
+        if broadphase == "auto":
+            has_mesh = any(isinstance(g.geometry, coal.BVHModelBase) for g in robot.collision_model.geometryObjects)
+            broadphase = "aabb_tree" if has_mesh else "naive"
+        self.broadphase = "none" if self.padding > 0 else broadphase
         self.check_count = 0
         self._self_pairs = self_collision_pairs(robot)
         self._model = robot.model
@@ -100,6 +153,13 @@ class CollisionChecker:
             request.enable_contact = False
         self._pair_names = [(names[i], names[j]) for i, j in pairs]
         self._scene_version = self._scene.version
+        manager = BROADPHASES[self.broadphase]
+        self._manager = manager(self._model, geom_model, self._geom_data) if manager and pairs else None
+
+    def _collides(self, q: np.ndarray) -> bool:
+        if self._manager is not None:
+            return pin.computeCollisions(self._model, self._data, self._manager, q, True)
+        return pin.computeCollisions(self._model, self._data, self._geom_model, self._geom_data, q, True)
 
     def _sync(self) -> None:
         if self._scene.version != self._scene_version:
@@ -116,28 +176,43 @@ class CollisionChecker:
         """True if ``q`` (full configuration) is free of self- and scene collision."""
         self._sync()
         self.check_count += 1
-        return not pin.computeCollisions(self._model, self._data, self._geom_model, self._geom_data, q, True)
+        return not self._collides(q)
 
     def are_valid(self, Q: np.ndarray) -> np.ndarray:
         """Validity of each row of ``Q`` (n, nq)."""
         self._sync()
         Q = np.asarray(Q, dtype=float)
         out = np.empty(len(Q), dtype=bool)
-        model, data, gm, gd = self._model, self._data, self._geom_model, self._geom_data
+        collides = self._collides
         for k, q in enumerate(Q):
-            out[k] = not pin.computeCollisions(model, data, gm, gd, q, True)
+            out[k] = not collides(q)
         self.check_count += len(Q)
         return out
 
     def first_invalid(self, Q: np.ndarray) -> int:
         """Index of the first invalid row of ``Q`` (-1 if all valid); stops at the first hit."""
         self._sync()
-        model, data, gm, gd = self._model, self._data, self._geom_model, self._geom_data
+        collides = self._collides
         for k, q in enumerate(np.asarray(Q, dtype=float)):
             self.check_count += 1
-            if pin.computeCollisions(model, data, gm, gd, q, True):
+            if collides(q):
                 return k
         return -1
+
+    def any_invalid(self, Q: np.ndarray) -> bool:
+        """True if some row of ``Q`` is invalid; checks in bisection order (ends, middle, quarters, ...).
+
+        For a discretised edge the middle is the likeliest to collide when the
+        ends are known valid, so invalid edges are rejected after few checks.
+        """
+        self._sync()
+        Q = np.asarray(Q, dtype=float)
+        collides = self._collides
+        for k in bisection_order(len(Q)):
+            self.check_count += 1
+            if collides(Q[k]):
+                return True
+        return False
 
     def colliding_pairs(self, q: np.ndarray) -> list[tuple[str, str]]:
         """Names (link or obstacle) of every colliding pair at ``q``; empty if valid."""
