@@ -180,3 +180,25 @@ def test_world_loader_names_what_is_wrong(patch, needle):
 def test_load_world_missing_file(tmp_path):
     with pytest.raises(InvalidScene, match="not found"):
         load_world(tmp_path / "nope.yaml")
+
+
+def test_grid_planner_with_a_world_file_and_with_a_plain_grid():
+    from maru_planner.base.biped.planners import biped_track, biped_wall
+
+    w = world("corridor_wide")
+    plan = biped_track(None, world="worlds/biped/corridor_wide.yaml", headings=32, time_limit=10.0).plan(
+        None, w.start, w.goal)
+    assert plan.success and plan.stats["mapping"] == "3d_world"
+    grid = map_3d_to_2d(w).to_occupancy_grid()
+    footprint = np.array([[0.2, 0.18], [-0.2, 0.18], [-0.2, -0.18], [0.2, -0.18]])
+    plan = biped_wall(footprint).plan(grid, w.start, w.goal)
+    assert plan.success and plan.stats["mapping"] == "grid"
+    assert biped_wall(footprint).plan(None, w.start, w.goal).status == res.INVALID_REQUEST
+    with pytest.raises(InvalidScene):
+        biped_track(None, world="no/such/world.yaml")
+
+
+def test_biped_time_limit():
+    w = world("corridor_narrow")
+    m = map_3d_to_2d(w)
+    assert VirtualWallPlanner(w.robot, time_limit=1e-9).plan(m, w.start, w.goal).status == res.TIMED_OUT

@@ -61,6 +61,7 @@ class TunnelParams:
     maximum_value: float = 1.0e6
     max_virtual_obstacles: int = 200
     shortcut: bool = True
+    time_limit: float = 0.0  # seconds; 0 = no limit
 
     def validate(self) -> None:
         checks = [
@@ -73,6 +74,7 @@ class TunnelParams:
             (self.k5 < 0, "k5 must be < 0 (paper: K5 negative)"),
             (self.maximum_value > 0, "maximum_value must be > 0"),
             (self.max_virtual_obstacles >= 0, "max_virtual_obstacles must be >= 0"),
+            (math.isfinite(self.time_limit) and self.time_limit >= 0, "time_limit must be >= 0 s (0 = none)"),
         ]
         for ok, message in checks:
             if not ok:
@@ -134,6 +136,27 @@ class BigCellGrid:
         return 0 <= big[0] < self.shape[0] and 0 <= big[1] < self.shape[1]
 
 
+class TimedOut(Exception):
+    """The planner's time budget ran out."""
+
+
+class Deadline:
+    """Checks the clock every ``every`` calls (cheap enough for the inner loops)."""
+
+    def __init__(self, seconds: float, every: int = 512):
+        self.at = time.perf_counter() + seconds if seconds > 0 else math.inf
+        self.every = every
+        self.calls = 0
+
+    def check(self) -> None:
+        self.calls += 1
+        if self.calls % self.every == 0 and time.perf_counter() > self.at:
+            raise TimedOut
+
+
+NO_DEADLINE = Deadline(0.0)
+
+
 def _edge(a: tuple[int, int], b: tuple[int, int]) -> tuple:
     return (a, b) if a <= b else (b, a)
 
@@ -145,7 +168,8 @@ def _dist(a, b) -> float:
 # --------------------------------------------------------------------------- TFP
 
 
-def tunnel_finding(bg: BigCellGrid, start: tuple, goal: tuple, p: TunnelParams, blocked: set) -> tuple[list, bool]:
+def tunnel_finding(bg: BigCellGrid, start: tuple, goal: tuple, p: TunnelParams, blocked: set,
+                   deadline: Deadline = NO_DEADLINE) -> tuple[list, bool]:
     """TFP: greedy walk over Σ(β) minimising f_T, backtracking at dead ends.
 
     Returns (T in visiting order, reached_goal).
@@ -156,6 +180,7 @@ def tunnel_finding(bg: BigCellGrid, start: tuple, goal: tuple, p: TunnelParams, 
     chain = [start]
     cells_per_big = bg.size * bg.size
     while chain:
+        deadline.check()
         cur = chain[-1]
         if cur == goal:
             return tunnel, True
@@ -237,7 +262,8 @@ def lumped_cell_removal(bg: BigCellGrid, tunnel: list, start: tuple, goal: tuple
 # --------------------------------------------------------------------------- PFP
 
 
-def path_finding(occupied: np.ndarray, bg: BigCellGrid, thin: list, start: tuple, goal: tuple, p: TunnelParams):
+def path_finding(occupied: np.ndarray, bg: BigCellGrid, thin: list, start: tuple, goal: tuple, p: TunnelParams,
+                 deadline: Deadline = NO_DEADLINE):
     """PFP: greedy depth-first 8-neighbour walk of small cells inside B.
 
     Returns (cells or None, index in B of the β where the walk got stuck, expansions).
@@ -251,6 +277,7 @@ def path_finding(occupied: np.ndarray, bg: BigCellGrid, thin: list, start: tuple
     progress = 0
     expansions = 0
     while chain:
+        deadline.check()
         cur = chain[-1]
         if cur == goal:
             return chain, progress, expansions
@@ -357,11 +384,20 @@ class TunnelPlanner:
                 return self._finish(bad[0], bad[1], [], [], [], stats, t0)
         p = self.params
         attempts: list[Attempt] = []
+        deadline = Deadline(p.time_limit)
+        try:
+            return self._search(occupied, start, goal, attempts, stats, deadline, t0)
+        except TimedOut:
+            return self._finish(res.TIMED_OUT, f"time limit of {p.time_limit} s reached", [], attempts, occupied,
+                                stats, t0)
+
+    def _search(self, occupied, start, goal, attempts, stats, deadline, t0) -> CellPlan:
+        p = self.params
         for size in range(p.big_cell_size, p.min_big_cell_size - 1, -1):
             bg = BigCellGrid(occupied, size)
             blocked: set = set()
             while True:
-                attempt, cells = self._round(occupied, bg, start, goal, blocked, stats)
+                attempt, cells = self._round(occupied, bg, start, goal, blocked, stats, deadline)
                 attempts.append(attempt)
                 if cells is not None:
                     return self._finish(res.SOLVED, f"path found with big cells of {size}×{size}",
@@ -376,18 +412,18 @@ class TunnelPlanner:
         reason = f"{last.failed_stage} failed at big-cell size {last.big_cell_size}" if last else "no attempt"
         return self._finish(res.NO_PATH, f"no path: {reason}", [], attempts, occupied, stats, t0)
 
-    def _round(self, occupied, bg: BigCellGrid, start, goal, blocked: set, stats: dict):
+    def _round(self, occupied, bg: BigCellGrid, start, goal, blocked: set, stats: dict, deadline: Deadline):
         p = self.params
         stats["attempts"] += 1
         b_start, b_goal = bg.of(start), bg.of(goal)
-        tunnel, reached = tunnel_finding(bg, b_start, b_goal, p, blocked)
+        tunnel, reached = tunnel_finding(bg, b_start, b_goal, p, blocked, deadline)
         stats["tfp_expansions"] += len(tunnel)
         empty = np.zeros((0, 2), dtype=int)
         if not reached:
             return Attempt(bg.size, "TFP", _as_array(tunnel), empty, empty, empty, sorted(blocked)), None
         thin, lumped = lumped_cell_removal(bg, tunnel, b_start, b_goal, p, blocked)
         stats["lcrp_cells"] += len(thin)
-        cells, stuck, expansions = path_finding(occupied, bg, thin, start, goal, p)
+        cells, stuck, expansions = path_finding(occupied, bg, thin, start, goal, p, deadline)
         stats["pfp_expansions"] += expansions
         if cells is None:
             failing = _edge(thin[stuck], thin[min(stuck + 1, len(thin) - 1)])
@@ -430,10 +466,12 @@ class TunnelGridPlanner:
 
     Obstacles are grown by ``robot_radius`` metres (default: the footprint's
     circumradius, 0.25 m without a footprint — the paper's robot). Other
-    keyword arguments are :class:`TunnelParams` fields.
+    keyword arguments are :class:`TunnelParams` fields (``time_limit`` among
+    them); ``headings`` is accepted and unused, so that the node can pass the
+    parameters common to all base planners.
     """
 
-    def __init__(self, footprint=None, robot_radius: float | None = None, **params):
+    def __init__(self, footprint=None, robot_radius: float | None = None, headings=None, **params):
         if robot_radius is None:
             robot_radius = 0.25
             if footprint is not None and len(np.asarray(footprint)):

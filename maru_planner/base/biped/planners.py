@@ -9,7 +9,10 @@
   cell a line obstacle) and the gait rectangle is the footprint's bounding box
   (length along x, width along y; no body overhang).
 
-Other keyword arguments are :class:`TrackParams` / :class:`WallParams` fields.
+Other keyword arguments are :class:`TrackParams` / :class:`WallParams` fields
+(``time_limit`` among them); ``headings`` is accepted and unused (the node
+passes the parameters common to all base planners). A relative ``world``
+path that does not exist is looked up under the package's ``config/``.
 """
 
 from __future__ import annotations
@@ -41,17 +44,28 @@ def map_from_grid(grid) -> BipedMap2D:
     return BipedMap2D(occupied.copy(), np.zeros_like(occupied), grid.resolution, (grid.origin[0], grid.origin[1]))
 
 
+def resolve_world_path(world) -> Path:
+    path = Path(world)
+    if not path.is_absolute() and not path.exists():
+        from maru_planner.paths import config_path
+
+        candidate = config_path(*path.parts[1:]) if path.parts[0] == "config" else config_path(*path.parts)
+        if candidate.exists():
+            return candidate
+    return path
+
+
 class BipedGridPlanner:
     """One of the two biped planners, on a 3-D world or on a plain grid."""
 
     KINDS = {"track": TrackFollowingPlanner, "wall": VirtualWallPlanner}
 
-    def __init__(self, kind: str, footprint=None, world=None, **params):
+    def __init__(self, kind: str, footprint=None, world=None, headings=None, **params):
         if kind not in self.KINDS:
             raise ValueError(f"unknown biped planner kind {kind!r}")
         self.kind = kind
         if isinstance(world, str | Path) and str(world):
-            world = load_world(world)
+            world = load_world(resolve_world_path(world))
         self.world: BipedWorld | None = world if isinstance(world, BipedWorld) else None
         self.map2d = map_3d_to_2d(self.world) if self.world is not None else None
         self.robot = self.world.robot if self.world is not None else (

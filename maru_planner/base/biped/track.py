@@ -39,10 +39,13 @@ class TrackParams:
     max_reroutes: int = 20
     connect_radius: float = 3.0  # metres: how far start/goal look for the track
     simplify_tolerance: float | None = None  # metres, default one cell
+    time_limit: float = 0.0  # seconds, checked between reroutes; 0 = no limit
 
     def validate(self):
         if self.max_reroutes < 0 or self.connect_radius <= 0:
             raise ValueError("max_reroutes must be >= 0 and connect_radius > 0")
+        if not (math.isfinite(self.time_limit) and self.time_limit >= 0):
+            raise ValueError("time_limit must be >= 0 s (0 = none)")
 
 
 def turn_allowed(phi: float, robot: BipedRobot, half_width: float) -> tuple[bool, float]:
@@ -199,6 +202,9 @@ class TrackFollowingPlanner:
         message = "no mid-line track joins start and goal with room for the gait width"
         for attempt in range(p.max_reroutes + 1):
             stats["reroutes"] = attempt
+            if p.time_limit and time.perf_counter() - t0 > p.time_limit:
+                return _finish(res.TIMED_OUT, f"time limit of {p.time_limit} s reached", np.zeros((0, 3)), stats,
+                               layers, t0, checker)
             ids = _shortest(graph, s_id, g_id, banned)
             stats["expansions"] += len(ids or ())
             if ids is None:

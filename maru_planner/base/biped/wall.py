@@ -53,6 +53,7 @@ class WallParams:
     max_steps: int = 2000
     patience: int = 150  # steps without getting closer to the goal before giving up
     oscillation_tolerance: float = math.radians(1)
+    time_limit: float = 0.0  # seconds, checked every step; 0 = no limit
     centering: float = 2.0  # extra cost-to-go per cell of clearance missing to K (keeps to mid-passage)
 
     def validate(self):
@@ -65,6 +66,7 @@ class WallParams:
             (self.lookahead > 0 and self.goal_tolerance > 0, "lookahead and goal_tolerance must be > 0"),
             (self.max_steps > 0 and self.patience > 0, "max_steps and patience must be > 0"),
             (self.centering >= 0, "centering must be >= 0"),
+            (math.isfinite(self.time_limit) and self.time_limit >= 0, "time_limit must be >= 0 s (0 = none)"),
         ]
         for ok, message in checks:
             if not ok:
@@ -213,10 +215,10 @@ class VirtualWallPlanner:
         if not np.isfinite(field[start_cell]) and self._reference_heading(field, m, start) is None:
             return _finish(res.NO_PATH, "no passage wide enough for the gait joins start and goal",
                            np.zeros((0, 3)), stats, layers, t0, checker)
-        status, message, poses = self._walk(m, checker, field, start, goal, stats, trace)
+        status, message, poses = self._walk(m, checker, field, start, goal, stats, trace, t0)
         return _finish(status, message, np.asarray(poses, dtype=float), stats, layers, t0, checker)
 
-    def _walk(self, m, checker, field, start, goal, stats, trace):
+    def _walk(self, m, checker, field, start, goal, stats, trace, t0):
         p = self.params
         pose = tuple(float(v) for v in start)
         poses = [pose]
@@ -226,6 +228,8 @@ class VirtualWallPlanner:
         damping = 1
         best_distance, since_best = math.inf, 0
         for _ in range(p.max_steps):
+            if p.time_limit and time.perf_counter() - t0 > p.time_limit:
+                return res.TIMED_OUT, f"time limit of {p.time_limit} s reached", []
             stats["expansions"] += 1
             distance = math.hypot(goal[0] - pose[0], goal[1] - pose[1])
             if distance <= p.goal_tolerance:
