@@ -118,10 +118,18 @@ def joint_state_values(msg, what: str = "start_state") -> dict[str, float]:
     return named_values(msg.name, msg.position, what)
 
 
-def configuration(robot, values: dict[str, float]) -> np.ndarray:
-    """Full robot configuration (``robot.neutral()`` with ``values`` set by joint name)."""
+def configuration(robot, values: dict[str, float], *, strict: bool = False) -> np.ndarray:
+    """Full robot configuration: ``robot.neutral()`` with ``values`` set by joint name.
+
+    Names the robot does not have are ignored (``/joint_states`` may carry other joints),
+    or raise ``InvalidJointNames`` when ``strict``.
+    """
     q = np.asarray(robot.neutral(), dtype=float).copy()
-    known = [name for name in values if name in set(robot.joint_names)]
+    joints = set(robot.joint_names)
+    unknown = [name for name in values if name not in joints]
+    if strict and unknown:
+        raise errors.InvalidJointNames(f"unknown joint(s) {', '.join(unknown)}")
+    known = [name for name in values if name in joints]
     if known:
         q[robot.joint_indices(known)] = [values[name] for name in known]
     return q

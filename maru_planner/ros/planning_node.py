@@ -358,10 +358,10 @@ class PlanningNode(Node):
             targets = conv.pose_goals(request.poses, request.links, self._param("planning_frame"))
             if not targets:
                 raise errors.InvalidRequest("no poses: give poses + links")
-            seed = self._ik_seed(request.seed_state)
+            seed, strict = self._ik_seed(request.seed_state)
             timeout = request.timeout if request.timeout > 0 else self._param("ik_timeout")
             group = request.group or self._param("default_group")
-            q = await self._in_worker(_ik_in_context, group, targets, seed, timeout, request.avoid_collisions)
+            q = await self._in_worker(_ik_in_context, group, targets, seed, strict, timeout, request.avoid_collisions)
         except Exception as exc:  # noqa: BLE001
             response.error = conv.error_msg(exc, source="node")
             self._log_failure("compute_ik", response.error)
@@ -370,10 +370,11 @@ class PlanningNode(Node):
         response.solution = conv.joint_state_msg(self._robot.joint_names, q, self.get_clock().now().to_msg())
         return response
 
-    def _ik_seed(self, msg: JointState) -> dict[str, float]:
+    def _ik_seed(self, msg: JointState) -> tuple[dict[str, float], bool]:
+        """(seed values, whether every name must be a robot joint): the request's, else /joint_states."""
         if msg.name or msg.position:
-            return conv.joint_state_values(msg, "seed_state")
-        return self.latest_joint_state()
+            return conv.joint_state_values(msg, "seed_state"), True
+        return self.latest_joint_state(), False
 
     def _on_apply_scene(self, request: ApplyScene.Request, response: ApplyScene.Response):
         try:
@@ -416,18 +417,13 @@ def _plan_in_context(context: PlanningContext, motion_request):
     return context.planner.plan(motion_request)
 
 
-def _ik_in_context(context: PlanningContext, group, targets, seed, timeout, avoid_collisions) -> np.ndarray:
+def _ik_in_context(context: PlanningContext, group, targets, seed, strict, timeout, avoid_collisions) -> np.ndarray:
     from maru_planner.robot.ik import solve_ik
 
     robot = context.robot
-    q_seed = robot.configuration(seed)
-    q = solve_ik(robot, targets=targets, q_seed=q_seed, group=group, timeout=timeout)
-    if avoid_collisions:
-        pairs = context.checker.colliding_pairs(q)
-        if pairs:
-            names = ", ".join(f"{a}-{b}" for a, b in pairs)
-            raise errors.NoIKSolution(f"the IK solution for {sorted(targets)} collides ({names})", source="ik")
-    return q
+    q_seed = conv.configuration(robot, seed, strict=strict)
+    is_valid = context.checker.is_valid if avoid_collisions else None
+    return solve_ik(robot, targets, q_seed, group, deadline=time.monotonic() + timeout, is_valid=is_valid)
 
 
 def main(args=None) -> None:

@@ -1,0 +1,234 @@
+"""Service overhead of planning_node: round trip minus the core's planning time.
+
+Starts planning_node (and, as a baseline, an empty std_srvs/Trigger server) as
+their own processes on loopback DDS, then times N calls of each from this
+process:
+
+- ``plan_motion``: a small right-arm move; overhead = round trip - ``planning_time``
+  (the core's total time reported in the response);
+- ``get_scene``: a node service without planning (conversions + DDS only);
+- ``trigger``: an empty rclpy service (what DDS + rclpy alone cost).
+
+Target: median plan_motion overhead <= 5 ms.
+
+    .venv/bin/python bench/service_latency.py [--calls 100] [--quick]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import textwrap
+import time
+from pathlib import Path
+
+import numpy as np
+
+from maru_planner.paths import config_path
+from maru_planner.ros.env import configure_loopback_dds
+
+RESULTS = Path(__file__).resolve().parent / "results"
+NAME = "service_latency"
+TARGET_MS = 5.0
+JOINTS = ["waist_yaw"] + [f"r_arm_j{i}" for i in range(1, 7)] + [f"l_arm_j{i}" for i in range(1, 7)]
+START = dict(zip(JOINTS, (-0.9, -0.7, 1.57, 0.7, 0.7, -0.9, -0.9, -0.8, 1.57, 2.0, 0.7, -1.9, -1.25), strict=True))
+
+TRIGGER_SERVER = textwrap.dedent(
+    """
+    import rclpy
+    from rclpy.executors import ExternalShutdownException
+    from std_srvs.srv import Trigger
+    from maru_planner.ros.env import configure_loopback_dds
+    configure_loopback_dds()
+    rclpy.init()
+    node = rclpy.create_node("latency_trigger_server")
+    def answer(request, response):
+        response.success = True
+        return response
+    node.create_service(Trigger, "latency_trigger", answer)
+    try:
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    """
+)
+
+
+def log(message: str) -> None:
+    print(message, file=sys.stderr, flush=True)
+
+
+def start_process(args: list[str], log_file) -> subprocess.Popen:
+    return subprocess.Popen(
+        [sys.executable, *args],
+        stdout=log_file,
+        stderr=subprocess.STDOUT,
+        stdin=subprocess.DEVNULL,
+        env=dict(os.environ),
+    )
+
+
+def timed_calls(client, make_request, calls: int, label: str, timeout: float = 60.0):
+    """Round-trip seconds and responses of ``calls`` sequential calls (after 3 warm-up calls)."""
+    from maru_planner.ros.planning_client import call_service
+
+    for _ in range(3):
+        call_service(client, make_request(0), timeout)
+    rtts, responses = [], []
+    for i in range(calls):
+        request = make_request(i)
+        t0 = time.perf_counter()
+        response = call_service(client, request, timeout)
+        rtts.append(time.perf_counter() - t0)
+        responses.append(response)
+        if (i + 1) % 20 == 0:
+            log(f"  {label}: {i + 1}/{calls}")
+    return np.array(rtts), responses
+
+
+def plan_request_factory():
+    from maru_planner.ros.planning_client import plan_request
+
+    def make(i: int):
+        goal = dict(START, r_arm_j4=START["r_arm_j4"] + 0.1 + 0.002 * (i % 50))
+        return plan_request(goal, start=START, group="upper_body", planner_id="RRTConnect", time_budget=5.0, seed=i)
+
+    return make
+
+
+def summarize(values_s: np.ndarray) -> dict:
+    ms = values_s * 1e3
+    return {
+        "median_ms": float(np.median(ms)),
+        "mean_ms": float(np.mean(ms)),
+        "p90_ms": float(np.percentile(ms, 90)),
+        "max_ms": float(np.max(ms)),
+        "min_ms": float(np.min(ms)),
+    }
+
+
+def run(calls: int) -> dict:
+    import rclpy
+    from rclpy.executors import MultiThreadedExecutor
+    from std_srvs.srv import Trigger
+
+    from maru_planner_interfaces.msg import PlanningError
+    from maru_planner_interfaces.srv import GetScene, PlanMotion
+
+    logs = tempfile.TemporaryDirectory(prefix="latency_")
+    node_log = open(Path(logs.name) / "planning_node.log", "w")
+    trigger_log = open(Path(logs.name) / "trigger.log", "w")
+    params = str(config_path("planner.yaml"))
+    node = start_process(["-m", "maru_planner.ros.planning_node", "--ros-args", "--params-file", params], node_log)
+    trigger = start_process(["-c", TRIGGER_SERVER], trigger_log)
+    rclpy.init()
+    client_node = rclpy.create_node("latency_client")
+    executor = MultiThreadedExecutor(num_threads=2)
+    executor.add_node(client_node)
+    import threading
+
+    threading.Thread(target=executor.spin, daemon=True).start()
+    try:
+        plan_client = client_node.create_client(PlanMotion, "plan_motion")
+        scene_client = client_node.create_client(GetScene, "get_scene")
+        trigger_client = client_node.create_client(Trigger, "latency_trigger")
+        log("waiting for planning_node and the trigger server ...")
+        for c in (plan_client, scene_client, trigger_client):
+            if not c.wait_for_service(timeout_sec=120.0):
+                raise RuntimeError(f"{c.srv_name} not available; node log:\n" + Path(node_log.name).read_text())
+        log(f"timing {calls} calls each")
+        plan_rtt, plan_responses = timed_calls(plan_client, plan_request_factory(), calls, "plan_motion")
+        failures = [r.error.message for r in plan_responses if r.error.code != PlanningError.SUCCESS]
+        if failures:
+            raise RuntimeError(f"{len(failures)} plan calls failed, e.g. {failures[0]}")
+        core = np.array([r.planning_time for r in plan_responses])
+        scene_rtt, _ = timed_calls(scene_client, lambda i: GetScene.Request(), calls, "get_scene")
+        trigger_rtt, _ = timed_calls(trigger_client, lambda i: Trigger.Request(), calls, "trigger")
+    finally:
+        executor.shutdown(timeout_sec=2.0)
+        client_node.destroy_node()
+        rclpy.shutdown()
+        for proc in (node, trigger):
+            proc.terminate()
+            try:
+                proc.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+        node_log.close()
+        trigger_log.close()
+        logs.cleanup()
+    return {
+        "calls": calls,
+        "target_median_overhead_ms": TARGET_MS,
+        "plan_motion_overhead": summarize(plan_rtt - core),
+        "plan_motion_round_trip": summarize(plan_rtt),
+        "plan_motion_core_time": summarize(core),
+        "get_scene_round_trip": summarize(scene_rtt),
+        "trigger_round_trip (empty rclpy service, baseline)": summarize(trigger_rtt),
+        "raw_ms": {
+            "plan_overhead": ((plan_rtt - core) * 1e3).tolist(),
+            "get_scene": (scene_rtt * 1e3).tolist(),
+            "trigger": (trigger_rtt * 1e3).tolist(),
+        },
+    }
+
+
+def table(results: dict) -> str:
+    rows = [k for k in results if isinstance(results[k], dict) and "median_ms" in results[k]]
+    lines = [
+        f"# planning_node service latency ({results['calls']} calls each)",
+        "",
+        "| measure | median ms | mean ms | p90 ms | max ms |",
+        "|---|---|---|---|---|",
+    ]
+    for key in rows:
+        s = results[key]
+        lines.append(f"| {key} | {s['median_ms']:.2f} | {s['mean_ms']:.2f} | {s['p90_ms']:.2f} | {s['max_ms']:.2f} |")
+    median = results["plan_motion_overhead"]["median_ms"]
+    verdict = "met" if median <= TARGET_MS else "missed"
+    lines += ["", f"Target: median plan_motion overhead <= {TARGET_MS} ms: **{verdict}** ({median:.2f} ms)."]
+    return "\n".join(lines) + "\n"
+
+
+def plot(results: dict, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    raw = results["raw_ms"]
+    labels = ["plan_motion\noverhead", "get_scene\nround trip", "empty Trigger\nround trip (baseline)"]
+    fig, ax = plt.subplots(figsize=(7, 4))
+    ax.boxplot([raw["plan_overhead"], raw["get_scene"], raw["trigger"]], showfliers=True)
+    ax.set_xticks([1, 2, 3], labels)
+    ax.axhline(TARGET_MS, color="tab:red", linestyle="--", label=f"target {TARGET_MS} ms")
+    ax.set_ylabel("ms")
+    ax.set_title(f"planning_node service latency, {results['calls']} calls each (loopback DDS)")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--calls", type=int, default=100)
+    parser.add_argument("--quick", action="store_true", help="20 calls each")
+    args = parser.parse_args(argv)
+    configure_loopback_dds(random_domain=True)
+    results = run(20 if args.quick else args.calls)
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    (RESULTS / f"{NAME}.json").write_text(json.dumps(results, indent=2))
+    markdown = table(results)
+    (RESULTS / f"{NAME}.md").write_text(markdown)
+    plot(results, RESULTS / f"{NAME}.png")
+    print(markdown)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
