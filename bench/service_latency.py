@@ -36,6 +36,9 @@ NAME = "service_latency"
 TARGET_MS = 5.0
 JOINTS = ["waist_yaw"] + [f"r_arm_j{i}" for i in range(1, 7)] + [f"l_arm_j{i}" for i in range(1, 7)]
 START = dict(zip(JOINTS, (-0.9, -0.7, 1.57, 0.7, 0.7, -0.9, -0.9, -0.8, 1.57, 2.0, 0.7, -1.9, -1.25), strict=True))
+PAPER_GOAL = dict(
+    zip(JOINTS, (0.9, -0.8, 1.57, 1.14, 0.7, -1.24, -1.9, -0.7, 1.57, 2.44, 0.7, -2.24, -1.25), strict=True)
+)
 
 TRIGGER_SERVER = textwrap.dedent(
     """
@@ -100,6 +103,18 @@ def plan_request_factory():
     return make
 
 
+def paper_request_factory():
+    """The 13-DOF paper problem (RRTConnect, fixed seed): a real search and a longer trajectory."""
+    from maru_planner.ros.planning_client import plan_request
+
+    def make(i: int):
+        return plan_request(
+            PAPER_GOAL, start=START, group="upper_body", planner_id="RRTConnect", time_budget=20.0, seed=3
+        )
+
+    return make
+
+
 def summarize(values_s: np.ndarray) -> dict:
     ms = values_s * 1e3
     return {
@@ -111,7 +126,7 @@ def summarize(values_s: np.ndarray) -> dict:
     }
 
 
-def run(calls: int) -> dict:
+def run(calls: int, paper_calls: int) -> dict:
     import rclpy
     from rclpy.executors import MultiThreadedExecutor
     from std_srvs.srv import Trigger
@@ -146,6 +161,9 @@ def run(calls: int) -> dict:
         if failures:
             raise RuntimeError(f"{len(failures)} plan calls failed, e.g. {failures[0]}")
         core = np.array([r.planning_time for r in plan_responses])
+        paper_rtt, paper_responses = timed_calls(plan_client, paper_request_factory(), paper_calls, "paper problem")
+        paper_core = np.array([r.planning_time for r in paper_responses])
+        paper_points = int(np.median([len(r.trajectory.points) for r in paper_responses]))
         scene_rtt, _ = timed_calls(scene_client, lambda i: GetScene.Request(), calls, "get_scene")
         trigger_rtt, _ = timed_calls(trigger_client, lambda i: Trigger.Request(), calls, "trigger")
     finally:
@@ -167,10 +185,15 @@ def run(calls: int) -> dict:
         "plan_motion_overhead": summarize(plan_rtt - core),
         "plan_motion_round_trip": summarize(plan_rtt),
         "plan_motion_core_time": summarize(core),
+        "paper_problem_calls": paper_calls,
+        "paper_problem_trajectory_points": paper_points,
+        "paper_problem_overhead": summarize(paper_rtt - paper_core),
+        "paper_problem_core_time": summarize(paper_core),
         "get_scene_round_trip": summarize(scene_rtt),
         "trigger_round_trip (empty rclpy service, baseline)": summarize(trigger_rtt),
         "raw_ms": {
             "plan_overhead": ((plan_rtt - core) * 1e3).tolist(),
+            "paper_overhead": ((paper_rtt - paper_core) * 1e3).tolist(),
             "get_scene": (scene_rtt * 1e3).tolist(),
             "trigger": (trigger_rtt * 1e3).tolist(),
         },
@@ -181,6 +204,12 @@ def table(results: dict) -> str:
     rows = [k for k in results if isinstance(results[k], dict) and "median_ms" in results[k]]
     lines = [
         f"# planning_node service latency ({results['calls']} calls each)",
+        "",
+        "plan_motion: a small right-arm move (upper_body group, RRTConnect); paper problem: the 13-DOF",
+        f"desk-and-box problem ({results['paper_problem_calls']} calls, RRTConnect seed 3, "
+        f"{results['paper_problem_trajectory_points']} trajectory points). Overhead = client round trip - the",
+        "core's planning_time from the response. Baselines: get_scene (node service, no planning) and an",
+        "empty std_srvs/Trigger rclpy service in its own process.",
         "",
         "| measure | median ms | mean ms | p90 ms | max ms |",
         "|---|---|---|---|---|",
@@ -201,10 +230,15 @@ def plot(results: dict, path: Path) -> None:
     import matplotlib.pyplot as plt
 
     raw = results["raw_ms"]
-    labels = ["plan_motion\noverhead", "get_scene\nround trip", "empty Trigger\nround trip (baseline)"]
-    fig, ax = plt.subplots(figsize=(7, 4))
-    ax.boxplot([raw["plan_overhead"], raw["get_scene"], raw["trigger"]], showfliers=True)
-    ax.set_xticks([1, 2, 3], labels)
+    labels = [
+        "plan_motion\noverhead",
+        "paper problem\noverhead",
+        "get_scene\nround trip",
+        "empty Trigger\nround trip (baseline)",
+    ]
+    fig, ax = plt.subplots(figsize=(8, 4))
+    ax.boxplot([raw["plan_overhead"], raw["paper_overhead"], raw["get_scene"], raw["trigger"]], showfliers=True)
+    ax.set_xticks([1, 2, 3, 4], labels)
     ax.axhline(TARGET_MS, color="tab:red", linestyle="--", label=f"target {TARGET_MS} ms")
     ax.set_ylabel("ms")
     ax.set_title(f"planning_node service latency, {results['calls']} calls each (loopback DDS)")
@@ -217,10 +251,11 @@ def plot(results: dict, path: Path) -> None:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--calls", type=int, default=100)
-    parser.add_argument("--quick", action="store_true", help="20 calls each")
+    parser.add_argument("--paper-calls", type=int, default=20, help="calls of the 13-DOF paper problem")
+    parser.add_argument("--quick", action="store_true", help="20 calls each, 5 of the paper problem")
     args = parser.parse_args(argv)
     configure_loopback_dds(random_domain=True)
-    results = run(20 if args.quick else args.calls)
+    results = run(20 if args.quick else args.calls, 5 if args.quick else args.paper_calls)
     RESULTS.mkdir(parents=True, exist_ok=True)
     (RESULTS / f"{NAME}.json").write_text(json.dumps(results, indent=2))
     markdown = table(results)

@@ -8,6 +8,7 @@ Joint values are always matched by name, never by position in an array.
 
 from __future__ import annotations
 
+import array
 import math
 
 import numpy as np
@@ -314,14 +315,21 @@ def trajectory_msg(trajectory, frame_id: str, stamp=None) -> JointTrajectory:
     accelerations = _optional_rows(trajectory, "accelerations", positions.shape)
     for i, t in enumerate(np.asarray(trajectory.times, dtype=float)):
         point = JointTrajectoryPoint()
-        point.positions = positions[i].tolist()
+        # array('d') is taken as is by the message (a list is checked element by element)
+        point.positions = _doubles(positions[i])
         if velocities is not None:
-            point.velocities = velocities[i].tolist()
+            point.velocities = _doubles(velocities[i])
         if accelerations is not None:
-            point.accelerations = accelerations[i].tolist()
+            point.accelerations = _doubles(accelerations[i])
         point.time_from_start = duration_msg(float(t))
         msg.points.append(point)
     return msg
+
+
+def _doubles(row: np.ndarray) -> array.array:
+    values = array.array("d")
+    values.frombytes(np.ascontiguousarray(row, dtype=np.float64).tobytes())
+    return values
 
 
 def _optional_rows(trajectory, field: str, shape) -> np.ndarray | None:

@@ -137,6 +137,7 @@ class PlanningNode(Node):
         self._latest_joints: dict[str, float] = {}
         self._joints_lock = threading.Lock()
         self._last_plan_markers = None
+        self._marker_lock = threading.Lock()  # plan_markers uses self._robot's shared pinocchio data
         self._marker_subscribers = 0
 
         self._scene = SceneStore(self._load_scene_dict())
@@ -234,6 +235,8 @@ class PlanningNode(Node):
         return future
 
     def _sync_scene(self, context: PlanningContext) -> None:
+        if context.scene_version == self._scene.version:
+            return
         scene_dict, version = self._scene.snapshot()
         if context.scene_version != version:
             from maru_planner.scene import Scene
@@ -275,8 +278,9 @@ class PlanningNode(Node):
             return
         frame = self._param("planning_frame")
         markers = scene_markers(self._scene.snapshot()[0], frame, self.get_clock().now().to_msg())
-        if self._last_plan_markers is not None:
-            markers.markers.extend(self._last_plan_markers.markers)
+        with self._marker_lock:
+            if self._last_plan_markers is not None:
+                markers.markers.extend(self._last_plan_markers.markers)
         self._marker_pub.publish(markers)
 
     # ------------------------------------------------------------ services
@@ -296,19 +300,27 @@ class PlanningNode(Node):
         if not result.success:
             self._log_failure("plan_motion", response.error)
             return response
-        frame = self._param("planning_frame")
         stamp = self.get_clock().now().to_msg()
-        response.trajectory = conv.trajectory_msg(result.trajectory, frame, stamp)
-        self._trajectory_pub.publish(response.trajectory)
-        if self._marker_pub.get_subscription_count() > 0:
-            self._last_plan_markers = plan_markers(self._robot, result.trajectory, motion_request.start, frame, stamp)
-            self._publish_markers()
+        response.trajectory = conv.trajectory_msg(result.trajectory, self._param("planning_frame"), stamp)
+        # publishing (and marker FK) happens after the answer has gone out
+        self.executor.create_task(self._publish_plan, response.trajectory, result.trajectory, motion_request.start)
         self.get_logger().info(
             f"plan_motion {request.group or self._param('default_group')} "
             f"{response.stats.planner_id}: {len(response.trajectory.points)} points, "
-            f"core {response.planning_time:.3f} s, round trip {time.perf_counter() - started:.3f} s"
+            f"core {response.planning_time:.3f} s, in node {time.perf_counter() - started:.3f} s"
         )
         return response
+
+    def _publish_plan(self, trajectory_msg: JointTrajectory, trajectory, start: dict[str, float]) -> None:
+        """Publish the last plan on ~/planned_trajectory and, when someone listens, its hand paths."""
+        self._trajectory_pub.publish(trajectory_msg)
+        if self._marker_pub.get_subscription_count() > 0:
+            frame = trajectory_msg.header.frame_id
+            with self._marker_lock:
+                self._last_plan_markers = plan_markers(
+                    self._robot, trajectory, start, frame, trajectory_msg.header.stamp
+                )
+            self._publish_markers()
 
     def _motion_request(self, request: PlanMotion.Request):
         """Core ``MotionRequest`` of a ``PlanMotion`` request (raises typed errors for bad fields)."""
