@@ -21,19 +21,21 @@ class StripParams:
 
     k_r: float = 0.5  # repulsion gain (paper)
     k_c: float = 0.3  # contraction gain (paper)
-    d_safe: float = 0.30  # safety margin added to the robot radius: d_0 = d_safe + d_r
+    d_safe: float = 0.45  # safety margin added to the robot radius: d_0 = d_safe + d_r
     robot_radius: float = 0.30  # d_r
     num_vias: int = 20
     via_spacing: float = 0.30  # m between vias on the reference path
     strip: str = "modified"  # "modified" (eq. 41-42) or "plain" (eq. 39)
     head_on_ratio: float = 0.25  # modified only: see forces.modified_external_forces
+    suppress_tangential: bool = True  # drop the along-strip part of external forces on vias (elastic bands)
     iterations: int = 2  # force steps per update
     max_via_step: float = 0.2  # m, per iteration
     max_linear: float = 0.5
     max_angular: float = 1.0
     k_angular: float = 2.0  # w = k_angular * heading error
     lookahead: float = 0.6  # m along the strip to the base target
-    beam_window: tuple[int, int] | None = (31, 331)  # paper's central window of a 0.5 deg scan
+    beam_window: tuple[int, int] | None = (31, 331)  # obstacle_check window: the paper's central 150 deg
+    force_beam_window: tuple[int, int] | None = None  # beams used for the forces (None = every valid beam)
     avoidance_range: float = 1.5  # obstacle_check threshold (AVOIDANCE_RANGE)
     force_range: float = 8.0  # scan points farther than this are ignored by the forces
     is_sort_radius: float = 0.5  # IsSort, m per axis
@@ -62,11 +64,13 @@ class StripParams:
             value = getattr(self, name)
             if not math.isfinite(value) or value <= 0:
                 raise ValueError(f"StripParams.{name} must be positive, got {value!r}")
-        if self.beam_window is not None:
-            lo, hi = self.beam_window
-            if lo < 0 or hi <= lo:
-                raise ValueError(f"beam_window must be (lo, hi) with 0 <= lo < hi, got {self.beam_window}")
-            self.beam_window = (int(lo), int(hi))
+        for name in ("beam_window", "force_beam_window"):
+            window = getattr(self, name)
+            if window is not None:
+                lo, hi = window
+                if lo < 0 or hi <= lo:
+                    raise ValueError(f"{name} must be (lo, hi) with 0 <= lo < hi, got {window}")
+                setattr(self, name, (int(lo), int(hi)))
         self.laser_pose = tuple(float(v) for v in self.laser_pose)
 
     @property
@@ -80,7 +84,7 @@ class StripParams:
         if unknown:
             raise ValueError(f"unknown StripParams field(s): {', '.join(unknown)}")
         values = dict(values)
-        for key in ("beam_window", "laser_pose"):
+        for key in ("beam_window", "force_beam_window", "laser_pose"):
             if values.get(key) is not None:
                 values[key] = tuple(values[key])
         return cls(**values)
@@ -112,7 +116,7 @@ class ElasticStripController:
         self.params = params or StripParams()
         p = self.params
         self.strip = ElasticStrip(p.num_vias, p.via_spacing, p.k_c, p.k_r, p.d0, p.strip, p.iterations,
-                                  p.max_via_step, p.head_on_ratio)
+                                  p.max_via_step, p.head_on_ratio, p.suppress_tangential)
         self.via = ViaTarget(reach=p.via_reach, blocked_radius=p.robot_radius)
         self.arm = None
         if p.arm_enabled:
@@ -124,6 +128,7 @@ class ElasticStripController:
         self._path: np.ndarray | None = None
         self._needs_start = True
         self.updates = 0
+        self._pairs_seen = 0
         self.last_work: dict = {}
 
     # -- inputs -------------------------------------------------------------------------------
@@ -175,7 +180,7 @@ class ElasticStripController:
             self._needs_start = False
         position = pose[:2]
 
-        points_robot = scan_to_points(scan, p.laser_pose, p.beam_window, max_range=p.force_range)
+        points_robot = scan_to_points(scan, p.laser_pose, p.force_beam_window, max_range=p.force_range)
         points_world = to_world(points_robot, pose)
 
         self.strip.anchor(position)
@@ -187,12 +192,15 @@ class ElasticStripController:
         goal_dir = to_goal / max(dist_goal, 1e-9)
 
         look_idx, look_point = self.strip.lookahead(p.lookahead)
+        look_idx, look_point = self._clear_target(position, strip, look_idx, points_world)
         event = obstacle_check(scan, p.avoidance_range, p.beam_window) is not None
         if p.use_via_events:
             self.via.refresh(position, goal_dir, points_world)
             if event and look_idx > 0:
-                current = self.via.point if self.via.active else self.strip.planned_point(look_idx)
+                current = self.via.point if self.via.active else self.goal[:2]
                 self.via.offer(look_point, current, p.is_sort_radius, p.is_sort_rule)
+        if self.via.active and not self._segment_clear(position, self.via.point, points_world):
+            self.via.clear()
         target = self.via.point if self.via.active else look_point
 
         robot_force = self._robot_force(position, target, points_world)
@@ -203,14 +211,38 @@ class ElasticStripController:
             arm_steps, _ = self.arm.step(points_robot)
             arm_q = self.arm.q.copy()
         self.updates += 1
+        pairs_before = self._pairs_seen
+        self._pairs_seen = self.strip.pair_evaluations
         self.last_work = {"beams": int(scan.ranges.size), "points": int(len(points_world)),
-                          "vias": int(len(strip)), "force_evaluations": self.strip.iterations}
+                          "vias": int(len(strip)), "force_evaluations": self.strip.iterations,
+                          "pair_evaluations": self.strip.pair_evaluations - pairs_before}
         return ControlOutput(
             v=v, w=w, strip=strip, target=(float(target[0]), float(target[1])), reached_goal=reached,
             obstacle_points=points_world, arm_joint_steps=arm_steps, arm_joint_positions=arm_q,
             update_time=time.perf_counter() - t0, obstacle_event=event, via_active=self.via.active,
             robot_force=(float(robot_force[0]), float(robot_force[1])), work=dict(self.last_work),
         )
+
+    def _segment_clear(self, start: np.ndarray, end: np.ndarray, points: np.ndarray) -> bool:
+        """Does the straight drive start -> end keep the body (robot_radius) off every scan point?"""
+        if len(points) == 0:
+            return True
+        seg = end - start
+        length2 = float(seg @ seg)
+        rel = points - start
+        s = np.clip(rel @ seg / length2, 0.0, 1.0) if length2 > 1e-12 else np.zeros(len(points))
+        closest = start + s[:, None] * seg
+        return bool(np.min(np.hypot(*(points - closest).T)) > self.params.robot_radius)
+
+    def _clear_target(self, position, strip, look_idx, points):
+        """The farthest via up to the lookahead one whose straight segment from the robot is clear (else via 1)."""
+        if len(points) == 0 or look_idx <= 1:
+            return look_idx, strip[look_idx].copy()
+        near = points[np.hypot(*(points - position).T) < self.params.lookahead + 2 * self.params.robot_radius]
+        for idx in range(look_idx, 1, -1):
+            if self._segment_clear(position, strip[idx], near):
+                return idx, strip[idx].copy()
+        return 1, strip[1].copy()
 
     def _robot_force(self, position: np.ndarray, target: np.ndarray, points: np.ndarray) -> np.ndarray:
         """External force on the base's own control point (eq. 39/41 at the robot)."""

@@ -61,15 +61,20 @@ def plain_external_forces(vias: np.ndarray, points: np.ndarray, d0: float, k_r: 
     return repulsion(offset, d, d0, k_r)
 
 
+def _side_split(vias: np.ndarray, tangents: np.ndarray, points: np.ndarray):
+    offsets, dist = _offsets(vias, points)
+    # cross(t, p - v) = -cross(t, v - p): >= 0 means the point is on the left (on the line counts as left)
+    side = -(tangents[:, None, 0] * offsets[..., 1] - tangents[:, None, 1] * offsets[..., 0])
+    return offsets, dist, side
+
+
 def side_nearest(vias: np.ndarray, tangents: np.ndarray, points: np.ndarray):
     """Nearest obstacle point left and right of each via's direction ``tangents`` (unit, (k, 2)).
 
     Returns (offset_left, dist_left, offset_right, dist_right); a side with no
     point has distance inf. A point exactly on the line counts as left.
     """
-    offsets, dist = _offsets(vias, points)
-    # cross(t, p - v) = -cross(t, v - p): positive means the point is on the left
-    side = -(tangents[:, None, 0] * offsets[..., 1] - tangents[:, None, 1] * offsets[..., 0])
+    offsets, dist, side = _side_split(vias, tangents, points)
     left = side >= 0.0
     off_l, d_l = _nearest(offsets, np.where(left, dist, np.inf))
     off_r, d_r = _nearest(offsets, np.where(left, np.inf, dist))
@@ -83,20 +88,26 @@ def modified_external_forces(
     d0: float,
     k_r: float,
     head_on_ratio: float = 0.25,
+    prefer: float = 1.0,
 ) -> np.ndarray:
     """Eq. 41: ef(L) + ef(R), the repulsions of the nearest left and the nearest right obstacle point.
 
-    Head-on case (our documented choice, see docs/reactive.md): when the sum
-    pushes the via back along the strip with a sideways part smaller than
-    ``head_on_ratio`` of the backward part, the two points straddle the
-    strip symmetrically and their sideways pushes cancel. The two-point form
-    knows which side is more open (the side whose nearest point is farther),
-    so the via is pushed that way (left on an exact tie) with the magnitude
-    of the stronger side force. Set ``head_on_ratio=0`` to disable.
+    Head-on case (our documented choice, see docs/reactive.md): when both
+    sides push and their sum lies along the strip (its sideways part smaller
+    than ``head_on_ratio`` of the along-strip part), the left and right
+    points straddle the strip and their sideways pushes cancel - the
+    situation where the plain form drives into the obstacle. The via is then
+    pushed sideways, with the magnitude of the stronger side force, towards
+    the side holding less obstacle within d0 (points weighted by d0 - d);
+    on a tie towards ``prefer`` (+1 left, -1 right: the way the strip already
+    bends). ``head_on_ratio=0`` disables the rule.
     """
     if len(points) == 0 or len(vias) == 0:
         return np.zeros((len(vias), 2))
-    off_l, d_l, off_r, d_r = side_nearest(vias, tangents, points)
+    offsets, dist, side = _side_split(vias, tangents, points)
+    left = side >= 0.0
+    off_l, d_l = _nearest(offsets, np.where(left, dist, np.inf))
+    off_r, d_r = _nearest(offsets, np.where(left, np.inf, dist))
     f_l = repulsion(off_l, d_l, d0, k_r)
     f_r = repulsion(off_r, d_r, d0, k_r)
     forces = f_l + f_r
@@ -107,12 +118,15 @@ def modified_external_forces(
     lateral = np.einsum("ij,ij->i", forces, normals)
     mag_l = np.linalg.norm(f_l, axis=1)
     mag_r = np.linalg.norm(f_r, axis=1)
-    head_on = (mag_l > 0) & (mag_r > 0) & (axial < 0) & (np.abs(lateral) < head_on_ratio * np.abs(axial))
+    head_on = (mag_l > 0) & (mag_r > 0) & (np.abs(lateral) < head_on_ratio * np.abs(axial))
     if np.any(head_on):
-        # more open side: the one whose nearest point is farther; exact tie -> left (+normal)
-        sign = np.where(d_l >= d_r, 1.0, -1.0)
-        push = np.maximum(mag_l, mag_r)
-        forces[head_on] += (sign * push)[head_on, None] * normals[head_on]
+        weight = np.clip(d0 - dist[head_on], 0.0, None)
+        # side > 0: point on the left; the signed lateral "mass" of obstacle within d0 of the via
+        mass = np.sum(weight * np.sign(side[head_on]), axis=1)
+        total = np.sum(weight, axis=1)
+        sign = np.where(np.abs(mass) <= 0.1 * total, prefer, -np.sign(mass))
+        push = np.maximum(mag_l, mag_r)[head_on]
+        forces[head_on] += (sign * push)[:, None] * normals[head_on]
     return forces
 
 
@@ -124,12 +138,13 @@ def external_forces(
     k_r: float,
     strip: str = "modified",
     head_on_ratio: float = 0.25,
+    prefer: float = 1.0,
 ) -> np.ndarray:
     """Dispatch to the plain (eq. 39) or modified (eq. 41) external force."""
     if strip == "plain":
         return plain_external_forces(vias, points, d0, k_r)
     if strip == "modified":
-        return modified_external_forces(vias, tangents, points, d0, k_r, head_on_ratio)
+        return modified_external_forces(vias, tangents, points, d0, k_r, head_on_ratio, prefer)
     raise ValueError(f"strip must be 'modified' or 'plain', got {strip!r}")
 
 
@@ -148,3 +163,18 @@ def unit_tangents(vias: np.ndarray) -> np.ndarray:
     t[~bad] /= n[~bad, None]
     t[bad] = (1.0, 0.0)
     return t
+
+
+def remove_tangential(forces: np.ndarray, tangents: np.ndarray) -> np.ndarray:
+    """Forces minus their component along the strip (as in Quinlan & Khatib's elastic bands)."""
+    along = np.einsum("ij,ij->i", forces, tangents)
+    return forces - along[:, None] * tangents
+
+
+def side_preference(vias: np.ndarray) -> float:
+    """+1 if the strip bulges left of its chord (or is straight), -1 if it bulges right."""
+    if len(vias) < 3:
+        return 1.0
+    chord = vias[-1] - vias[0]
+    bulge = np.sum(chord[0] * (vias[1:-1, 1] - vias[0, 1]) - chord[1] * (vias[1:-1, 0] - vias[0, 0]))
+    return -1.0 if bulge < -1e-6 else 1.0

@@ -4,7 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from maru_planner.reactive.forces import external_forces, internal_forces, unit_tangents
+from maru_planner.reactive.forces import (
+    external_forces,
+    internal_forces,
+    remove_tangential,
+    side_preference,
+    unit_tangents,
+)
 
 
 def resample_path(path: np.ndarray, spacing: float) -> np.ndarray:
@@ -34,7 +40,7 @@ class ElasticStrip:
 
     def __init__(self, num_vias: int, spacing: float, k_c: float, k_r: float, d0: float,
                  strip: str = "modified", iterations: int = 2, max_step: float = 0.2,
-                 head_on_ratio: float = 0.25):
+                 head_on_ratio: float = 0.25, suppress_tangential: bool = True):
         if num_vias < 3:
             raise ValueError(f"num_vias must be >= 3, got {num_vias}")
         self.num_vias = num_vias
@@ -44,12 +50,14 @@ class ElasticStrip:
         self.iterations = iterations
         self.max_step = max_step
         self.head_on_ratio = head_on_ratio
+        self.suppress_tangential = suppress_tangential
         self._ref = np.zeros((0, 2))
         self._vias = np.zeros((num_vias, 2))
         self._ref_index = np.zeros(num_vias, dtype=int)
         self._count = 0
         self.shifts = 0
         self.force_evaluations = 0
+        self.pair_evaluations = 0  # via x obstacle-point distances computed, the dominant work
 
     def set_path(self, path: np.ndarray, start=None) -> None:
         """New reference path (n >= 1, columns x, y[, theta]); the strip restarts on it."""
@@ -127,9 +135,14 @@ class ElasticStrip:
             if movable_last:
                 forces[-1] = self.k_c * (self._ref[self._ref_index[k - 1]] - vias[-1])
             if len(points):
-                forces += external_forces(vias, unit_tangents(vias), points, self.d0, self.k_r,
-                                          self.strip, self.head_on_ratio)
+                tangents = unit_tangents(vias)
+                ext = external_forces(vias, tangents, points, self.d0, self.k_r, self.strip, self.head_on_ratio,
+                                      side_preference(vias))
+                if self.suppress_tangential:
+                    ext = remove_tangential(ext, tangents)
+                forces += ext
             self.force_evaluations += 1
+            self.pair_evaluations += k * len(points)
             forces[0] = 0.0
             if not movable_last:
                 forces[-1] = 0.0
