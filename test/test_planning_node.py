@@ -462,6 +462,43 @@ def test_eight_concurrent_clients_each_get_their_own_answer(planner_node, tester
         np.testing.assert_allclose(positions[-1], [goal[n] for n in names], atol=1e-6)
 
 
+def test_a_long_plan_does_not_block_joint_states_or_scene_updates(client, tester):
+    """While an RRT search runs (it cannot solve the paper problem, so it uses its whole budget),
+    scene services answer and /joint_states are taken in; a plan sent meanwhile starts from them."""
+    from sensor_msgs.msg import JointState
+
+    from maru_planner.ros.planning_client import plan_request
+    from maru_planner.ros.planning_conversions import joint_state_msg
+
+    publisher = tester.node.create_publisher(JointState, "/joint_states", 10)
+    assert tester.wait_for(lambda: publisher.get_subscription_count() > 0, timeout=20.0)
+    long_plan = client.plan_client.call_async(
+        plan_request(PAPER_GOAL, start=PAPER_START, planner_id="RRT", time_budget=8.0, seed=5)
+    )
+    time.sleep(0.3)
+    moved = _easy_goal(PAPER_START, 0.15)
+    for _ in range(5):
+        publisher.publish(joint_state_msg(list(moved), list(moved.values())))
+        time.sleep(0.05)
+    pose = np.eye(4)
+    pose[:3, 3] = [-1.0, -0.5, 0.3]
+    added = client.add_obstacle("meanwhile", "sphere", [0.05], pose)
+    listed = [o.name for o in client.get_scene().obstacles]
+    removed = client.remove_obstacle("meanwhile")
+    assert not long_plan.done(), "the long plan ended before the checks ran; they proved nothing"
+    _assert_success(added)
+    _assert_success(removed)
+    assert "meanwhile" in listed
+    follow_up = client.plan_client.call_async(
+        plan_request(_easy_goal(PAPER_START, 0.4), planner_id="RRTConnect", time_budget=10.0, seed=2)
+    )
+    assert not long_plan.done()
+    assert tester.wait_for(lambda: long_plan.done() and follow_up.done(), timeout=60.0)
+    assert long_plan.result().error.code == _codes().TIMED_OUT
+    names, _, positions = _positions(follow_up.result())
+    np.testing.assert_allclose(positions[0], [moved[n] for n in names], atol=1e-9)
+
+
 DISCONNECTING_CLIENT = textwrap.dedent(
     """
     import sys, time
