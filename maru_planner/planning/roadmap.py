@@ -45,7 +45,7 @@ class RevalidationReport:
 class Roadmap:
     """One group's PRM (OMPL ``PRM``) with its own SimpleSetup, kept between queries."""
 
-    def __init__(self, group_space: GroupSpace, checker, resolution: float, max_nearest_neighbors: int = 10):
+    def __init__(self, group_space: GroupSpace, checker, resolution: float, max_nearest_neighbors: int = 5):
         self.gs = group_space
         self.edges = EdgeChecker(group_space, checker, resolution)
         self.ss = og.SimpleSetup(group_space.space)
