@@ -250,7 +250,8 @@ class Scene:
         """Load from a YAML file path or a YAML string."""
         base_dir = None
         text = str(source)
-        is_path = isinstance(source, Path) or ("\n" not in text and text.endswith((".yaml", ".yml")))
+        one_line = "\n" not in text
+        is_path = isinstance(source, Path) or (one_line and (text.endswith((".yaml", ".yml")) or Path(text).is_file()))
         if is_path:
             path = Path(source)
             if not path.is_file():

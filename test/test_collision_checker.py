@@ -121,3 +121,21 @@ def test_broadphase_agrees_with_pair_loop(robot, mode):
     assert CollisionChecker(robot, scene, padding=0.01).broadphase == "none"
     with pytest.raises(ValueError, match="broadphase"):
         CollisionChecker(robot, scene, broadphase="octree")
+
+
+def test_mesh_obstacle_from_yaml(robot, tmp_path):
+    from maru_planner.robot.example_robots import example_robot_data_dir
+
+    stl = example_robot_data_dir() / "panda_description/meshes/collision/link0.stl"
+    home = robot.named_state("home")
+    hand = robot.frame_pose(home, "r_hand")[:3, 3]
+    path = tmp_path / "scene.yaml"
+    path.write_text(
+        f"obstacles:\n  - {{name: part, type: mesh, path: {stl}, scale: [1, 1, 1], "
+        f"pose: {{xyz: [{hand[0]}, {hand[1]}, {hand[2] - 0.05}]}}}}\n"
+    )
+    scene = Scene.from_yaml(str(path))
+    cc = CollisionChecker(robot, scene)
+    assert ("r_hand", "part") in cc.colliding_pairs(home)
+    scene.move("part", [1.5, 0, 0])
+    assert cc.is_valid(home)

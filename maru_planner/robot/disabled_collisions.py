@@ -1,7 +1,7 @@
 """Which link pairs an SRDF should exclude from self-collision checks.
 
 Like MoveIt's setup assistant: a pair is disabled when the links are
-``Adjacent`` (same rigid body or joined by one joint), ``Always`` colliding
+``Adjacent`` (parent and child link, skipping links without geometry), ``Always`` colliding
 (in at least 95 % of random configurations: checking it only says "invalid"),
 or ``Never`` colliding in ``n_samples`` random configurations within limits --
 and, to keep rare-but-possible contacts checked, never closer than
@@ -30,8 +30,16 @@ def _link_of_geometry(model: pin.Model, geom_model: pin.GeometryModel) -> list[s
     return [model.frames[g.parentFrame].name for g in geom_model.geometryObjects]
 
 
-def _joint_adjacent(model: pin.Model, ja: int, jb: int) -> bool:
-    return ja == jb or model.parents[ja] == jb or model.parents[jb] == ja
+def _parent_link(model: pin.Model, link: str, with_geometry: set[str]) -> str | None:
+    """The nearest ancestor link that has geometry (links without geometry are skipped, as in MoveIt)."""
+    frame = model.frames[model.getFrameId(link, pin.FrameType.BODY)]
+    while True:
+        parent = model.frames[frame.parentFrame]
+        if parent.type == pin.FrameType.BODY and parent.name in with_geometry:
+            return parent.name
+        if frame.parentFrame == 0:
+            return None
+        frame = parent
 
 
 def _random_configuration(model: pin.Model, rng: np.random.Generator) -> np.ndarray:
@@ -48,13 +56,12 @@ def compute_disabled_collisions(
     model = pin.buildModelFromXML(urdf_text)
     geom_model = pin.buildGeomFromUrdfString(model, urdf_text, pin.COLLISION, package_dirs=package_dirs or [])
     links = _link_of_geometry(model, geom_model)
-    joints = [g.parentJoint for g in geom_model.geometryObjects]
-    link_joint = dict(zip(links, joints))
     link_names = sorted(set(links), key=links.index)
+    parent = {name: _parent_link(model, name, set(link_names)) for name in link_names}
 
     reasons: dict[tuple[str, str], str] = {}
     for a, b in combinations(link_names, 2):
-        if _joint_adjacent(model, link_joint[a], link_joint[b]):
+        if parent[a] == b or parent[b] == a:
             reasons[(a, b)] = "Adjacent"
     order = {name: i for i, name in enumerate(link_names)}
     for i, j in combinations(range(len(links)), 2):
