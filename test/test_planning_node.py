@@ -427,12 +427,15 @@ def test_malformed_obstacle_leaves_scene_unchanged(client):
     from maru_planner.ros.planning_client import obstacle_msg
 
     before = [o.name for o in client.get_scene().obstacles]
-    good = obstacle_msg("ok_box", "box", [0.1, 0.1, 0.1], np.eye(4) + np.diag([0, 0, 0, 0]))
+    good = obstacle_msg("ok_box", "box", [0.1, 0.1, 0.1], np.eye(4))
     bad = obstacle_msg("crate", "box", [0.1, 0.1], np.eye(4))
     response = client.apply_scene([good, bad])
     assert response.error.code == _codes().INVALID_SCENE
     assert "crate" in response.error.message
     assert [o.name for o in client.get_scene().obstacles] == before  # all-or-nothing
+    elsewhere = obstacle_msg("far_box", "box", [0.1, 0.1, 0.1], np.eye(4), frame_id="map")
+    response = client.apply_scene([elsewhere])
+    assert response.error.code == _codes().INVALID_SCENE and "'map'" in response.error.message
     response = client.remove_obstacle("no_such_thing")
     assert response.error.code == _codes().INVALID_SCENE and "no_such_thing" in response.error.message
     _good_request_still_succeeds(client)

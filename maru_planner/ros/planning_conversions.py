@@ -18,6 +18,7 @@ from shape_msgs.msg import SolidPrimitive
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from maru_planner import errors
+from maru_planner.scene import pose_matrix
 from maru_planner_interfaces.msg import PlannerStats, PlanningError, SceneObstacle
 
 # Most specific class first: the first isinstance match wins.
@@ -270,8 +271,6 @@ def obstacle_to_msg(obstacle: dict, frame_id: str) -> SceneObstacle:
 
     A mesh has no ``SolidPrimitive``: its shape type is left 0 (the scene YAML carries it).
     """
-    from maru_planner.scene import pose_matrix
-
     msg = SceneObstacle(name=obstacle["name"], operation=SceneObstacle.ADD)
     msg.header.frame_id = frame_id
     kind = obstacle["type"]

@@ -34,10 +34,15 @@ from trajectory_msgs.msg import JointTrajectory
 from visualization_msgs.msg import MarkerArray
 
 from maru_planner import errors
+from maru_planner.collision import CollisionChecker
 from maru_planner.paths import config_path, urdf_path
+from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig
+from maru_planner.robot import RobotModel
+from maru_planner.robot.ik import solve_ik
 from maru_planner.ros import planning_conversions as conv
 from maru_planner.ros.env import configure_loopback_dds
 from maru_planner.ros.markers import plan_markers, scene_markers
+from maru_planner.scene import Obstacle, Scene
 from maru_planner_interfaces.msg import PlanningError, SceneObstacle
 from maru_planner_interfaces.srv import ApplyScene, ComputeIK, GetScene, PlanMotion
 
@@ -80,8 +85,6 @@ class SceneStore:
     """The node's planning scene, changed atomically; readers get copies."""
 
     def __init__(self, scene_dict: dict):
-        from maru_planner.scene import Scene
-
         self._lock = threading.Lock()
         self._scene = Scene.from_dict(scene_dict)
         self.version = 0
@@ -91,32 +94,33 @@ class SceneStore:
             return copy.deepcopy(self._scene.to_dict()), self.version
 
     def scene(self):
-        from maru_planner.scene import Scene
-
         scene_dict, _ = self.snapshot()
         return Scene.from_dict(scene_dict)
 
-    def apply(self, obstacles: list[SceneObstacle], clear: bool) -> list[str]:
-        """Apply ADD/MOVE/REMOVE operations (after an optional clear) all-or-nothing; return the names."""
-        from maru_planner.scene import Scene
+    def apply(self, obstacles: list[SceneObstacle], clear: bool, frame: str) -> list[str]:
+        """Apply ADD/MOVE/REMOVE operations (after an optional clear) all-or-nothing; return the names.
 
+        Obstacle poses must be in ``frame`` (the planning frame) or have an empty frame_id.
+        """
         with self._lock:
             scene = Scene.from_dict(copy.deepcopy(self._scene.to_dict()))
             if clear:
                 scene.clear()
             for msg in obstacles:
-                _apply_obstacle(scene, msg)
+                _apply_obstacle(scene, msg, frame)
             self._scene = scene
             self.version += 1
             return [o["name"] for o in scene.to_dict().get("obstacles", [])]
 
 
-def _apply_obstacle(scene, msg: SceneObstacle) -> None:
+def _apply_obstacle(scene, msg: SceneObstacle, frame: str) -> None:
     """One ADD/MOVE/REMOVE on ``scene`` (raises InvalidScene naming the obstacle)."""
-    from maru_planner.scene import Obstacle
-
     if not msg.name:
         raise errors.InvalidScene("obstacle has an empty name")
+    if msg.operation != SceneObstacle.REMOVE and msg.header.frame_id not in ("", frame):
+        raise errors.InvalidScene(
+            f"obstacle '{msg.name}' is in frame '{msg.header.frame_id}'; only '{frame}' is supported (no tf here)"
+        )
     if msg.operation == SceneObstacle.REMOVE:
         scene.remove(msg.name)
     elif msg.operation == SceneObstacle.MOVE:
@@ -165,23 +169,16 @@ class PlanningNode(Node):
         return urdf, srdf, package_dirs
 
     def _make_robot(self):
-        from maru_planner.robot import RobotModel
-
         urdf, srdf, package_dirs = self._robot_files()
         return RobotModel.from_urdf(urdf, srdf, package_dirs=package_dirs or None)
 
     def _make_context(self) -> PlanningContext:
-        from maru_planner.collision import CollisionChecker
-        from maru_planner.planning import MotionPlanner, PlannerConfig
-
         robot = self._make_robot()
         checker = CollisionChecker(robot, self._scene.scene())
         config = PlannerConfig(resolution=self._param("resolution"), default_planner=self._param("default_planner"))
         return PlanningContext(robot, checker, MotionPlanner(robot, checker, config=config))
 
     def _load_scene_dict(self) -> dict:
-        from maru_planner.scene import Scene
-
         scene_file = self._param("scene_file")
         if scene_file.lower() == "none":
             return Scene().to_dict()
@@ -239,8 +236,6 @@ class PlanningNode(Node):
             return
         scene_dict, version = self._scene.snapshot()
         if context.scene_version != version:
-            from maru_planner.scene import Scene
-
             context.planner.set_scene(Scene.from_dict(scene_dict))
             context.scene_version = version
 
@@ -261,7 +256,7 @@ class PlanningNode(Node):
 
     def _on_scene_obstacle(self, msg: SceneObstacle) -> None:
         try:
-            self._scene.apply([msg], clear=False)
+            self._scene.apply([msg], clear=False, frame=self._param("planning_frame"))
         except errors.MaruError as exc:
             self.get_logger().warning(f"ignoring /planning_scene_obstacles update: {exc}")
             return
@@ -324,8 +319,6 @@ class PlanningNode(Node):
 
     def _motion_request(self, request: PlanMotion.Request):
         """Core ``MotionRequest`` of a ``PlanMotion`` request (raises typed errors for bad fields)."""
-        from maru_planner.planning import MotionRequest
-
         budget = float(request.allowed_planning_time)
         if not math.isfinite(budget) or budget <= 0.0:
             raise errors.InvalidRequest(f"allowed_planning_time must be > 0 s, got {budget}")
@@ -390,7 +383,9 @@ class PlanningNode(Node):
 
     def _on_apply_scene(self, request: ApplyScene.Request, response: ApplyScene.Response):
         try:
-            response.obstacle_names = self._scene.apply(list(request.obstacles), clear=request.clear)
+            response.obstacle_names = self._scene.apply(
+                list(request.obstacles), clear=request.clear, frame=self._param("planning_frame")
+            )
         except Exception as exc:  # noqa: BLE001
             response.error = conv.error_msg(exc, source="scene")
             response.obstacle_names = [o["name"] for o in self._scene.snapshot()[0].get("obstacles", [])]
@@ -401,8 +396,6 @@ class PlanningNode(Node):
         return response
 
     def _on_get_scene(self, _request: GetScene.Request, response: GetScene.Response):
-        from maru_planner.scene import Scene
-
         scene_dict, _ = self._scene.snapshot()
         frame = self._param("planning_frame")
         response.obstacles = [conv.obstacle_to_msg(o, frame) for o in scene_dict.get("obstacles", [])]
@@ -430,8 +423,6 @@ def _plan_in_context(context: PlanningContext, motion_request):
 
 
 def _ik_in_context(context: PlanningContext, group, targets, seed, strict, timeout, avoid_collisions) -> np.ndarray:
-    from maru_planner.robot.ik import solve_ik
-
     robot = context.robot
     q_seed = conv.configuration(robot, seed, strict=strict)
     is_valid = context.checker.is_valid if avoid_collisions else None
