@@ -1,0 +1,254 @@
+"""numba kernels of the sphere checker: robot spheres against scene primitives and against each other.
+
+All lengths in metres. Signed distances are negative inside. A robot sphere (centre c, radius r)
+collides with a primitive when ``signed_distance(c, primitive) < r + padding``.
+
+Two radii per robot sphere: the *outer* radius covers the link's surface (sphere_model), the *inner*
+radius is a ball inside the link (its centre's depth in the convex link). Outer free -> free; inner
+hit -> hit; between the two the exact model decides (spheres.py).
+
+Broad phase: each geometry object's spheres have a bounding sphere; only when it is within reach of
+an obstacle (or of the other group's bound, for self-collision pairs) are its spheres tested.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from maru_planner.collision.batch_fk import joint_poses_nb, sphere_centers_nb
+
+
+@njit(cache=True)
+def box_distance(p, center, rot, half):
+    """Signed distance from point ``p`` to a box (world-from-box rotation ``rot``, half extents)."""
+    out2 = 0.0
+    inside = 1e300
+    for a in range(3):
+        local = (
+            rot[0, a] * (p[0] - center[0]) + rot[1, a] * (p[1] - center[1]) + rot[2, a] * (p[2] - center[2])
+        )
+        e = abs(local) - half[a]
+        if e > 0.0:
+            out2 += e * e
+        if -e < inside:
+            inside = -e
+    if out2 > 0.0:
+        return np.sqrt(out2)
+    return -inside
+
+
+@njit(cache=True)
+def cylinder_distance(p, center, axis, half_length, radius):
+    """Signed distance from point ``p`` to a solid cylinder (unit ``axis``, centred)."""
+    dx, dy, dz = p[0] - center[0], p[1] - center[1], p[2] - center[2]
+    t = dx * axis[0] + dy * axis[1] + dz * axis[2]
+    rx, ry, rz = dx - t * axis[0], dy - t * axis[1], dz - t * axis[2]
+    radial = np.sqrt(rx * rx + ry * ry + rz * rz)
+    ez = abs(t) - half_length
+    er = radial - radius
+    if ez > 0.0 or er > 0.0:
+        ez = max(ez, 0.0)
+        er = max(er, 0.0)
+        return np.sqrt(ez * ez + er * er)
+    return max(ez, er)
+
+
+@njit(cache=True)
+def point_obstacle_distance(p, k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r):
+    """Signed distance from ``p`` to obstacle ``k`` (boxes first, then spheres, then cylinders)."""
+    nb, ns = box_c.shape[0], sph_c.shape[0]
+    if k < nb:
+        return box_distance(p, box_c[k], box_r[k], box_h[k])
+    k -= nb
+    if k < ns:
+        d0, d1, d2 = p[0] - sph_c[k, 0], p[1] - sph_c[k, 1], p[2] - sph_c[k, 2]
+        return np.sqrt(d0 * d0 + d1 * d1 + d2 * d2) - sph_r[k]
+    k -= ns
+    return cylinder_distance(p, cyl_c[k], cyl_a[k], cyl_h[k], cyl_r[k])
+
+
+@njit(cache=True)
+def _dist(a, b):
+    d0, d1, d2 = a[0] - b[0], a[1] - b[1], a[2] - b[2]
+    return np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+
+
+VALID, COLLIDING, AMBIGUOUS = 0, 1, 2
+
+
+@njit(cache=True)
+def classify_state(
+    q, parent, kind, axis, prot, ppos, idx_q,
+    s_joint, s_center, s_radius, s_inner, g_start, g_joint, g_center, g_radius, self_pairs, padding,
+    box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r,
+    rot, pos, world, gworld, amb,
+):  # fmt: skip
+    """VALID, COLLIDING or AMBIGUOUS for one configuration, and the number of ambiguous pairs.
+
+    COLLIDING: an *inner* ball (contained in the link) is within ``padding`` of an obstacle or of an
+    inner ball of a self-collision pair, so the exact model collides too. VALID: no *outer* (covering)
+    sphere is. Otherwise the (kind, a, b) pairs whose outer spheres touch are written to ``amb``
+    (kind 0: group a vs obstacle b; kind 1: group a vs group b) for the exact model to decide.
+    """
+    joint_poses_nb(q, parent, kind, axis, prot, ppos, idx_q, rot, pos)
+    sphere_centers_nb(rot, pos, g_joint, g_center, gworld)
+    sphere_centers_nb(rot, pos, s_joint, s_center, world)
+    n_obs = box_c.shape[0] + sph_c.shape[0] + cyl_c.shape[0]
+    n_groups = g_joint.shape[0]
+    n_amb = 0
+    for k in range(n_obs):
+        for g in range(n_groups):
+            if g_joint[g] == 0:  # fixed to the world: like the exact checker, never tested against the scene
+                continue
+            gd = point_obstacle_distance(gworld[g], k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r)
+            if gd >= g_radius[g] + padding:
+                continue
+            touched = False
+            for s in range(g_start[g], g_start[g + 1]):
+                d = point_obstacle_distance(world[s], k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r)
+                if d < s_inner[s] + padding:
+                    return COLLIDING, 0
+                if d < s_radius[s] + padding:
+                    touched = True
+            if touched and n_amb < amb.shape[0]:
+                amb[n_amb, 0], amb[n_amb, 1], amb[n_amb, 2] = 0, g, k
+                n_amb += 1
+    for p in range(self_pairs.shape[0]):
+        ga, gb = self_pairs[p, 0], self_pairs[p, 1]
+        if _dist(gworld[ga], gworld[gb]) >= g_radius[ga] + g_radius[gb] + padding:
+            continue
+        touched = False
+        for sa in range(g_start[ga], g_start[ga + 1]):
+            if _dist(world[sa], gworld[gb]) >= s_radius[sa] + g_radius[gb] + padding:
+                continue
+            for sb in range(g_start[gb], g_start[gb + 1]):
+                d = _dist(world[sa], world[sb])
+                if d < s_inner[sa] + s_inner[sb] + padding:
+                    return COLLIDING, 0
+                if d < s_radius[sa] + s_radius[sb] + padding:
+                    touched = True
+        if touched and n_amb < amb.shape[0]:
+            amb[n_amb, 0], amb[n_amb, 1], amb[n_amb, 2] = 1, ga, gb
+            n_amb += 1
+    if n_amb > 0:
+        return AMBIGUOUS, n_amb
+    return VALID, 0
+
+
+def pack_robot(parent, kind, axis, prot, ppos, idx_q, s_joint, s_center, s_radius, s_inner,
+               g_start, g_joint, g_center, g_radius, self_pairs, padding):  # fmt: skip
+    """Robot data as one int64 and one float64 array: few kernel arguments, cheap numba dispatch."""
+    nj, ns, ng, npairs = len(parent), len(s_joint), len(g_joint), len(self_pairs)
+    ints = np.concatenate([
+        [nj, ns, ng, npairs], parent, kind, idx_q, s_joint, g_start, g_joint, np.asarray(self_pairs).reshape(-1),
+    ]).astype(np.int64)  # fmt: skip
+    floats = np.concatenate([
+        [padding], np.ravel(axis), np.ravel(prot), np.ravel(ppos), np.ravel(s_center), s_radius, s_inner,
+        np.ravel(g_center), g_radius,
+    ]).astype(np.float64)  # fmt: skip
+    return ints, floats
+
+
+def pack_scene(box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r):
+    """Scene primitives as one float64 array (counts first)."""
+    parts = [[len(box_c), len(sph_c), len(cyl_c)], box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r]
+    return np.concatenate([np.ravel(np.asarray(p, dtype=np.float64)) for p in parts])
+
+
+@njit(cache=True)
+def unpack_robot(ri, rf):
+    nj, ns, ng, npairs = ri[0], ri[1], ri[2], ri[3]
+    o = 4
+    parent = ri[o : o + nj]
+    kind = ri[o + nj : o + 2 * nj]
+    idx_q = ri[o + 2 * nj : o + 3 * nj]
+    o += 3 * nj
+    s_joint = ri[o : o + ns]
+    o += ns
+    g_start = ri[o : o + ng + 1]
+    o += ng + 1
+    g_joint = ri[o : o + ng]
+    o += ng
+    self_pairs = ri[o : o + 2 * npairs].reshape((npairs, 2))
+    padding = rf[0]
+    f = 1
+    axis = rf[f : f + 3 * nj].reshape((nj, 3))
+    f += 3 * nj
+    prot = rf[f : f + 9 * nj].reshape((nj, 3, 3))
+    f += 9 * nj
+    ppos = rf[f : f + 3 * nj].reshape((nj, 3))
+    f += 3 * nj
+    s_center = rf[f : f + 3 * ns].reshape((ns, 3))
+    f += 3 * ns
+    s_radius = rf[f : f + ns]
+    s_inner = rf[f + ns : f + 2 * ns]
+    f += 2 * ns
+    g_center = rf[f : f + 3 * ng].reshape((ng, 3))
+    g_radius = rf[f + 3 * ng : f + 4 * ng]
+    return (parent, kind, axis, prot, ppos, idx_q, s_joint, s_center, s_radius, s_inner, g_start, g_joint,
+            g_center, g_radius, self_pairs, padding)  # fmt: skip
+
+
+@njit(cache=True)
+def unpack_scene(sf):
+    nb, ns, nc = int(sf[0]), int(sf[1]), int(sf[2])
+    o = 3
+    box_c = sf[o : o + 3 * nb].reshape((nb, 3))
+    o += 3 * nb
+    box_r = sf[o : o + 9 * nb].reshape((nb, 3, 3))
+    o += 9 * nb
+    box_h = sf[o : o + 3 * nb].reshape((nb, 3))
+    o += 3 * nb
+    sph_c = sf[o : o + 3 * ns].reshape((ns, 3))
+    o += 3 * ns
+    sph_r = sf[o : o + ns]
+    o += ns
+    cyl_c = sf[o : o + 3 * nc].reshape((nc, 3))
+    o += 3 * nc
+    cyl_a = sf[o : o + 3 * nc].reshape((nc, 3))
+    o += 3 * nc
+    cyl_h = sf[o : o + nc]
+    cyl_r = sf[o + nc : o + 2 * nc]
+    return box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r
+
+
+@njit(cache=True)
+def scan_nb(Q, start, ri, rf, sf, amb, stop_at_ambiguous):
+    """First row >= ``start`` of ``Q`` that is not VALID: (row, status, n_ambiguous), or (-1, VALID, 0).
+
+    ``ri``/``rf``/``sf``: :func:`pack_robot` and :func:`pack_scene` arrays. With ``stop_at_ambiguous``
+    false, AMBIGUOUS rows are reported as COLLIDING (the pure sphere model).
+    """
+    parent, kind, axis, prot, ppos, idx_q, s_joint, s_center, s_radius, s_inner, g_start, g_joint, g_center, \
+        g_radius, self_pairs, padding = unpack_robot(ri, rf)  # fmt: skip
+    box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r = unpack_scene(sf)
+    nj = parent.shape[0]
+    rot = np.empty((nj, 3, 3))
+    pos = np.empty((nj, 3))
+    world = np.empty((s_joint.shape[0], 3))
+    gworld = np.empty((g_joint.shape[0], 3))
+    for i in range(start, Q.shape[0]):
+        status, n_amb = classify_state(
+            Q[i], parent, kind, axis, prot, ppos, idx_q,
+            s_joint, s_center, s_radius, s_inner, g_start, g_joint, g_center, g_radius, self_pairs, padding,
+            box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, rot, pos, world, gworld, amb,
+        )  # fmt: skip
+        if status == COLLIDING:
+            return i, COLLIDING, 0
+        if status == AMBIGUOUS:
+            return i, (AMBIGUOUS if stop_at_ambiguous else COLLIDING), n_amb
+    return -1, VALID, 0
+
+
+@njit(cache=True)
+def sphere_obstacle_distances_nb(world, sf):
+    """Signed distance from every point of ``world`` (n, 3) to every obstacle of ``sf``: (n, n_obstacles)."""
+    box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r = unpack_scene(sf)
+    n_obs = box_c.shape[0] + sph_c.shape[0] + cyl_c.shape[0]
+    out = np.empty((world.shape[0], n_obs))
+    for s in range(world.shape[0]):
+        for k in range(n_obs):
+            out[s, k] = point_obstacle_distance(world[s], k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h,
+                                                cyl_r)
+    return out
