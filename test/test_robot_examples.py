@@ -43,6 +43,7 @@ def test_tiago_and_talos_load_with_nq_equal_nv():
     tiago = load_example_robot("tiago")
     assert tiago.model.nq == tiago.model.nv == tiago.nq
     assert "wheel_left_joint" not in tiago.joint_names and "arm" in tiago.groups
+    assert CollisionChecker(tiago).is_valid(tiago.neutral())  # links touching at rest are not checked
     talos = load_example_robot("talos")
     assert talos.nq == talos.model.nv == 32 and "r_arm" in talos.groups
     q = talos.named_state("half_sitting")

@@ -79,17 +79,18 @@ def self_collision_pairs(robot: RobotModel) -> list[tuple[int, int]]:
     """Geometry index pairs to check for self-collision.
 
     Excluded: geometries on the same rigid body, link pairs disabled in the
-    SRDF and -- for robots without any disabled pair -- parent/child bodies.
+    SRDF and -- for robots loaded without SRDF collision info -- parent/child bodies.
     """
     model, geoms = robot.model, robot.collision_model.geometryObjects
     disabled = robot.srdf.disabled_pairs
+    skip_adjacent = getattr(robot, "skip_adjacent_pairs", not disabled)
     links = [model.frames[g.parentFrame].name for g in geoms]
     pairs = []
     for i, j in combinations(range(len(geoms)), 2):
         ji, jj = geoms[i].parentJoint, geoms[j].parentJoint
         if ji == jj or frozenset((links[i], links[j])) in disabled:
             continue
-        if not disabled and (model.parents[ji] == jj or model.parents[jj] == ji):
+        if skip_adjacent and (model.parents[ji] == jj or model.parents[jj] == ji):
             continue
         pairs.append((i, j))
     return pairs

@@ -7,6 +7,8 @@ The wheel has no Python module: its URDF/SRDF/meshes live under
 Treatment of non-planning joints (so that nq == nv for the planning API):
 - TIAGo: the no-hand model; the wheels (continuous joints) are locked at 0,
   i.e. the base is fixed; planning uses torso lift, head and the 7-DOF arm.
+  It ships without an SRDF: parent/child links and the link pairs touching at
+  the neutral posture (MoveIt's "Default" rule) are not checked.
 - Talos: loaded with a fixed base (no free-flyer), all 32 revolute joints
   kept; SRDF groups (r_arm, l_arm, torso, ...) select the planned subset.
 """
@@ -102,4 +104,6 @@ def load_example_robot(name: str) -> RobotModel:
     )
     if spec.groups and set(robot.groups) == {"all"}:
         robot.groups = {"all": robot.groups["all"], **spec.groups}
+    if spec.srdf is None:
+        robot.disable_default_collisions()  # no SRDF: links touching at rest are not checked
     return robot

@@ -41,6 +41,8 @@ class RobotModel:
         self.data = model.createData()
         self.collision_model = collision_model
         self.srdf = srdf or SrdfInfo()
+        # Without SRDF collision info, parent/child links are never checked against each other.
+        self.skip_adjacent_pairs = not self.srdf.disabled_pairs
         self.joint_names: list[str] = [model.names[j] for j in range(1, model.njoints)]
         self.nq = model.nq
         self._joint_q_index = {model.names[j]: model.joints[j].idx_q for j in range(1, model.njoints)}
@@ -129,6 +131,20 @@ class RobotModel:
         last_joint = self.model.njoints - 1
         bodies = [f for f in self.model.frames if f.parentJoint == last_joint and f.type == pin.FrameType.BODY]
         return {"tip": bodies[-1].name} if bodies else {}
+
+    def disable_default_collisions(self, q: np.ndarray | None = None) -> list[tuple[str, str]]:
+        """Add the link pairs colliding at ``q`` (default: neutral) to the disabled pairs.
+
+        MoveIt's "Default" rule, for robots shipped without an SRDF whose
+        links touch in their rest posture (e.g. TIAGo's arm mount). Returns the
+        pairs added. Build CollisionCheckers after calling this.
+        """
+        from maru_planner.collision.checker import CollisionChecker
+
+        checker = CollisionChecker(self, broadphase="none")
+        pairs = checker.colliding_pairs(self.neutral() if q is None else np.asarray(q, dtype=float))
+        self.srdf.disabled_pairs.update(frozenset(p) for p in pairs)
+        return pairs
 
     # ----------------------------------------------------------- configs --
     def neutral(self) -> np.ndarray:
