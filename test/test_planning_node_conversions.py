@@ -1,4 +1,4 @@
-"""Unit tests of the planning node's message <-> core conversions (no node, no DDS)."""
+"""Unit tests of the planning node's message <-> core conversions, and the in-process node helper."""
 
 from __future__ import annotations
 
@@ -155,3 +155,26 @@ def test_trajectory_and_stats_messages():
     stats = conv.stats_msg(PlanStats(planner_id="PRM", nodes=12, collision_checks=99, solve_time=0.5, seed=None))
     assert (stats.planner_id, stats.nodes, stats.collision_checks, stats.seed) == ("PRM", 12, 99, -1)
     assert stats.solve_time == pytest.approx(0.5)
+
+
+@pytest.mark.ros
+def test_background_node_serves_in_process(rclpy_session):
+    """The in-process node (for demos): namespaced services, parameter overrides, an empty scene."""
+    from conftest import SpinningNode
+
+    from maru_planner.ros.planning_client import PlanningClient
+    from maru_planner.ros.planning_node import BackgroundPlanningNode
+
+    joints = ["waist_yaw"] + [f"r_arm_j{i}" for i in range(1, 7)] + [f"l_arm_j{i}" for i in range(1, 7)]
+    start = dict(zip(joints, (-0.9, -0.7, 1.57, 0.7, 0.7, -0.9, -0.9, -0.8, 1.57, 2.0, 0.7, -1.9, -1.25), strict=True))
+    goal = dict(start, r_arm_j4=1.1)
+    with BackgroundPlanningNode(namespace="inproc", scene_file="none", workers=1, default_planner="PRM"):
+        spinning = SpinningNode("inproc_client")
+        try:
+            client = PlanningClient(node=spinning.node, namespace="/inproc")
+            assert client.get_scene(timeout=30.0).obstacles == []
+            response = client.plan(goal, start=start, time_budget=10.0, seed=1)
+            assert response.error.code == PlanningError.SUCCESS, response.error.message
+            assert response.stats.planner_id == "PRM"
+        finally:
+            spinning.destroy()

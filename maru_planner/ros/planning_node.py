@@ -429,6 +429,39 @@ def _ik_in_context(context: PlanningContext, group, targets, seed, strict, timeo
     return solve_ik(robot, targets, q_seed, group, deadline=time.monotonic() + timeout, is_valid=is_valid)
 
 
+class BackgroundPlanningNode:
+    """``planning_node`` spun by its own executor in a daemon thread of this process.
+
+    For demos and scripts that want the node without a subprocess; rclpy must already be
+    initialised (after ``configure_loopback_dds()``). Keyword arguments override parameters::
+
+        with BackgroundPlanningNode(default_planner="PRM", scene_file="none") as planning:
+            ...  # call its services, e.g. with maru_planner.ros.planning_client.PlanningClient
+    """
+
+    def __init__(self, namespace: str = "", **parameters):
+        from rclpy.parameter import Parameter
+
+        overrides = [Parameter(name, value=value) for name, value in parameters.items()]
+        self.node = PlanningNode(namespace=namespace, parameter_overrides=overrides)
+        threads = max(2, self.node.get_parameter("executor_threads").value)
+        self.executor = MultiThreadedExecutor(num_threads=threads)
+        self.executor.add_node(self.node)
+        self._thread = threading.Thread(target=self.executor.spin, name="planning_node", daemon=True)
+        self._thread.start()
+
+    def stop(self) -> None:
+        self.executor.shutdown(timeout_sec=5.0)
+        self.node.destroy_node()
+        self._thread.join(timeout=5.0)
+
+    def __enter__(self) -> BackgroundPlanningNode:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.stop()
+
+
 def main(args=None) -> None:
     """Entry point of ``ros2 run maru_planner planning_node`` (and ``python -m``)."""
     configure_loopback_dds()
