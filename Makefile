@@ -26,7 +26,7 @@ interfaces: $(STAMP)
 	@VENV=$(VENV) bash scripts/build_interfaces.sh
 
 demo: setup
-	@$(PY) -m maru_planner.demo
+	@$(PY) -m maru_planner.ros.demo
 
 test: setup
 	@$(PY) -m pytest -p no:cacheprovider test

@@ -43,7 +43,7 @@ setup(
             "maru-plan = maru_planner.planning.cli:main",
             "maru-reactive-sim = maru_planner.sim.cli:main",
             "maru-base-plan = maru_planner.base.cli:main",
-            "maru-demo = maru_planner.demo:main",
+            "maru-demo = maru_planner.ros.demo:main",
         ],
     },
 )

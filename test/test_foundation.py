@@ -33,8 +33,6 @@ def _core_modules() -> list[str]:
     for info in pkgutil.walk_packages(maru_planner.__path__, "maru_planner."):
         if info.name.startswith("maru_planner.ros.") and info.name != "maru_planner.ros.env":
             continue
-        if info.name in ("maru_planner.demo",):
-            continue
         names.append(info.name)
     return names
 
