@@ -56,7 +56,7 @@ def house_occupancy() -> np.ndarray:
     return occ
 
 
-def rooms_map(n: int, seed: int, room: int = 25, door: int = 6) -> np.ndarray:
+def rooms_map(n: int, seed: int, room: int = 25, door: int = 10) -> np.ndarray:
     """An n × n floor of square rooms (walls 1 cell, one door per wall side) plus random furniture."""
     rng = np.random.default_rng(seed)
     occ = np.zeros((n, n), dtype=bool)
@@ -68,7 +68,7 @@ def rooms_map(n: int, seed: int, room: int = 25, door: int = 6) -> np.ndarray:
     for k in range(room, n - 1, room):
         for start in range(0, n, room):
             for along_rows in (True, False):
-                if rng.random() < 0.15:
+                if rng.random() < 0.1:
                     continue  # some walls have no door
                 lo = start + 2 + int(rng.integers(0, max(1, room - door - 3)))
                 hi = min(lo + door, n - 1)
@@ -96,8 +96,14 @@ def random_boxes_map(n: int, seed: int, fill: float = 0.2) -> np.ndarray:
 
 
 def far_free_pair(occ: np.ndarray) -> tuple[tuple, tuple]:
-    """A start near the lower-left corner and a goal near the upper-right one, both free."""
-    free = np.argwhere(~occ)
+    """Start near the lower-left corner, goal near the upper-right one, in the largest free 4-connected region."""
+    from scipy import ndimage
+
+    labels, count = ndimage.label(~occ)
+    if count == 0:
+        raise ValueError("the map has no free cell")
+    largest = 1 + int(np.argmax(np.bincount(labels.ravel())[1:]))
+    free = np.argwhere(labels == largest)
     n0, n1 = occ.shape
     start = free[np.argmin(free[:, 0] + free[:, 1])]
     goal = free[np.argmin((n0 - 1 - free[:, 0]) + (n1 - 1 - free[:, 1]))]

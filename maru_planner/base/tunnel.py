@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import math
 import time
+from array import array
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -91,7 +92,8 @@ class Attempt:
     lumped: np.ndarray  # (m, 2) lumped β
     thin_tunnel: np.ndarray  # (n, 2) β of B from start to goal
     cells: np.ndarray  # (p, 2) α path (PFP), empty on failure
-    virtual_obstacles: list = field(default_factory=list)  # blocked β edges at this size
+    virtual_obstacles: list = field(default_factory=list)  # blocked β edges ((r, c), (r, c)) at this size
+    failing_edge: tuple | None = None  # flat β pair where PFP got stuck
 
 
 @dataclass
@@ -107,11 +109,16 @@ class CellPlan:
 
 
 class BigCellGrid:
-    """Small-cell grid seen as big cells of ``size × size`` (cells past the edge count as occupied)."""
+    """Small-cell grid seen as big cells of ``size × size`` (cells past the edge count as occupied).
+
+    Big cells are addressed by flat index ``row * width + col``; ``full`` and
+    ``count`` are bytes-like for fast scalar access from Python.
+    """
 
     def __init__(self, occupied: np.ndarray, size: int):
         self.size = size
         h, w = occupied.shape
+        self.grid_shape = (h, w)
         self.shape = (-(-h // size), -(-w // size))
         dtype = np.uint8 if size * size <= 255 else np.uint16
         # Counted one row of big cells at a time: no full-size copy of the map.
@@ -122,18 +129,38 @@ class BigCellGrid:
             strip[:] = True
             strip[: len(rows), :w] = rows
             self.obstacle_count[i] = strip.reshape(size, self.shape[1], size).sum(axis=(0, 2))
-        self.full = self.obstacle_count == size * size
+        self.full = (self.obstacle_count == size * size).ravel().tobytes()
+        self.count = self.obstacle_count.ravel().tolist() if dtype == np.uint16 else self.obstacle_count.tobytes()
         self.diagonal = max(float(np.hypot(self.shape[0] - 1, self.shape[1] - 1)), 1.0)
 
-    def of(self, cell: tuple[int, int]) -> tuple[int, int]:
-        return cell[0] // self.size, cell[1] // self.size
+    def of(self, cell: tuple[int, int]) -> int:
+        """Flat index of the big cell holding small cell (row, col)."""
+        return (cell[0] // self.size) * self.shape[1] + cell[1] // self.size
 
-    def centre(self, big: tuple[int, int], grid_shape: tuple[int, int]) -> tuple[int, int]:
+    def rc(self, big: int) -> tuple[int, int]:
+        return divmod(big, self.shape[1])
+
+    def centre(self, big: int) -> tuple[int, int]:
+        r, c = divmod(big, self.shape[1])
         half = self.size // 2
-        return min(big[0] * self.size + half, grid_shape[0] - 1), min(big[1] * self.size + half, grid_shape[1] - 1)
+        return min(r * self.size + half, self.grid_shape[0] - 1), min(c * self.size + half, self.grid_shape[1] - 1)
 
-    def contains(self, big: tuple[int, int]) -> bool:
-        return 0 <= big[0] < self.shape[0] and 0 <= big[1] < self.shape[1]
+    def neighbours(self, big: int):
+        """Σ(β): flat indices of the 4-neighbours inside the grid."""
+        w = self.shape[1]
+        r, c = divmod(big, w)
+        if r > 0:
+            yield big - w
+        if c < w - 1:
+            yield big + 1
+        if r < self.shape[0] - 1:
+            yield big + w
+        if c > 0:
+            yield big - 1
+
+    def to_rc(self, bigs) -> np.ndarray:
+        flat = np.frombuffer(bigs, dtype=np.int32) if isinstance(bigs, array) else np.asarray(bigs, dtype=np.int32)
+        return np.column_stack(np.divmod(flat, self.shape[1])).astype(np.int32).reshape(-1, 2)
 
 
 class TimedOut(Exception):
@@ -157,7 +184,7 @@ class Deadline:
 NO_DEADLINE = Deadline(0.0)
 
 
-def _edge(a: tuple[int, int], b: tuple[int, int]) -> tuple:
+def _edge(a: int, b: int) -> tuple:
     return (a, b) if a <= b else (b, a)
 
 
@@ -168,95 +195,108 @@ def _dist(a, b) -> float:
 # --------------------------------------------------------------------------- TFP
 
 
-def tunnel_finding(bg: BigCellGrid, start: tuple, goal: tuple, p: TunnelParams, blocked: set,
-                   deadline: Deadline = NO_DEADLINE) -> tuple[list, bool]:
+def tunnel_finding(bg: BigCellGrid, start: int, goal: int, p: TunnelParams, blocked: set,
+                   deadline: Deadline = NO_DEADLINE) -> tuple[array, bytearray, bool]:
     """TFP: greedy walk over Σ(β) minimising f_T, backtracking at dead ends.
 
-    Returns (T in visiting order, reached_goal).
+    Returns (T in visiting order, T as a flat mask, reached_goal).
     """
-    visited = np.zeros(bg.shape, dtype=bool)
-    visited[start] = True
-    tunnel = [start]
+    visited = bytearray(bg.shape[0] * bg.shape[1])
+    visited[start] = 1
+    tunnel = array("i", [start])
     chain = [start]
-    cells_per_big = bg.size * bg.size
+    full, count = bg.full, bg.count
+    per_big = bg.size * bg.size
+    g_rc, s_rc = bg.rc(goal), bg.rc(start)
+    k1, k2, k3 = p.k1 / bg.diagonal, p.k2 / bg.diagonal, p.k3 / per_big
     while chain:
         deadline.check()
         cur = chain[-1]
         if cur == goal:
-            return tunnel, True
-        best, best_f = None, np.inf
-        for dr, dc in SIGMA:
-            nb = (cur[0] + dr, cur[1] + dc)
-            if not bg.contains(nb) or visited[nb] or _edge(cur, nb) in blocked:
-                continue
-            if bg.full[nb]:
-                continue  # eq. 6 adds MAXIMUM_VALUE: a full β is never connected
-            f3 = bg.obstacle_count[nb] / cells_per_big
-            f = p.k1 * _dist(goal, nb) / bg.diagonal + p.k2 * _dist(start, nb) / bg.diagonal + p.k3 * f3
+            return tunnel, visited, True
+        best, best_f = -1, math.inf
+        for nb in bg.neighbours(cur):
+            if visited[nb] or full[nb] or (blocked and _edge(cur, nb) in blocked):
+                continue  # a full β gets MAXIMUM_VALUE in eq. 6: never connected
+            rc = bg.rc(nb)
+            f = k1 * _dist(g_rc, rc) + k2 * _dist(s_rc, rc) + k3 * count[nb]
             if f < best_f:
                 best, best_f = nb, f
-        if best is None:
+        if best < 0:
             chain.pop()
             continue
-        visited[best] = True
+        visited[best] = 1
         tunnel.append(best)
         chain.append(best)
-    return tunnel, False
+    return tunnel, visited, False
 
 
 # -------------------------------------------------------------------------- LCRP
 
 
 def lumped_cells(tunnel: list) -> list:
-    """β of T with three or more Σ-neighbours in T."""
+    """β (row, col) of T with three or more Σ-neighbours in T."""
     members = set(tunnel)
     return [b for b in tunnel if sum((b[0] + dr, b[1] + dc) in members for dr, dc in SIGMA) >= 3]
 
 
-def _bfs_depths(tunnel: list, start: tuple, blocked: set) -> dict:
-    members = set(tunnel)
-    depth = {start: 0}
+def lumped_mask(mask: np.ndarray) -> np.ndarray:
+    """Same on a 2-D bool mask of T (vectorised)."""
+    m = mask.astype(np.uint8)
+    n = np.zeros(mask.shape, dtype=np.uint8)
+    n[1:] += m[:-1]
+    n[:-1] += m[1:]
+    n[:, 1:] += m[:, :-1]
+    n[:, :-1] += m[:, 1:]
+    return mask & (n >= 3)
+
+
+def _bfs_depths(bg: BigCellGrid, members: bytearray, start: int, blocked: set) -> array:
+    depth = array("i", [-1]) * len(members)
+    depth[start] = 0
     frontier = [start]
     while frontier:
         nxt = []
         for cur in frontier:
-            for dr, dc in SIGMA:
-                nb = (cur[0] + dr, cur[1] + dc)
-                if nb in members and nb not in depth and _edge(cur, nb) not in blocked:
-                    depth[nb] = depth[cur] + 1
+            d = depth[cur] + 1
+            for nb in bg.neighbours(cur):
+                if members[nb] and depth[nb] < 0 and not (blocked and _edge(cur, nb) in blocked):
+                    depth[nb] = d
                     nxt.append(nb)
         frontier = nxt
     return depth
 
 
-def lumped_cell_removal(bg: BigCellGrid, tunnel: list, start: tuple, goal: tuple, p: TunnelParams, blocked: set):
-    """LCRP: backtrack from β_goal to β_start inside T; returns (B start→goal, lumped cells)."""
-    lumped = lumped_cells(tunnel)
-    depth = _bfs_depths(tunnel, start, blocked)
+def lumped_cell_removal(bg: BigCellGrid, members: bytearray, start: int, goal: int, p: TunnelParams,
+                        blocked: set) -> tuple[list, np.ndarray]:
+    """LCRP: backtrack from β_goal to β_start inside T; returns (B start→goal, lumped cells (k, 2))."""
+    mask = np.frombuffer(bytes(members), dtype=np.uint8).reshape(bg.shape).astype(bool)
+    lumped = np.flatnonzero(lumped_mask(mask))
+    depth = _bfs_depths(bg, members, start, blocked)
     # Subgoal queue: lumped cells met on the way back, farthest from the start first.
-    subgoals = sorted((b for b in lumped if b in depth), key=lambda b: (-depth[b], b))
+    subgoals = sorted((int(b) for b in lumped if depth[b] >= 0), key=lambda b: (-depth[b], b))
     back = [goal]
-    current_subgoal = goal
+    current_subgoal = bg.rc(goal)
     cur = goal
     pending = 0  # index of the next subgoal in the queue
     while cur != start:
         while pending < len(subgoals) and depth[subgoals[pending]] >= depth[cur]:
             pending += 1
-        next_subgoal = subgoals[pending] if pending < len(subgoals) else start
-        best, best_f = None, np.inf
-        for dr, dc in SIGMA:
-            nb = (cur[0] + dr, cur[1] + dc)
-            if depth.get(nb, -1) != depth[cur] - 1 or _edge(cur, nb) in blocked:
+        next_subgoal = bg.rc(subgoals[pending] if pending < len(subgoals) else start)
+        best, best_f = -1, math.inf
+        for nb in bg.neighbours(cur):
+            if depth[nb] != depth[cur] - 1 or (blocked and _edge(cur, nb) in blocked):
                 continue
-            f = (p.k1 * _dist(next_subgoal, nb) + p.k2 * _dist(current_subgoal, nb)) / bg.diagonal
+            rc = bg.rc(nb)
+            f = (p.k1 * _dist(next_subgoal, rc) + p.k2 * _dist(current_subgoal, rc)) / bg.diagonal
             if f < best_f:
                 best, best_f = nb, f
         cur = best
-        if cur == next_subgoal:
-            current_subgoal = cur
+        if pending < len(subgoals) and cur == subgoals[pending]:
+            current_subgoal = bg.rc(cur)
         back.append(cur)
     back.reverse()
-    return back, lumped
+    return back, bg.to_rc(lumped)
 
 
 # --------------------------------------------------------------------------- PFP
@@ -271,8 +311,9 @@ def path_finding(occupied: np.ndarray, bg: BigCellGrid, thin: list, start: tuple
     h, w = occupied.shape
     order = {b: i for i, b in enumerate(thin)}
     diag = max(float(np.hypot(h - 1, w - 1)), 1.0)
+    k4, k5 = p.k4 / diag, p.k5 / diag
     last = len(thin) - 1
-    visited = {start}
+    visited = {start[0] * w + start[1]}
     chain = [start]
     progress = 0
     expansions = 0
@@ -283,24 +324,24 @@ def path_finding(occupied: np.ndarray, bg: BigCellGrid, thin: list, start: tuple
             return chain, progress, expansions
         expansions += 1
         progress = max(progress, order[bg.of(cur)])
-        target = goal if progress == last else bg.centre(thin[progress + 1], (h, w))
-        previous = start if progress == 0 else bg.centre(thin[progress], (h, w))
-        best, best_f = None, np.inf
+        target = goal if progress == last else bg.centre(thin[progress + 1])
+        previous = start if progress == 0 else bg.centre(thin[progress])
+        best, best_f = None, math.inf
         for dr, dc in GAMMA:
             r, c = cur[0] + dr, cur[1] + dc
-            if not (0 <= r < h and 0 <= c < w) or occupied[r, c] or (r, c) in visited:
+            if not (0 <= r < h and 0 <= c < w) or occupied[r, c] or r * w + c in visited:
                 continue
             if dr and dc and (occupied[cur[0] + dr, cur[1]] or occupied[cur[0], cur[1] + dc]):
                 continue  # no corner cutting
             if bg.of((r, c)) not in order:
                 continue
-            f = (p.k4 * _dist(target, (r, c)) + p.k5 * _dist(previous, (r, c))) / diag
+            f = k4 * _dist(target, (r, c)) + k5 * _dist(previous, (r, c))
             if f < best_f:
                 best, best_f = (r, c), f
         if best is None:
             chain.pop()
             continue
-        visited.add(best)
+        visited.add(best[0] * w + best[1])
         chain.append(best)
     return None, progress, expansions
 
@@ -406,7 +447,7 @@ class TunnelPlanner:
                     break
                 if len(blocked) >= p.max_virtual_obstacles:
                     break
-                blocked.add(attempt.virtual_obstacles[-1])
+                blocked.add(attempt.failing_edge)
                 stats["virtual_obstacles"] = len(blocked)
         last = attempts[-1] if attempts else None
         reason = f"{last.failed_stage} failed at big-cell size {last.big_cell_size}" if last else "no attempt"
@@ -416,22 +457,24 @@ class TunnelPlanner:
         p = self.params
         stats["attempts"] += 1
         b_start, b_goal = bg.of(start), bg.of(goal)
-        tunnel, reached = tunnel_finding(bg, b_start, b_goal, p, blocked, deadline)
+        tunnel, members, reached = tunnel_finding(bg, b_start, b_goal, p, blocked, deadline)
         stats["tfp_expansions"] += len(tunnel)
         empty = np.zeros((0, 2), dtype=int)
+        virtual = [tuple(map(bg.rc, e)) for e in sorted(blocked)]
         if not reached:
-            return Attempt(bg.size, "TFP", _as_array(tunnel), empty, empty, empty, sorted(blocked)), None
-        thin, lumped = lumped_cell_removal(bg, tunnel, b_start, b_goal, p, blocked)
+            return Attempt(bg.size, "TFP", bg.to_rc(tunnel), empty, empty, empty, virtual), None
+        thin, lumped = lumped_cell_removal(bg, members, b_start, b_goal, p, blocked)
+        del members
         stats["lcrp_cells"] += len(thin)
         cells, stuck, expansions = path_finding(occupied, bg, thin, start, goal, p, deadline)
         stats["pfp_expansions"] += expansions
         if cells is None:
             failing = _edge(thin[stuck], thin[min(stuck + 1, len(thin) - 1)])
-            virtual = sorted(blocked) + [failing]
-            attempt = Attempt(bg.size, "PFP", _as_array(tunnel), _as_array(lumped), _as_array(thin), empty, virtual)
+            attempt = Attempt(bg.size, "PFP", bg.to_rc(tunnel), lumped, bg.to_rc(thin), empty,
+                              virtual + [tuple(map(bg.rc, failing))])
+            attempt.failing_edge = failing
             return attempt, None
-        attempt = Attempt(bg.size, None, _as_array(tunnel), _as_array(lumped), _as_array(thin), _as_array(cells),
-                          sorted(blocked))
+        attempt = Attempt(bg.size, None, bg.to_rc(tunnel), lumped, bg.to_rc(thin), _as_array(cells), virtual)
         return attempt, cells
 
     def _finish(self, status, message, cells, attempts, occupied, stats, t0) -> CellPlan:
