@@ -45,12 +45,26 @@ def eq4_position(q):
     d2, l3, l5, l6 = 0.0055, 0.224, 0.225, 0.041
     A = C1 * C2 * C3 - S1 * S3
     B = C2 * C3 * S1 + C1 * S3
-    px = (-d2 * S1 + C1 * l3 * S2 + l6 * S6 * (-C1 * C4 * S2 - A * S4) + l5 * (C1 * C4 * S2 + A * S4)
-          + l6 * C6 * (C5 * (C4 * A - C1 * S2 * S4) + (-C3 * S1 - C1 * C2 * S3) * S5))
-    py = (C1 * d2 + l3 * S1 * S2 + l6 * S6 * (-C4 * S1 * S2 - B * S4) + l5 * (C4 * S1 * S2 + B * S4)
-          + l6 * C6 * (C5 * (C4 * B - S1 * S2 * S4) + (C1 * C3 - C2 * S1 * S3) * S5))
-    pz = (C2 * l3 + l5 * (C2 * C4 - C3 * S2 * S4) + l6 * S6 * (-C2 * C4 + C3 * S2 * S4)
-          + l6 * C6 * (C5 * (-C3 * C4 * S2 - C2 * S4) + S2 * S3 * S5))
+    px = (
+        -d2 * S1
+        + C1 * l3 * S2
+        + l6 * S6 * (-C1 * C4 * S2 - A * S4)
+        + l5 * (C1 * C4 * S2 + A * S4)
+        + l6 * C6 * (C5 * (C4 * A - C1 * S2 * S4) + (-C3 * S1 - C1 * C2 * S3) * S5)
+    )
+    py = (
+        C1 * d2
+        + l3 * S1 * S2
+        + l6 * S6 * (-C4 * S1 * S2 - B * S4)
+        + l5 * (C4 * S1 * S2 + B * S4)
+        + l6 * C6 * (C5 * (C4 * B - S1 * S2 * S4) + (C1 * C3 - C2 * S1 * S3) * S5)
+    )
+    pz = (
+        C2 * l3
+        + l5 * (C2 * C4 - C3 * S2 * S4)
+        + l6 * S6 * (-C2 * C4 + C3 * S2 * S4)
+        + l6 * C6 * (C5 * (-C3 * C4 * S2 - C2 * S4) + S2 * S3 * S5)
+    )
     return np.array([px, py, pz])
 
 

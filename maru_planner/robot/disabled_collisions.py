@@ -69,9 +69,7 @@ def compute_disabled_collisions(
             geom_model.addCollisionPair(pin.CollisionPair(i, j))
     geom_data = pin.GeometryData(geom_model)
     data = model.createData()
-    pair_links = [
-        tuple(sorted((links[p.first], links[p.second]), key=order.get)) for p in geom_model.collisionPairs
-    ]
+    pair_links = [tuple(sorted((links[p.first], links[p.second]), key=order.get)) for p in geom_model.collisionPairs]
     hits = dict.fromkeys(pair_links, 0)
     closest = dict.fromkeys(pair_links, np.inf)
     rng = np.random.default_rng(seed)
