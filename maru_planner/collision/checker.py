@@ -11,7 +11,7 @@ the pair list: in planning they are the ones that usually fail, and
 Validity checks (``is_valid``, ``are_valid``, ``first_invalid``,
 ``any_invalid``) go through a coal broad phase, which skips the narrow phase
 of every pair whose bounding boxes do not overlap -- most pairs, most of the
-time (bench/collision.py: 2-7x faster than ``pinocchio.computeCollisions``
+time (bench/collision.py: 3-6x faster than ``pinocchio.computeCollisions``
 over the same pairs). ``broadphase="auto"`` picks the naive manager (AABB test
 per pair) for primitive-only robots and a dynamic AABB tree when the robot
 has meshes; with ``padding`` > 0 the plain pair loop is used (the broad
