@@ -202,3 +202,15 @@ def test_biped_time_limit():
     w = world("corridor_narrow")
     m = map_3d_to_2d(w)
     assert VirtualWallPlanner(w.robot, time_limit=1e-9).plan(m, w.start, w.goal).status == res.TIMED_OUT
+
+
+def test_asymmetric_scene_passes_only_with_the_side_dependent_clearance():
+    import dataclasses
+
+    w = world("corridor_asymmetric")
+    m = map_3d_to_2d(w)
+    assert m.growth["wall_north_west"] == pytest.approx(0.14) and m.growth["wall_south"] == pytest.approx(0.0)
+    assert TrackFollowingPlanner(w.robot).plan(m, w.start, w.goal).success
+    wide_both = dataclasses.replace(w, robot=dataclasses.replace(w.robot, body_right=w.robot.body_left))
+    conservative = map_3d_to_2d(wide_both)
+    assert not TrackFollowingPlanner(w.robot).plan(conservative, w.start, w.goal).success
