@@ -181,6 +181,13 @@ class Obstacle:
         return d
 
 
+def _is_file(text: str) -> bool:
+    try:
+        return Path(text).is_file()
+    except (OSError, ValueError):  # e.g. a long one-line YAML string is not a valid file name
+        return False
+
+
 class Scene:
     """An ordered set of named obstacles in ``frame`` (the robot's root frame)."""
 
@@ -251,7 +258,7 @@ class Scene:
         base_dir = None
         text = str(source)
         one_line = "\n" not in text
-        is_path = isinstance(source, Path) or (one_line and (text.endswith((".yaml", ".yml")) or Path(text).is_file()))
+        is_path = isinstance(source, Path) or (one_line and (text.endswith((".yaml", ".yml")) or _is_file(text)))
         if is_path:
             path = Path(source)
             if not path.is_file():

@@ -83,3 +83,13 @@ def test_paper_scene_files_load():
     for name in ("maru6_desk.yaml", "maru13_desk_box.yaml"):
         scene = Scene.from_yaml(config_path("scenes", name))
         assert scene.frame == "base_link" and "desk" in scene
+
+
+def test_one_line_yaml_string_and_file_path(tmp_path):
+    long_line = "{obstacles: [" + ", ".join(f"{{name: b{i}, type: sphere, radius: 0.1}}" for i in range(20)) + "]}"
+    assert len(Scene.from_yaml(long_line)) == 20
+    path = tmp_path / "scene.txt"
+    path.write_text(YAML)
+    assert list(Scene.from_yaml(str(path)).obstacles) == ["desk", "ball", "post"]
+    with pytest.raises(InvalidScene, match="not found"):
+        Scene.from_yaml(str(tmp_path / "missing.yaml"))
