@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from maru_planner.errors import InvalidGroup
+from maru_planner.paths import urdf_path
 from maru_planner.robot import RobotModel
 from maru_planner.robot import maru1_description as desc
 
@@ -134,10 +135,9 @@ def test_jacobian_matches_finite_difference(robot):
         np.testing.assert_allclose(J[:3, i], dp, atol=1e-6)
 
 
-def test_checked_in_files_match_generator(tmp_path):
-    urdf = desc.generate_urdf()
-    assert (desc_path := __import__("maru_planner.paths", fromlist=["urdf_path"]).urdf_path()).is_dir()
-    assert (desc_path / "maru1_upper_body.urdf").read_text() == urdf
-    srdf = (desc_path / "maru1_upper_body.srdf").read_text()
+def test_checked_in_files_match_generator():
+    urdf_dir = urdf_path()
+    assert (urdf_dir / "maru1_upper_body.urdf").read_text() == desc.generate_urdf()
+    srdf = (urdf_dir / "maru1_upper_body.srdf").read_text()
     assert 'reason="Adjacent"' in srdf and 'reason="Never"' in srdf
     assert '<disable_collisions link1="r_arm_link5" link2="l_arm_link5"' not in srdf  # forearms can meet
