@@ -64,7 +64,7 @@ PARAMETERS = {
     "max_planning_time": 60.0,  # s: larger allowed_planning_time is answered INVALID_REQUEST
     "default_attempts": 1,
     "ik_timeout": 1.0,  # s: ComputeIK budget when the request gives none
-    "scene_file": "",  # empty = config/scenes/maru13_desk_box.yaml; "none" = empty scene
+    "scene_file": "",  # empty = config/scenes/maru13_desk_box.yaml; "none" = empty scene; relative: cwd, then config/
     "workers": 2,  # planning contexts (threads); more requests queue
     "executor_threads": 4,
     "marker_period": 1.0,  # s: markers are re-sent to new subscribers at this period
@@ -183,6 +183,8 @@ class PlanningNode(Node):
         if scene_file.lower() == "none":
             return Scene().to_dict()
         path = Path(scene_file) if scene_file else config_path(DEFAULT_SCENE)
+        if not path.is_absolute() and not path.is_file():
+            path = config_path(scene_file)  # e.g. "scenes/maru6_desk.yaml" from the package's config/
         return Scene.from_yaml(path).to_dict()
 
     def _make_interfaces(self) -> None:
