@@ -41,10 +41,10 @@ def shipped_params() -> dict:
 
 
 class ReactiveClient:
-    """Publishers for the node's inputs and recorders of its outputs."""
+    """Publishers for the node's inputs and recorders of its outputs (one namespace)."""
 
     def __init__(self, spinning, namespace: str = "", process=None):
-        from geometry_msgs.msg import PoseStamped, Twist
+        from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
         from nav_msgs.msg import Odometry, Path
         from rclpy.qos import QoSProfile, ReliabilityPolicy
         from sensor_msgs.msg import LaserScan
@@ -54,19 +54,23 @@ class ReactiveClient:
         self.spinning = spinning
         self.process = process  # the node under test, for its log in failure messages
         node = self.node = spinning.node
-        self.scan_pub = node.create_publisher(LaserScan, f"{namespace}/scan", reliable)
+        self._lock = threading.Lock()
+        self.twists: list = []
+        self.stamped: dict[int, object] = {}  # scan stamp (ns) -> the Twist answering it
+        self.strips: list = []
+        self.arm: list = []
+        # Created in this order on purpose: discovery announces endpoints in creation order, so once the
+        # node has matched the last writer (scan) and the last reader (cmd_vel_stamped), it has the others.
         self.odom_pub = node.create_publisher(Odometry, f"{namespace}/odom", reliable)
         self.plan_pub = node.create_publisher(Path, f"{namespace}/plan", reliable)
         self.goal_pub = node.create_publisher(PoseStamped, f"{namespace}/goal_pose", reliable)
-        self._lock = threading.Lock()
-        self.twists: list = []
-        self.strips: list = []
-        self.arm: list = []
-        arm_topic = f"{namespace}/reactive_node/arm_command"
+        self.scan_pub = node.create_publisher(LaserScan, f"{namespace}/scan", reliable)
+        private = f"{namespace}/reactive_node"
         self._subscriptions = [
             node.create_subscription(Twist, f"{namespace}/cmd_vel", self._keep(self.twists), reliable),
-            node.create_subscription(Path, f"{namespace}/reactive_node/strip", self._keep(self.strips), reliable),
-            node.create_subscription(JointTrajectory, arm_topic, self._keep(self.arm), reliable),
+            node.create_subscription(Path, f"{private}/strip", self._keep(self.strips), reliable),
+            node.create_subscription(JointTrajectory, f"{private}/arm_command", self._keep(self.arm), reliable),
+            node.create_subscription(TwistStamped, f"{private}/cmd_vel_stamped", self._keep_stamped, reliable),
         ]
 
     def _keep(self, store: list):
@@ -76,32 +80,44 @@ class ReactiveClient:
 
         return callback
 
+    def _keep_stamped(self, msg) -> None:
+        from maru_planner.ros.reactive_conversions import stamp_to_ns
+
+        with self._lock:
+            self.stamped[stamp_to_ns(msg.header.stamp)] = msg.twist
+
     def wait_connected(self, timeout: float = 30.0) -> None:
         pubs = (self.scan_pub, self.odom_pub, self.plan_pub, self.goal_pub)
         ok = self.spinning.wait_for(lambda: all(p.get_subscription_count() > 0 for p in pubs), timeout=timeout)
         assert ok, "reactive_node did not subscribe to scan, odom, plan and goal_pose"
         subs = self._subscriptions
         ok = self.spinning.wait_for(lambda: all(s.get_publisher_count() > 0 for s in subs), timeout=timeout)
-        assert ok, "reactive_node's cmd_vel, strip and arm_command publishers were not discovered"
+        assert ok, "reactive_node's cmd_vel, strip, arm_command and cmd_vel_stamped publishers were not discovered"
         self._handshake()
 
-    def _handshake(self) -> None:
-        """Make sure the node's readers have matched our odom and scan writers before real data flows.
+    def _handshake(self, attempts: int = 30) -> None:
+        """Send odometry and a scan stamped 0 until their answer comes back.
 
-        Discovery is not symmetric: our writer can see the node's reader before that reader knows our
-        writer, and a volatile reader then misses what was sent meanwhile. A reader acknowledges only
-        writers it has matched, so one harmless message each (odometry at time 0, a scan with
-        angle_increment 0 that the node drops) acknowledged by the node settles it.
+        Discovery is not symmetric: we can see the node's endpoints before the node knows ours, and
+        a volatile endpoint misses what is sent meanwhile. An answer to a scan (a zero Twist: there
+        is no goal yet) proves both directions are matched. Answers are told apart by their stamp.
         """
-        from rclpy.duration import Duration
         from sensor_msgs.msg import LaserScan
 
         from maru_planner.ros import reactive_conversions as conv
 
-        self.odom_pub.publish(conv.odom_msg((0.0, 0.0, 0.0), 0.0, 0.0, 0.0, "odom", "base_link"))
-        self.scan_pub.publish(LaserScan())
-        for pub in (self.odom_pub, self.scan_pub):
-            assert pub.wait_for_all_acked(Duration(seconds=20)), f"{pub.topic_name} not acknowledged by the node"
+        scan = LaserScan()
+        scan.angle_min, scan.angle_max, scan.angle_increment = -0.1, 0.1, 0.1
+        scan.range_min, scan.range_max, scan.ranges = 0.05, 10.0, [float("inf")] * 3
+        for _ in range(attempts):
+            self.odom_pub.publish(conv.odom_msg((0.0, 0.0, 0.0), 0.0, 0.0, 0.0, "odom", "base_link"))
+            self.scan_pub.publish(scan)
+            if self.spinning.wait_for(lambda: 0 in self.stamped and self.twist_count() > 0, timeout=1.0):
+                return
+        raise AssertionError("reactive_node never answered the handshake scan" + self._log_tail())
+
+    def _log_tail(self) -> str:
+        return f"; node log:\n{self.process.log()[-3000:]}" if self.process else ""
 
     def send_and_confirm(self, publisher, msg, process, marker: str, attempts: int = 20) -> None:
         """Publish a goal or plan until the node's log shows it was applied (``marker`` once more).
@@ -120,19 +136,26 @@ class ReactiveClient:
             return len(self.twists)
 
     def step(self, odom, scan, timeout: float = 20.0):
-        """Send odometry and a scan of the same time; return the Twist the scan produced."""
-        before = self.twist_count()
+        """Send odometry and a scan of the same time; return the command (Twist) that answers the scan."""
+        from maru_planner.ros.reactive_conversions import stamp_to_ns
+
+        stamp = stamp_to_ns(scan.header.stamp)
+        assert stamp not in self.stamped, "scan stamps must be unique within a test"
         if odom is not None:
             self.odom_pub.publish(odom)
         self.scan_pub.publish(scan)
-        ok = self.spinning.wait_for(lambda: self.twist_count() > before, timeout=timeout)
-        assert ok, "no cmd_vel for the scan" + (f"; node log:\n{self.process.log()[-3000:]}" if self.process else "")
+        ok = self.spinning.wait_for(lambda: stamp in self.stamped, timeout=timeout)
+        assert ok, f"no command for the scan stamped {stamp} ns" + self._log_tail()
         with self._lock:
-            return self.twists[before]
+            return self.stamped[stamp]
 
-
-def twist_pairs(twists) -> list[tuple[float, float]]:
-    return [(t.linear.x, t.angular.z) for t in twists]
+    def plain_twists_end_with(self, commands: list, timeout: float = 20.0) -> bool:
+        """The cmd_vel stream ends with ``commands`` (the answers to the scans, in order)."""
+        n = len(commands)
+        ok = self.spinning.wait_for(lambda: self.twist_count() >= n, timeout=timeout)
+        with self._lock:
+            tail = [(t.linear.x, t.angular.z) for t in self.twists[-n:]]
+        return ok and tail == [(t.linear.x, t.angular.z) for t in commands]
 
 
 # ---------------------------------------------------------------- conversions, no DDS
@@ -369,10 +392,11 @@ def test_a_stale_scan_stops_the_base(client, reactive_node):
 def test_status_counts_match_what_was_sent(client, reactive_node):
     """1 scan without goal + 5 + 1 + 3 (stale test) valid scans, 1 of them stale, 3 malformed: a Twist per valid one."""
     expected_twists = 1 + 5 + 1 + 3
-    assert client.spinning.wait_for(lambda: client.twist_count() >= expected_twists)
-    status = re.compile(r"scans (\d+), updates 8, dropped (\d+), stale 1")
+    status = re.compile(r"scans (\d+), updates 8, dropped 3, stale 1")
     assert client.spinning.wait_for(lambda: status.search(reactive_node.log()), timeout=20), reactive_node.log()[-2000:]
-    scans, dropped = map(int, status.findall(reactive_node.log())[-1])
-    assert scans - dropped == 10, "valid scans: 1 + 5 + 1 + 3"
-    assert dropped in (3, 4), "3 malformed scans (+ the handshake's, unless it was sent before discovery settled)"
-    assert client.twist_count() == expected_twists
+    scans = int(status.findall(reactive_node.log())[-1])
+    handshakes = scans - 3 - expected_twists
+    assert handshakes >= 1, "the handshake scans are answered too"
+    answers = [client.stamped[k] for k in sorted(client.stamped) if k > 0]
+    assert len(answers) == expected_twists
+    assert client.plain_twists_end_with(answers), "cmd_vel carries the same commands, one per valid scan"

@@ -64,7 +64,7 @@ class Replay:
 
 def _start_node(node_process, tmp_path: Path):
     ns = f"/replay{next(_namespaces)}"
-    params = reactive_params_file(tmp_path, scan_reliability="reliable")
+    params = reactive_params_file(tmp_path, scan_reliability="reliable", status_period=1.0)
     args = ["--ros-args", "-r", f"__ns:={ns}", "--params-file", str(config_path("reactive.yaml")),
             "--params-file", str(params)]
     return ns, node_process(NODE_MODULE, args)
@@ -99,7 +99,9 @@ def replay_bag(bag: Path, node_process, spinning_factory, tmp_path: Path, inject
             client.step(odom, msg)
             result.scans.append(msg)
     assert spinning.wait_for(lambda: len(client.strips) >= len(result.scans) and len(client.arm) >= len(result.scans))
-    result.twists = [(t.linear.x, t.angular.z) for t in client.twists]
+    answers = [client.stamped[conv.stamp_to_ns(scan.header.stamp)] for scan in result.scans]
+    assert client.plain_twists_end_with(answers), "cmd_vel must carry the same commands as cmd_vel_stamped"
+    result.twists = [(t.linear.x, t.angular.z) for t in answers]
     result.strips, result.arm = list(client.strips), list(client.arm)
     assert process.alive(), process.log()[-2000:]
     return result

@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 from builtin_interfaces.msg import Duration, Time
-from geometry_msgs.msg import Point, PoseStamped, Quaternion, Twist
+from geometry_msgs.msg import Point, PoseStamped, Quaternion, Twist, TwistStamped
 from nav_msgs.msg import Odometry, Path
 from rclpy.serialization import deserialize_message
 from sensor_msgs.msg import LaserScan
@@ -160,6 +160,14 @@ def twist_msg(v: float, w: float) -> Twist:
     msg = Twist()
     msg.linear.x = float(v)
     msg.angular.z = float(w)
+    return msg
+
+
+def twist_stamped_msg(v: float, w: float, frame_id: str, stamp_s: float) -> TwistStamped:
+    msg = TwistStamped()
+    msg.header.frame_id = frame_id
+    msg.header.stamp = s_to_stamp(stamp_s)
+    msg.twist = twist_msg(v, w)
     return msg
 
 

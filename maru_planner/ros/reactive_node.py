@@ -1,10 +1,15 @@
 """reactive_node: the modified elastic strip (paper 001) driven by /scan.
 
-Subscribes ``/scan`` (LaserScan), ``/odom`` (Odometry), ``/plan`` (Path, the
-initial path) and ``/goal_pose`` (PoseStamped). Every valid scan gives exactly
-one update: a ``/cmd_vel`` Twist, the strip on ``~/strip`` (nav_msgs/Path),
+Subscribes ``scan`` (LaserScan), ``odom`` (Odometry), ``plan`` (Path, the
+initial path) and ``goal_pose`` (PoseStamped). Every valid scan gives exactly
+one update: a ``cmd_vel`` Twist, the strip on ``~/strip`` (nav_msgs/Path),
 arm joint commands on ``~/arm_command`` (JointTrajectory) and, when someone
-listens, markers on ``~/markers``.
+listens, markers on ``~/markers``. ``~/cmd_vel_stamped`` (TwistStamped) repeats
+every command stamped with the time of the scan it answers. Names are relative: ``/scan`` etc. in the
+root namespace, ``/robot1/scan`` with ``-r __ns:=/robot1``.
+
+Each scan is paired with the odometry of its time: it waits (at most until
+the next scan arrives) for an odometry message stamped at or after it.
 
 Malformed scans are dropped with a throttled warning; a scan older than
 ``stale_scan_timeout`` stops the base (zero Twist). With
@@ -21,12 +26,14 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
+import traceback
 
 import numpy as np
 import rclpy
 import yaml
-from geometry_msgs.msg import PoseStamped, Twist
+from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
 from nav_msgs.msg import Odometry, Path
+from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
@@ -89,8 +96,16 @@ def strip_params_from_config(path) -> StripParams:
     exactly as the node configured from the same file would.
     """
     with open(path) as stream:
-        params = (yaml.safe_load(stream) or {}).get("reactive_node", {}).get("ros__parameters", {})
+        params = node_section(yaml.safe_load(stream) or {})
     return StripParams.from_dict({k: v for k, v in params.items() if k not in NODE_PARAMETERS})
+
+
+def node_section(params_file: dict) -> dict:
+    """The ``ros__parameters`` of reactive_node in a parsed params file (``reactive_node`` or ``/**/reactive_node``)."""
+    for key in ("/**/reactive_node", "reactive_node", "/reactive_node", "/**"):
+        if key in params_file:
+            return params_file[key].get("ros__parameters", {})
+    return {}
 
 
 class ReactiveNode(Node):
@@ -100,13 +115,17 @@ class ReactiveNode(Node):
         super().__init__("reactive_node", **kwargs)
         self._strip_defaults = _strip_param_defaults()
         for name, default in {**self._strip_defaults, **NODE_PARAMETERS}.items():
-            self.declare_parameter(name, default)
+            if default is None:  # optional StripParams fields (e.g. a beam window): any type, unset = None
+                self.declare_parameter(name, None, ParameterDescriptor(dynamic_typing=True))
+            else:
+                self.declare_parameter(name, default)
         self.params = self._read_strip_params()
         self.controller = ElasticStripController(self.params)
         self.warnings = ThrottledWarnings(self.get_logger(), self._param("warn_throttle_period"))
         self.use_stamps = bool(self._param("use_message_stamps"))
         self.stale_timeout = float(self._param("stale_scan_timeout"))
         self.odom_frame = str(self._param("odom_frame"))
+        self.base_frame = str(self._param("base_frame"))
 
         self.pose: conv.Pose2D | None = None
         self.odom_stamp: float | None = None
@@ -129,7 +148,8 @@ class ReactiveNode(Node):
 
     def _read_strip_params(self) -> StripParams:
         try:
-            return StripParams.from_dict({name: self._param(name) for name in self._strip_defaults})
+            values = {name: self._param(name) for name in self._strip_defaults}
+            return StripParams.from_dict({k: tuple(v) if isinstance(v, list) else v for k, v in values.items()})
         except (TypeError, ValueError) as exc:
             raise ValueError(f"invalid reactive_node parameters: {exc}") from exc
 
@@ -148,11 +168,12 @@ class ReactiveNode(Node):
         )
         # Creation order matters: when several messages are ready at once the executor takes them in
         # this order, so an odometry / goal / plan sent before a scan is applied before that scan.
-        self.create_subscription(Odometry, "/odom", self.on_odom, 10)
-        self.create_subscription(PoseStamped, "/goal_pose", self.on_goal, 10)
-        self.create_subscription(Path, "/plan", self.on_plan, 10)
-        self.create_subscription(LaserScan, "/scan", self.on_scan, scan_qos)
-        self.cmd_pub = self.create_publisher(Twist, "/cmd_vel", 10)
+        self.odom_topic = self.create_subscription(Odometry, "odom", self.on_odom, 10).topic_name
+        self.create_subscription(PoseStamped, "goal_pose", self.on_goal, 10)
+        self.create_subscription(Path, "plan", self.on_plan, 10)
+        self.scan_topic = self.create_subscription(LaserScan, "scan", self.on_scan, scan_qos).topic_name
+        self.cmd_pub = self.create_publisher(Twist, "cmd_vel", 10)
+        self.cmd_stamped_pub = self.create_publisher(TwistStamped, "~/cmd_vel_stamped", 10)
         self.strip_pub = self.create_publisher(Path, "~/strip", 10)
         self.arm_pub = self.create_publisher(JointTrajectory, "~/arm_command", 10)
         self.marker_pub = self.create_publisher(MarkerArray, "~/markers", 10)
@@ -177,6 +198,8 @@ class ReactiveNode(Node):
         self.newest_stamp = max(self.newest_stamp, conv.stamp_to_s(stamp))
 
     def on_odom(self, msg: Odometry) -> None:
+        if self.pose is None:
+            self.get_logger().info(f"receiving odometry on {self.odom_topic}")
         self.pose = conv.pose_from_odom(msg)
         self.odom_stamp = conv.stamp_to_s(msg.header.stamp)
         self._see_stamp(msg.header.stamp)
@@ -218,6 +241,8 @@ class ReactiveNode(Node):
             return
         if self.use_stamps:
             self._see_stamp(msg.header.stamp)
+        if self.counts["scans"] - self.counts["dropped"] == 1:
+            self.get_logger().info(f"receiving scans on {self.scan_topic}")
         self.last_scan_received = time.monotonic()
         self._process_pending(force=True)
         self.pending = (scan, conv.stamp_to_s(msg.header.stamp))
@@ -235,28 +260,33 @@ class ReactiveNode(Node):
         if not force and (self.odom_stamp is None or self.odom_stamp < header_stamp):
             return
         self.pending = None
+        if self.odom_stamp is not None and self.odom_stamp < header_stamp - self.stale_timeout:
+            lag = header_stamp - self.odom_stamp
+            self.warnings.warn("odom", f"odometry is {lag:.3f} s older than the scan: using it anyway")
         scan_age = self._now() - header_stamp
         if scan_age > self.stale_timeout:
             self.counts["stale"] += 1
             self.warnings.warn("stale", f"scan is {scan_age:.3f} s old (> {self.stale_timeout} s): stopping the base")
-            self._stop_base()
+            self._stop_base(header_stamp)
             return
         if self.pose is None or not self.controller.has_goal:
             missing = "odometry" if self.pose is None else "a goal"
             self.warnings.warn("waiting", f"no {missing} yet: holding still")
-            self._stop_base()
+            self._stop_base(header_stamp)
             return
         try:
-            self._update(scan, scan.stamp)
+            self._update(scan, scan.stamp, header_stamp)
         except (MaruError, ValueError, RuntimeError) as exc:
             self.warnings.warn("update", f"update failed, stopping the base: {exc}")
-            self._stop_base()
+            self._stop_base(header_stamp)
+        except Exception:  # noqa: BLE001 - a controller bug must stop the base, not kill the node
+            self.get_logger().error("controller update raised; stopping the base\n" + traceback.format_exc())
+            self._stop_base(header_stamp)
 
-    def _update(self, scan, stamp: float) -> None:
+    def _update(self, scan, stamp: float, header_stamp: float) -> None:
         out = self.controller.update(pose=self.pose, scan=scan)
         self.counts["updates"] += 1
-        self.cmd_pub.publish(conv.twist_msg(out.v, out.w))
-        self.base_stopped = out.v == 0.0 and out.w == 0.0
+        self._send_command(out.v, out.w, header_stamp)
         self.strip_pub.publish(conv.path_msg(np.asarray(out.strip), self.odom_frame, stamp))
         self._publish_arm(out, stamp)
         if self.marker_pub.get_subscription_count() > 0:
@@ -276,9 +306,14 @@ class ReactiveNode(Node):
             conv.arm_trajectory_msg(self.arm_names, out.arm_joint_positions, out.arm_joint_steps, period, stamp)
         )
 
-    def _stop_base(self) -> None:
-        self.cmd_pub.publish(conv.twist_msg(0.0, 0.0))
-        self.base_stopped = True
+    def _send_command(self, v: float, w: float, stamp: float) -> None:
+        """cmd_vel, and the same command stamped with the time of the scan it answers."""
+        self.cmd_pub.publish(conv.twist_msg(v, w))
+        self.cmd_stamped_pub.publish(conv.twist_stamped_msg(v, w, self.base_frame, stamp))
+        self.base_stopped = v == 0.0 and w == 0.0
+
+    def _stop_base(self, stamp: float | None = None) -> None:
+        self._send_command(0.0, 0.0, self._now() if stamp is None else stamp)
 
     def on_watchdog(self) -> None:
         """Clock mode only: stop the base once when scans stop arriving."""
