@@ -311,15 +311,33 @@ class MotionPlanner:
         return roadmap
 
     def _search_prm(self, gs, start, goal, params, search_deadline, stats):
+        """Query the cached roadmap; after a scene change, verify the answer and fall back to re-validation.
+
+        A roadmap built before the last scene change is "stale": its answer is checked against the
+        current scene in one batched call (cheap) and returned if free. Only when that check fails is
+        the whole roadmap re-validated, and rebuilt if any milestone or edge died.
+        """
         roadmap = self._roadmap_for(gs, params)
-        if roadmap.scene_epoch != self._scene_key():
-            report = roadmap.revalidate()
-            self.last_revalidation = report
-            stats.validation_time += report.seconds
-            if not report.still_valid:
-                self._roadmaps.clear()
-                roadmap = self._roadmap_for(gs, params)
+        stale = roadmap.scene_epoch != self._scene_key()
+        path = self._query_roadmap(roadmap, start, goal, search_deadline, stats)
+        if path is None or not stale:
+            return path, None
+        t_check = time.monotonic()
+        path_ok = roadmap.edges.path_valid(path)
+        stats.validation_time += time.monotonic() - t_check
+        if path_ok:
+            return path, None
+        report = roadmap.revalidate()
+        self.last_revalidation = report
+        stats.validation_time += report.seconds
+        if report.still_valid:  # cannot happen with a deterministic checker; keep the roadmap if it does
             roadmap.scene_epoch = self._scene_key()
+            return path, None
+        self._roadmaps.clear()
+        roadmap = self._roadmap_for(gs, params)
+        return self._query_roadmap(roadmap, start, goal, search_deadline, stats), None
+
+    def _query_roadmap(self, roadmap: Roadmap, start, goal, search_deadline, stats):
         stats.roadmap_reused = roadmap.queries > 0
         if roadmap.milestones < self.config.prm_roadmap_nodes:
             before = roadmap.build_time
@@ -328,11 +346,11 @@ class MotionPlanner:
             stats.roadmap_build_time += roadmap.build_time - before
         seconds = search_deadline - time.monotonic()
         if seconds <= 0:
-            return None, None
+            return None
         with OMPL_LOCK:
             _status, path = roadmap.query(start, goal, seconds)
         stats.nodes, stats.edges = roadmap.milestones, roadmap.edge_count
-        return path, None
+        return path
 
     # --- post-processing --------------------------------------------------------------------
     def _simplify(self, req, gs, raw, seed, deadline, stats) -> np.ndarray:

@@ -271,7 +271,7 @@ class RCRRT(ob.Planner):
 
     def _goal_reachable(self, i: int, goal: np.ndarray, goal_range: float) -> bool:
         x = self.X[i]
-        if np.max(np.abs(goal - x)) > goal_range:
+        if np.abs(goal - x).max() > goal_range:
             return False
         return self._edge_valid(x, goal)
 

@@ -7,7 +7,7 @@ unchanged, see :mod:`maru_planner.planning.roadmap`) and ``RCRRT`` (ours,
 
 Parameter names (``PlannerConfig.planner_params[id]``):
 RRT/GoalBiasedRRT/RRTConnect ``range`` (max edge length in rad, 0 = OMPL's automatic 20 % of
-the space extent), RRT/GoalBiasedRRT ``goal_bias``, PRM ``max_nearest_neighbors`` (default 5, OMPL: 10; see docs),
+the space extent), RRT/GoalBiasedRRT ``goal_bias``, PRM ``max_nearest_neighbors`` (default 3, OMPL: 10; see docs),
 RCRRT: ``step``, ``goal_bias``, ``candidates``, ``goal_range``, ``seed``.
 """
 
@@ -25,7 +25,7 @@ DEFAULT_PARAMS: dict[str, dict] = {
     "RRT": {"range": 0.0, "goal_bias": 0.0},
     "GoalBiasedRRT": {"range": 0.0, "goal_bias": 0.05},
     "RRTConnect": {"range": 0.0},
-    "PRM": {"max_nearest_neighbors": 5},
+    "PRM": {"max_nearest_neighbors": 3},
     "RCRRT": dict(RCRRT_DEFAULTS),
 }
 

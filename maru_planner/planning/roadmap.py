@@ -1,11 +1,12 @@
 """A persistent OMPL PRM roadmap: built once, queried many times while the scene is unchanged.
 
 The paper's complaint about PRM is that the roadmap must be rebuilt whenever an obstacle moves.
-Here a roadmap remembers the scene epoch it was validated against. After a scene change the
-next query re-validates the whole roadmap in two batched checker calls (all milestones, then all
-edge states at the motion resolution) and reports what that cost; if nothing became invalid the
-roadmap is kept, otherwise it is dropped and rebuilt (OMPL's PRM offers no way to delete
-milestones or edges from Python).
+Here a roadmap remembers the scene it was built in. After a scene change the MotionPlanner keeps
+using it but checks each answer against the current scene (one batched call); only when an answer
+is blocked does it re-validate the whole roadmap (:meth:`Roadmap.revalidate`: two batched checker
+calls, all milestones then all edge states at the motion resolution, timed) and rebuild it if
+anything died (OMPL's PRM offers no way to delete milestones or edges from Python). New
+milestones and edges added after the change are always checked in the current scene.
 """
 
 from __future__ import annotations
@@ -45,7 +46,7 @@ class RevalidationReport:
 class Roadmap:
     """One group's PRM (OMPL ``PRM``) with its own SimpleSetup, kept between queries."""
 
-    def __init__(self, group_space: GroupSpace, checker, resolution: float, max_nearest_neighbors: int = 5):
+    def __init__(self, group_space: GroupSpace, checker, resolution: float, max_nearest_neighbors: int = 3):
         self.gs = group_space
         self.edges = EdgeChecker(group_space, checker, resolution)
         self.ss = og.SimpleSetup(group_space.space)

@@ -36,6 +36,7 @@ class GroupSpace:
         self.upper = np.asarray(upper, dtype=float)
         self.base = np.asarray(base, dtype=float).copy()
         self.dim = len(self.joint_names)
+        self._whole_robot = np.array_equal(self.indices, np.arange(len(self.base)))
         self.space = ob.RealVectorStateSpace(self.dim)
         bounds = ob.RealVectorBounds(self.dim)
         for i in range(self.dim):
@@ -61,14 +62,17 @@ class GroupSpace:
             q = self.base.copy()
             q[self.indices] = q_group
             return q
-        Q = np.repeat(self.base[None, :], len(q_group), axis=0)
+        if self._whole_robot:
+            return q_group
+        Q = np.empty((len(q_group), len(self.base)))
+        Q[:] = self.base
         Q[:, self.indices] = q_group
         return Q
 
 
 def edge_states(qa: np.ndarray, qb: np.ndarray, resolution: float) -> np.ndarray:
     """States checked for the edge qa → qb at ``resolution`` (qa excluded, qb included)."""
-    steps = max(1, math.ceil(float(np.max(np.abs(qb - qa))) / resolution))
+    steps = max(1, math.ceil(float(np.abs(qb - qa).max()) / resolution))
     t = np.arange(1, steps + 1, dtype=float)[:, None] / steps
     return qa + t * (qb - qa)
 
