@@ -400,3 +400,83 @@ def test_status_counts_match_what_was_sent(client, reactive_node):
     answers = [client.stamped[k] for k in sorted(client.stamped) if k > 0]
     assert len(answers) == expected_twists
     assert client.plain_twists_end_with(answers), "cmd_vel carries the same commands, one per valid scan"
+
+
+# ---------------------------------------------------------------- clock mode, bad parameters, launch file
+def test_clock_mode_watchdog_stops_the_base_when_scans_stop(node_process, rclpy_session, tmp_path):
+    from conftest import SpinningNode
+
+    from maru_planner.ros import reactive_conversions as conv
+
+    params = reactive_params_file(tmp_path, scan_reliability="reliable", use_message_stamps=False,
+                                  stale_scan_timeout=0.4)
+    process = node_process(NODE_MODULE, ["--ros-args", "-r", "__ns:=/clock_mode", "--params-file", str(params)])
+    spinning = SpinningNode("clock_mode_client")
+    try:
+        client = ReactiveClient(spinning, namespace="/clock_mode", process=process)
+        client.wait_connected()
+        client.send_and_confirm(client.goal_pub, conv.pose_stamped_msg((4.0, 0.0, 0.0), "odom", 0.0), process, "goal (")
+        now = spinning.node.get_clock().now().nanoseconds / 1e9
+        moving = client.step(_odom((0.0, 0.0, 0.0), now), synthetic_scan(now, [OBSTACLE]))
+        assert moving.linear.x > 0.0, "a fresh scan on the node clock gets the base moving"
+        moving_count = client.twist_count()
+        # no more scans: the watchdog (not a scan) must send a zero Twist
+        assert spinning.wait_for(lambda: client.twist_count() > moving_count, timeout=20), process.log()[-2000:]
+        last = client.twists[-1]
+        assert (last.linear.x, last.angular.z) == (0.0, 0.0)
+        assert "no scan for" in process.log()
+        old = now - 5.0
+        stale = client.step(_odom((0.0, 0.0, 0.0), old), synthetic_scan(old, [OBSTACLE]))
+        assert (stale.linear.x, stale.angular.z) == (0.0, 0.0), "a scan 5 s behind the node clock is stale"
+    finally:
+        spinning.destroy()
+
+
+@pytest.mark.parametrize(
+    ("override", "message"),
+    [({"strip": "elastic"}, "strip must be 'modified' or 'plain'"), ({"k_r": "strong"}, "k_r")],
+)
+def test_bad_parameters_stop_the_node_with_a_clear_error(tmp_path, override, message):
+    import subprocess
+    import sys
+
+    params = reactive_params_file(tmp_path, **override)
+    result = subprocess.run(
+        [sys.executable, "-m", NODE_MODULE, "--ros-args", "--params-file", str(params)],
+        capture_output=True, text=True, timeout=120, cwd=REPO_ROOT,
+    )
+    assert result.returncode != 0
+    assert message in result.stderr + result.stdout
+
+
+def test_launch_file_starts_the_node_with_the_shipped_config(monkeypatch):
+    """launch / launch_ros are not installed here: stand-ins record what the launch file asks for."""
+    import importlib.util
+    import sys
+    import types
+
+    class Recorder:
+        def __init__(self, *args, **kwargs):
+            self.args, self.kwargs = args, kwargs
+
+    fakes = {
+        "launch": types.SimpleNamespace(LaunchDescription=Recorder),
+        "launch.actions": types.SimpleNamespace(DeclareLaunchArgument=Recorder),
+        "launch.substitutions": types.SimpleNamespace(LaunchConfiguration=lambda name: f"<{name}>"),
+        "launch_ros.actions": types.SimpleNamespace(Node=Recorder),
+        "ament_index_python.packages": types.SimpleNamespace(get_package_share_directory=lambda _: str(REPO_ROOT)),
+    }
+    for name, module in fakes.items():
+        monkeypatch.setitem(sys.modules, name, module)
+    spec = importlib.util.spec_from_file_location("reactive_launch", REPO_ROOT / "launch" / "reactive.launch.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    description = module.generate_launch_description()
+    *arguments, node = description.args[0]
+    defaults = {a.args[0]: a.kwargs["default_value"] for a in arguments}
+    assert Path(defaults["params_file"]) == config_path("reactive.yaml")
+    assert node.kwargs["executable"] == "reactive_node" and node.kwargs["name"] == "reactive_node"
+    assert "reactive_node = maru_planner.ros.reactive_node:main" in (REPO_ROOT / "setup.py").read_text()
+    remapped = dict(node.kwargs["remappings"])
+    assert set(remapped) == {"scan", "odom", "plan", "goal_pose", "cmd_vel"}
+    assert {defaults[v.strip("<>")] for v in remapped.values()} == set(remapped), "remappings default to identity"

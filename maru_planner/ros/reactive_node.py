@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import sys
 import time
 import traceback
 
@@ -34,6 +35,7 @@ import yaml
 from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
 from nav_msgs.msg import Odometry, Path
 from rcl_interfaces.msg import ParameterDescriptor
+from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
@@ -323,10 +325,15 @@ class ReactiveNode(Node):
             self._stop_base()
 
 
-def main(args=None):
+def main(args=None) -> int:
     configure_loopback_dds()
     rclpy.init(args=args)
-    node = ReactiveNode()
+    try:
+        node = ReactiveNode()
+    except (ValueError, ParameterException) as exc:
+        print(f"reactive_node: bad parameters: {exc}", file=sys.stderr)
+        rclpy.try_shutdown()
+        return 2
     try:
         rclpy.spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):
@@ -334,9 +341,9 @@ def main(args=None):
     finally:
         node.get_logger().info(node.status())
         node.destroy_node()
-        if rclpy.ok():
-            rclpy.shutdown()
+        rclpy.try_shutdown()
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())
