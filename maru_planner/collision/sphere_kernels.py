@@ -19,16 +19,15 @@ from numba import njit
 from maru_planner.collision.batch_fk import joint_poses_nb, sphere_centers_nb
 
 
-@njit(cache=True)
-def box_distance(p, center, rot, half):
-    """Signed distance from point ``p`` to a box (world-from-box rotation ``rot``, half extents)."""
+@njit(cache=True, inline="always")
+def box_distance(px, py, pz, k, box_c, box_r, box_h):
+    """Signed distance from a point to box ``k`` (world-from-box rotation ``box_r[k]``, half extents)."""
+    dx, dy, dz = px - box_c[k, 0], py - box_c[k, 1], pz - box_c[k, 2]
     out2 = 0.0
     inside = 1e300
     for a in range(3):
-        local = (
-            rot[0, a] * (p[0] - center[0]) + rot[1, a] * (p[1] - center[1]) + rot[2, a] * (p[2] - center[2])
-        )
-        e = abs(local) - half[a]
+        local = box_r[k, 0, a] * dx + box_r[k, 1, a] * dy + box_r[k, 2, a] * dz
+        e = abs(local) - box_h[k, a]
         if e > 0.0:
             out2 += e * e
         if -e < inside:
@@ -38,15 +37,16 @@ def box_distance(p, center, rot, half):
     return -inside
 
 
-@njit(cache=True)
-def cylinder_distance(p, center, axis, half_length, radius):
-    """Signed distance from point ``p`` to a solid cylinder (unit ``axis``, centred)."""
-    dx, dy, dz = p[0] - center[0], p[1] - center[1], p[2] - center[2]
-    t = dx * axis[0] + dy * axis[1] + dz * axis[2]
-    rx, ry, rz = dx - t * axis[0], dy - t * axis[1], dz - t * axis[2]
+@njit(cache=True, inline="always")
+def cylinder_distance(px, py, pz, k, cyl_c, cyl_a, cyl_h, cyl_r):
+    """Signed distance from a point to solid cylinder ``k`` (unit axis ``cyl_a[k]``, centred)."""
+    dx, dy, dz = px - cyl_c[k, 0], py - cyl_c[k, 1], pz - cyl_c[k, 2]
+    ax, ay, az = cyl_a[k, 0], cyl_a[k, 1], cyl_a[k, 2]
+    t = dx * ax + dy * ay + dz * az
+    rx, ry, rz = dx - t * ax, dy - t * ay, dz - t * az
     radial = np.sqrt(rx * rx + ry * ry + rz * rz)
-    ez = abs(t) - half_length
-    er = radial - radius
+    ez = abs(t) - cyl_h[k]
+    er = radial - cyl_r[k]
     if ez > 0.0 or er > 0.0:
         ez = max(ez, 0.0)
         er = max(er, 0.0)
@@ -54,21 +54,21 @@ def cylinder_distance(p, center, axis, half_length, radius):
     return max(ez, er)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def point_obstacle_distance(p, k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r):
     """Signed distance from ``p`` to obstacle ``k`` (boxes first, then spheres, then cylinders)."""
+    px, py, pz = p[0], p[1], p[2]
     nb, ns = box_c.shape[0], sph_c.shape[0]
     if k < nb:
-        return box_distance(p, box_c[k], box_r[k], box_h[k])
+        return box_distance(px, py, pz, k, box_c, box_r, box_h)
     k -= nb
     if k < ns:
-        d0, d1, d2 = p[0] - sph_c[k, 0], p[1] - sph_c[k, 1], p[2] - sph_c[k, 2]
+        d0, d1, d2 = px - sph_c[k, 0], py - sph_c[k, 1], pz - sph_c[k, 2]
         return np.sqrt(d0 * d0 + d1 * d1 + d2 * d2) - sph_r[k]
-    k -= ns
-    return cylinder_distance(p, cyl_c[k], cyl_a[k], cyl_h[k], cyl_r[k])
+    return cylinder_distance(px, py, pz, k - ns, cyl_c, cyl_a, cyl_h, cyl_r)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _dist(a, b):
     d0, d1, d2 = a[0] - b[0], a[1] - b[1], a[2] - b[2]
     return np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
@@ -81,8 +81,9 @@ VALID, COLLIDING, AMBIGUOUS = 0, 1, 2
 def classify_state(
     q, parent, kind, axis, prot, ppos, idx_q,
     s_joint, s_center, s_radius, s_inner, g_start, g_joint, g_center, g_radius, self_pairs, padding,
+    c_start, c_joint, c_center, c_radius, g_clusters,
     box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r,
-    rot, pos, world, gworld, amb,
+    rot, pos, world, gworld, cworld, amb,
 ):  # fmt: skip
     """VALID, COLLIDING or AMBIGUOUS for one configuration, and the number of ambiguous pairs.
 
@@ -93,6 +94,7 @@ def classify_state(
     """
     joint_poses_nb(q, parent, kind, axis, prot, ppos, idx_q, rot, pos)
     sphere_centers_nb(rot, pos, g_joint, g_center, gworld)
+    sphere_centers_nb(rot, pos, c_joint, c_center, cworld)
     sphere_centers_nb(rot, pos, s_joint, s_center, world)
     n_obs = box_c.shape[0] + sph_c.shape[0] + cyl_c.shape[0]
     n_groups = g_joint.shape[0]
@@ -105,12 +107,18 @@ def classify_state(
             if gd >= g_radius[g] + padding:
                 continue
             touched = False
-            for s in range(g_start[g], g_start[g + 1]):
-                d = point_obstacle_distance(world[s], k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r)
-                if d < s_inner[s] + padding:
-                    return COLLIDING, 0
-                if d < s_radius[s] + padding:
-                    touched = True
+            for c in range(g_clusters[g], g_clusters[g + 1]):
+                cd = point_obstacle_distance(cworld[c], k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h,
+                                             cyl_r)
+                if cd >= c_radius[c] + padding:
+                    continue
+                for s in range(c_start[c], c_start[c + 1]):
+                    d = point_obstacle_distance(world[s], k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h,
+                                                cyl_r)
+                    if d < s_inner[s] + padding:
+                        return COLLIDING, 0
+                    if d < s_radius[s] + padding:
+                        touched = True
             if touched and n_amb < amb.shape[0]:
                 amb[n_amb, 0], amb[n_amb, 1], amb[n_amb, 2] = 0, g, k
                 n_amb += 1
@@ -119,15 +127,21 @@ def classify_state(
         if _dist(gworld[ga], gworld[gb]) >= g_radius[ga] + g_radius[gb] + padding:
             continue
         touched = False
-        for sa in range(g_start[ga], g_start[ga + 1]):
-            if _dist(world[sa], gworld[gb]) >= s_radius[sa] + g_radius[gb] + padding:
+        for ca in range(g_clusters[ga], g_clusters[ga + 1]):
+            if _dist(cworld[ca], gworld[gb]) >= c_radius[ca] + g_radius[gb] + padding:
                 continue
-            for sb in range(g_start[gb], g_start[gb + 1]):
-                d = _dist(world[sa], world[sb])
-                if d < s_inner[sa] + s_inner[sb] + padding:
-                    return COLLIDING, 0
-                if d < s_radius[sa] + s_radius[sb] + padding:
-                    touched = True
+            for cb in range(g_clusters[gb], g_clusters[gb + 1]):
+                if _dist(cworld[ca], cworld[cb]) >= c_radius[ca] + c_radius[cb] + padding:
+                    continue
+                for sa in range(c_start[ca], c_start[ca + 1]):
+                    if _dist(world[sa], cworld[cb]) >= s_radius[sa] + c_radius[cb] + padding:
+                        continue
+                    for sb in range(c_start[cb], c_start[cb + 1]):
+                        d = _dist(world[sa], world[sb])
+                        if d < s_inner[sa] + s_inner[sb] + padding:
+                            return COLLIDING, 0
+                        if d < s_radius[sa] + s_radius[sb] + padding:
+                            touched = True
         if touched and n_amb < amb.shape[0]:
             amb[n_amb, 0], amb[n_amb, 1], amb[n_amb, 2] = 1, ga, gb
             n_amb += 1
@@ -137,15 +151,17 @@ def classify_state(
 
 
 def pack_robot(parent, kind, axis, prot, ppos, idx_q, s_joint, s_center, s_radius, s_inner,
-               g_start, g_joint, g_center, g_radius, self_pairs, padding):  # fmt: skip
+               g_start, g_joint, g_center, g_radius, self_pairs, padding,
+               c_start, c_joint, c_center, c_radius, g_clusters):  # fmt: skip
     """Robot data as one int64 and one float64 array: few kernel arguments, cheap numba dispatch."""
-    nj, ns, ng, npairs = len(parent), len(s_joint), len(g_joint), len(self_pairs)
+    nj, ns, ng, npairs, nc = len(parent), len(s_joint), len(g_joint), len(self_pairs), len(c_joint)
     ints = np.concatenate([
-        [nj, ns, ng, npairs], parent, kind, idx_q, s_joint, g_start, g_joint, np.asarray(self_pairs).reshape(-1),
+        [nj, ns, ng, npairs, nc], parent, kind, idx_q, s_joint, g_start, g_joint, np.asarray(self_pairs).reshape(-1),
+        c_start, c_joint, g_clusters,
     ]).astype(np.int64)  # fmt: skip
     floats = np.concatenate([
         [padding], np.ravel(axis), np.ravel(prot), np.ravel(ppos), np.ravel(s_center), s_radius, s_inner,
-        np.ravel(g_center), g_radius,
+        np.ravel(g_center), g_radius, np.ravel(c_center), c_radius,
     ]).astype(np.float64)  # fmt: skip
     return ints, floats
 
@@ -158,8 +174,8 @@ def pack_scene(box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r):
 
 @njit(cache=True)
 def unpack_robot(ri, rf):
-    nj, ns, ng, npairs = ri[0], ri[1], ri[2], ri[3]
-    o = 4
+    nj, ns, ng, npairs, nc = ri[0], ri[1], ri[2], ri[3], ri[4]
+    o = 5
     parent = ri[o : o + nj]
     kind = ri[o + nj : o + 2 * nj]
     idx_q = ri[o + 2 * nj : o + 3 * nj]
@@ -171,6 +187,12 @@ def unpack_robot(ri, rf):
     g_joint = ri[o : o + ng]
     o += ng
     self_pairs = ri[o : o + 2 * npairs].reshape((npairs, 2))
+    o += 2 * npairs
+    c_start = ri[o : o + nc + 1]
+    o += nc + 1
+    c_joint = ri[o : o + nc]
+    o += nc
+    g_clusters = ri[o : o + ng + 1]
     padding = rf[0]
     f = 1
     axis = rf[f : f + 3 * nj].reshape((nj, 3))
@@ -186,8 +208,11 @@ def unpack_robot(ri, rf):
     f += 2 * ns
     g_center = rf[f : f + 3 * ng].reshape((ng, 3))
     g_radius = rf[f + 3 * ng : f + 4 * ng]
+    f += 4 * ng
+    c_center = rf[f : f + 3 * nc].reshape((nc, 3))
+    c_radius = rf[f + 3 * nc : f + 4 * nc]
     return (parent, kind, axis, prot, ppos, idx_q, s_joint, s_center, s_radius, s_inner, g_start, g_joint,
-            g_center, g_radius, self_pairs, padding)  # fmt: skip
+            g_center, g_radius, self_pairs, padding, c_start, c_joint, c_center, c_radius, g_clusters)  # fmt: skip
 
 
 @njit(cache=True)
@@ -220,19 +245,21 @@ def scan_nb(Q, start, ri, rf, sf, amb, stop_at_ambiguous):
     ``ri``/``rf``/``sf``: :func:`pack_robot` and :func:`pack_scene` arrays. With ``stop_at_ambiguous``
     false, AMBIGUOUS rows are reported as COLLIDING (the pure sphere model).
     """
-    parent, kind, axis, prot, ppos, idx_q, s_joint, s_center, s_radius, s_inner, g_start, g_joint, g_center, \
-        g_radius, self_pairs, padding = unpack_robot(ri, rf)  # fmt: skip
+    (parent, kind, axis, prot, ppos, idx_q, s_joint, s_center, s_radius, s_inner, g_start, g_joint, g_center,
+     g_radius, self_pairs, padding, c_start, c_joint, c_center, c_radius, g_clusters) = unpack_robot(ri, rf)
     box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r = unpack_scene(sf)
     nj = parent.shape[0]
     rot = np.empty((nj, 3, 3))
     pos = np.empty((nj, 3))
     world = np.empty((s_joint.shape[0], 3))
     gworld = np.empty((g_joint.shape[0], 3))
+    cworld = np.empty((c_joint.shape[0], 3))
     for i in range(start, Q.shape[0]):
         status, n_amb = classify_state(
             Q[i], parent, kind, axis, prot, ppos, idx_q,
             s_joint, s_center, s_radius, s_inner, g_start, g_joint, g_center, g_radius, self_pairs, padding,
-            box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, rot, pos, world, gworld, amb,
+            c_start, c_joint, c_center, c_radius, g_clusters,
+            box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, rot, pos, world, gworld, cworld, amb,
         )  # fmt: skip
         if status == COLLIDING:
             return i, COLLIDING, 0

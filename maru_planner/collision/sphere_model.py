@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial import ConvexHull, Delaunay
 
-FIT_VERSION = 2  # bump when the fit changes, so cached models are refitted
+FIT_VERSION = 3  # bump when the fit changes, so cached models are refitted
 
 
 @dataclass(frozen=True)
@@ -37,6 +37,7 @@ class SphereFitOptions:
     max_edge: float = 0.025  # surface triangles are split until no edge is longer than this
     grid_step: float = 0.012  # spacing of the candidate centres inside the hull
     cylinder_sides: int = 16  # circumscribed prism used to cover a cylinder
+    cluster_size: int = 6  # spheres per cluster (the middle level of the bounding hierarchy)
 
 
 @dataclass(frozen=True)
@@ -54,6 +55,12 @@ class SphereModel:
     group_radius: np.ndarray  # (ng,)
     group_names: tuple[str, ...]  # geometry object names
     group_links: tuple[str, ...]  # parent frame (link) names
+    # second level of the hierarchy: each group's spheres are sorted into clusters of a few spheres
+    cluster_start: np.ndarray  # (nc + 1,) spheres of cluster c are cluster_start[c]:cluster_start[c + 1]
+    cluster_joint: np.ndarray  # (nc,)
+    cluster_center: np.ndarray  # (nc, 3) bounding sphere of the cluster, in the joint frame
+    cluster_radius: np.ndarray  # (nc,)
+    group_clusters: np.ndarray  # (ng + 1,) clusters of group g are group_clusters[g]:group_clusters[g + 1]
 
     @property
     def n_spheres(self) -> int:
@@ -69,10 +76,20 @@ def fit_sphere_model(model, collision_model, options: SphereFitOptions | None = 
     options = options or SphereFitOptions()
     joints, centers, radii, inners, geoms, starts = [], [], [], [], [], [0]
     g_joint, g_center, g_radius, names, links = [], [], [], [], []
+    c_start, c_joint, c_center, c_radius, g_clusters = [0], [], [], [], [0]
     for gi, obj in enumerate(collision_model.geometryObjects):
         c_local, r, r_in = fit_geometry(obj.geometry, options)
         rot, pos = obj.placement.rotation, obj.placement.translation
         c = c_local @ rot.T + pos
+        order, sizes = cluster_spheres(c, options.cluster_size)
+        c, r, r_in = c[order], r[order], r_in[order]
+        for lo, hi in zip(np.cumsum([0, *sizes[:-1]]), np.cumsum(sizes)):
+            bc, br = bounding_sphere(c[lo:hi], r[lo:hi])
+            c_start.append(starts[-1] + int(hi))
+            c_joint.append(obj.parentJoint)
+            c_center.append(bc)
+            c_radius.append(br)
+        g_clusters.append(g_clusters[-1] + len(sizes))
         joints.append(np.full(len(r), obj.parentJoint))
         centers.append(c)
         radii.append(r)
@@ -97,7 +114,37 @@ def fit_sphere_model(model, collision_model, options: SphereFitOptions | None = 
         group_radius=np.asarray(g_radius, dtype=float),
         group_names=tuple(names),
         group_links=tuple(links),
+        cluster_start=np.asarray(c_start, dtype=np.int64),
+        cluster_joint=np.asarray(c_joint, dtype=np.int64),
+        cluster_center=np.asarray(c_center).reshape(-1, 3),
+        cluster_radius=np.asarray(c_radius, dtype=float),
+        group_clusters=np.asarray(g_clusters, dtype=np.int64),
     )
+
+
+def cluster_spheres(centers: np.ndarray, size: int) -> tuple[np.ndarray, list[int]]:
+    """Order of the spheres grouping them into clusters of about ``size`` near each other, and cluster sizes.
+
+    Farthest-point seeds, then a few nearest-seed (Lloyd) rounds; deterministic.
+    """
+    n = len(centers)
+    k = max(1, int(np.ceil(n / max(size, 1))))
+    if k == 1:
+        return np.arange(n), [n]
+    seeds = [0]
+    dist = np.linalg.norm(centers - centers[0], axis=1)
+    for _ in range(k - 1):
+        seeds.append(int(dist.argmax()))
+        dist = np.minimum(dist, np.linalg.norm(centers - centers[seeds[-1]], axis=1))
+    means = centers[seeds].copy()
+    for _ in range(8):
+        labels = np.linalg.norm(centers[:, None] - means[None], axis=2).argmin(axis=1)
+        for j in range(k):
+            if np.any(labels == j):
+                means[j] = centers[labels == j].mean(axis=0)
+    order = np.argsort(labels, kind="stable")
+    sizes = [int(c) for c in np.bincount(labels, minlength=k) if c > 0]
+    return order, sizes
 
 
 def cache_dir() -> Path:
@@ -148,6 +195,8 @@ def _from_npz(path: Path) -> SphereModel:
         values = {f.name: data[f.name] for f in dataclasses.fields(SphereModel)}
     values["group_names"] = tuple(str(x) for x in values["group_names"])
     values["group_links"] = tuple(str(x) for x in values["group_links"])
+    if len(values["group_clusters"]) != len(values["group_joint"]) + 1:
+        raise ValueError("stale sphere cache")
     return SphereModel(**values)
 
 

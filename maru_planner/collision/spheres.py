@@ -144,7 +144,8 @@ class SphereCollisionChecker:
             self.tree.idx_q, sm.joint, sm.center, sm.radius, sm.inner, sm.group_start, sm.group_joint,
             sm.group_center, sm.group_radius, self.self_pairs, self.padding,
         )  # fmt: skip
-        self._packed_robot = _kernels.pack_robot(*self._robot_args) if self.use_numba else None
+        clusters = (sm.cluster_start, sm.cluster_joint, sm.cluster_center, sm.cluster_radius, sm.group_clusters)
+        self._packed_robot = _kernels.pack_robot(*self._robot_args, *clusters) if self.use_numba else None
         self._robot_geoms = list(robot.collision_model.geometryObjects)
         self._exact_shapes = [exact_shape(obj.geometry) for obj in self._robot_geoms]
         self._amb = np.zeros((sm.n_groups * 8 + len(self.self_pairs), 3), dtype=np.int64)

@@ -1,0 +1,420 @@
+"""Arm planning against peers: ours vs. naive OMPL vs. pyroboplan, on Maru-1 13-DOF and MotionBenchMaker Panda.
+
+    .venv/bin/python bench/peers_arm.py [--quick] [--budget 1.0] [--peer-budget 3.0] [--pyroboplan-per-set 10]
+
+Solvers, all RRT-Connect, on the same problems in one run:
+- ours: ``MotionPlanner`` (planner "RRTConnect", no simplification) on the batched sphere checker
+  (``SphereCollisionChecker``: exact answer at every checked state), the path then verified on the exact
+  pinocchio/coal model by ``plan_verified`` (falls back to exact planning if verification fails).
+  Time = the whole ``plan_verified`` call (validation, search, time parameterisation, verification).
+- naive OMPL: ``ompl.geometric.RRTConnect`` through ``SimpleSetup`` with OMPL's defaults, the state validity
+  checker a plain Python function calling ``pinocchio.computeCollisions`` on the mesh model per state.
+- pyroboplan: ``RRTPlanner`` with ``rrt_connect=True, bidirectional_rrt=True`` (its RRT-Connect), default step.
+Panda problems keep the fingers at 0.065 m (MotionBenchMaker's convention; the URDF's finger limit, 0.04 m,
+is widened for this); peers plan on a reduced 7-DOF model with the fingers locked there.
+
+Outputs bench/results/peers_arm.{json,md,png}; progress on stderr.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from maru_planner.collision import CollisionChecker, obstacle_geometry, self_collision_pairs
+from maru_planner.collision.spheres import SphereCollisionChecker
+from maru_planner.collision.verified import plan_verified
+from maru_planner.moveit_scene import PANDA_FINGERS_OPEN, iter_mbm_problems
+from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig
+from maru_planner.planning.problems import PROBLEMS
+from maru_planner.robot import RobotModel, load_example_robot
+from maru_planner.scene import Scene
+
+ROOT = Path(__file__).resolve().parent
+RESULTS = ROOT / "results"
+TARBALL = ROOT.parent.parent / "shared/benchmarks/motionbenchmaker/vamp_panda_problems.tar.bz2"
+PANDA_ARM = [f"panda_joint{i}" for i in range(1, 8)]
+VAMP_PUBLISHED = {
+    "source": "VAMP README / Thomason et al., ICRA 2024 (RRT-Connect, SIMD sphere checks, one desktop core)",
+    "mbm_panda_median_s": 35e-6,
+}
+
+
+def log(msg: str) -> None:
+    print(msg, file=sys.stderr, flush=True)
+
+
+# ----------------------------------------------------------------------------------------- problems --
+class Case:
+    """One planning problem: robot, scene, group, start/goal dicts (full robot state / group joints)."""
+
+    def __init__(self, name, family, robot, scene, group, start, goal):
+        self.name, self.family, self.robot, self.scene = name, family, robot, scene
+        self.group, self.start, self.goal = group, start, goal
+
+
+def maru13_case(robot) -> Case:
+    problem = PROBLEMS["maru13"]
+    names = robot.groups[problem.group]
+    return Case("maru13", "maru13", robot, Scene.from_yaml(problem.scene_path), problem.group,
+                problem.start_dict(names), problem.goal_dict(names))
+
+
+def panda_robot():
+    robot = load_example_robot("panda")
+    fingers = robot.joint_indices(list(PANDA_FINGERS_OPEN))
+    robot.upper_limits[fingers] = np.maximum(robot.upper_limits[fingers], list(PANDA_FINGERS_OPEN.values()))
+    return robot
+
+
+def mbm_cases(robot, per_set: int | None) -> list[Case]:
+    cases = []
+    for p in iter_mbm_problems(TARBALL, limit_per_set=per_set, fixed_joints=PANDA_FINGERS_OPEN):
+        goal = {k: v for k, v in p.request.goal.items() if k in PANDA_ARM}
+        cases.append(Case(p.name, p.set_name, robot, p.scene, "arm", p.request.start, goal))
+    return cases
+
+
+def full_q(robot, values: dict) -> np.ndarray:
+    q = np.asarray(robot.neutral(), dtype=float).copy()
+    q[robot.joint_indices(list(values))] = list(values.values())
+    return q
+
+
+# ------------------------------------------------------------------------------------------ solvers --
+class Ours:
+    name = "ours"
+
+    def __init__(self, robot, resolution: float):
+        self.verify_resolution = 0.5 * resolution
+        self.fast = SphereCollisionChecker(robot)
+        self.exact = CollisionChecker(robot)
+        self.planner = MotionPlanner(robot, self.fast, PlannerConfig(resolution=resolution))
+
+    def solve(self, case: Case, budget: float, seed: int) -> dict:
+        self.planner.set_scene(case.scene)
+        self.exact.set_scene(case.scene)
+        self.fast.reset_count()
+        req = MotionRequest(case.group, start=case.start, goal_joints=case.goal, planner_id="RRTConnect",
+                            time_budget=budget, seed=seed, simplify=False)
+        out = plan_verified(self.planner, self.exact, req, resolution=self.verify_resolution)
+        return {"success": out.success, "time": out.total_time, "status": out.result.status.value,
+                "fallback": out.fallback_used, "verify_time": out.verify_time,
+                "plan_time": out.total_time - out.verify_time, "checks": out.result.stats.collision_checks,
+                "exact_pair_checks": self.fast.exact_pair_checks}
+
+
+def peer_geometry(robot, scene, locked: dict | None):
+    """(model, geometry model with obstacles and the exact checker's pairs, q of the kept joints -> full q)."""
+    geom = robot.collision_model.copy()
+    n_robot = geom.ngeoms
+    for ob in scene.obstacles.values():
+        placement = pin.SE3(ob.pose[:3, :3].copy(), ob.pose[:3, 3].copy())
+        geom.addGeometryObject(pin.GeometryObject(f"scene/{ob.name}", 0, 0, placement, obstacle_geometry(ob)))
+    moving = [i for i in range(n_robot) if geom.geometryObjects[i].parentJoint != 0]
+    pairs = [(i, k) for k in range(n_robot, geom.ngeoms) for i in moving] + self_collision_pairs(robot)
+    for i, j in pairs:
+        geom.addCollisionPair(pin.CollisionPair(i, j))
+    model = robot.model
+    if locked:
+        q_ref = full_q(robot, locked)
+        ids = [model.getJointId(n) for n in locked]
+        model, (geom,) = pin.buildReducedModel(model, [geom], ids, q_ref)
+    return model, geom
+
+
+class NaiveOmpl:
+    name = "naive OMPL"
+
+    def __init__(self, locked):
+        self.locked = locked
+
+    def solve(self, case: Case, budget: float, seed: int) -> dict:
+        from ompl import base as ob
+        from ompl import geometric as og
+
+        model, geom = peer_geometry(case.robot, case.scene, self.locked)
+        data, gdata = model.createData(), pin.GeometryData(geom)
+        names = [model.names[j] for j in range(1, model.njoints)]
+        dim = model.nq
+        space = ob.RealVectorStateSpace(dim)
+        bounds = ob.RealVectorBounds(dim)
+        for i in range(dim):
+            bounds.setLow(i, float(model.lowerPositionLimit[i]))
+            bounds.setHigh(i, float(model.upperPositionLimit[i]))
+        space.setBounds(bounds)
+        ss = og.SimpleSetup(space)
+        checks = [0]
+
+        def valid(state) -> bool:
+            checks[0] += 1
+            q = np.array([state[i] for i in range(dim)])
+            return not pin.computeCollisions(model, data, geom, gdata, q, True)
+
+        ss.setStateValidityChecker(valid)
+        start, goal = space.allocState(), space.allocState()
+        for i, n in enumerate(names):
+            start[i] = case.start[n] if n in case.start else 0.0
+            goal[i] = case.goal.get(n, case.start.get(n, 0.0))
+        ss.setStartAndGoalStates(start, goal)
+        ss.setPlanner(og.RRTConnect(ss.getSpaceInformation()))
+        t0 = time.perf_counter()
+        solved = ss.solve(budget)
+        elapsed = time.perf_counter() - t0
+        exact = bool(solved) and ss.haveExactSolutionPath()
+        return {"success": exact, "time": elapsed, "status": str(solved), "checks": checks[0]}
+
+
+class Pyroboplan:
+    name = "pyroboplan"
+
+    def __init__(self, locked):
+        self.locked = locked
+
+    def solve(self, case: Case, budget: float, seed: int) -> dict:
+        _stub_meshcat()
+        from pyroboplan.planning.rrt import RRTPlanner, RRTPlannerOptions
+
+        model, geom = peer_geometry(case.robot, case.scene, self.locked)
+        names = [model.names[j] for j in range(1, model.njoints)]
+        q_start = np.array([case.start.get(n, 0.0) for n in names])
+        q_goal = np.array([case.goal.get(n, case.start.get(n, 0.0)) for n in names])
+        options = RRTPlannerOptions(rrt_connect=True, bidirectional_rrt=True, max_planning_time=budget,
+                                    rng_seed=seed, fast_return=True)
+        planner = RRTPlanner(model, geom, options)
+        t0 = time.perf_counter()
+        path = _quiet(planner.plan, q_start, q_goal)
+        elapsed = time.perf_counter() - t0
+        return {"success": path is not None and elapsed <= budget * 1.05, "time": elapsed, "status": "",
+                "checks": None}
+
+
+def _stub_meshcat() -> None:
+    """pyroboplan imports meshcat for its visualisation helpers only; meshcat is not installed here, so an
+    empty stand-in module satisfies the import (planning never calls into it)."""
+    import types
+
+    if "meshcat" not in sys.modules:
+        try:
+            import meshcat  # noqa: F401
+        except ImportError:
+            pkg = types.ModuleType("meshcat")
+            for sub in ("geometry", "transformations", "visualizer"):
+                mod = types.ModuleType(f"meshcat.{sub}")
+                setattr(pkg, sub, mod)
+                sys.modules[f"meshcat.{sub}"] = mod
+            sys.modules["meshcat"] = pkg
+
+
+def _quiet(fn, *args):
+    import contextlib
+    import io
+
+    with contextlib.redirect_stdout(io.StringIO()):
+        return fn(*args)
+
+
+# ---------------------------------------------------------------------------------------- reporting --
+def summarise(runs: list[dict], budget: float) -> dict:
+    """Success rate, median/p95 time with failures counted at their time (capped at the budget)."""
+    if not runs:
+        return {"n": 0}
+    times = np.array([r["time"] if r["success"] else max(r["time"], budget) for r in runs])
+    ok = np.array([r["success"] for r in runs])
+    return {
+        "n": len(runs),
+        "success_rate": float(ok.mean()),
+        "median_s": float(np.median(times)),
+        "p95_s": float(np.percentile(times, 95)),
+        "mean_s": float(times.mean()),
+        "median_solved_s": float(np.median(times[ok])) if ok.any() else None,
+    }
+
+
+def run(solver, cases, budget, seeds, label) -> list[dict]:
+    runs = []
+    t0 = time.monotonic()
+    for k, case in enumerate(cases):
+        for seed in seeds:
+            try:
+                r = solver.solve(case, budget, seed)
+            except Exception as exc:  # a peer crashing on a problem counts as a failure, named
+                r = {"success": False, "time": budget, "status": f"error: {type(exc).__name__}: {exc}"}
+            r.update(problem=case.name, family=case.family, seed=seed)
+            runs.append(r)
+        done = k + 1
+        if done % 10 == 0 or done == len(cases):
+            ok = sum(r["success"] for r in runs)
+            log(f"  {label}: {done}/{len(cases)} problems, {ok}/{len(runs)} solved, {time.monotonic() - t0:.1f} s")
+    return runs
+
+
+def ratio(a, b):
+    return None if not a or not b else b / a
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="3 problems per MBM set, 3 Maru-1 seeds, 2 for pyroboplan")
+    ap.add_argument("--budget", type=float, default=1.0, help="seconds per problem for ours (issue: 1 s)")
+    ap.add_argument("--peer-budget", type=float, default=3.0, help="seconds per problem for the peers")
+    ap.add_argument("--per-set", type=int, default=None, help="MBM problems per set (default: all 100)")
+    ap.add_argument("--pyroboplan-per-set", type=int, default=5, help="MBM problems per set given to pyroboplan")
+    ap.add_argument("--maru-seeds", type=int, default=10)
+    ap.add_argument("--resolution", type=float, default=0.05, help="our motion-check step (rad, L-inf)")
+    ap.add_argument("--out", type=Path, default=RESULTS / "peers_arm")
+    args = ap.parse_args(argv)
+    per_set = 3 if args.quick else args.per_set
+    pyro_per_set = 2 if args.quick else args.pyroboplan_per_set
+    maru_seeds = list(range(3 if args.quick else args.maru_seeds))
+
+    log("loading robots and problems ...")
+    maru, panda = RobotModel.maru1(), panda_robot()
+    maru_cases = [maru13_case(maru)]
+    panda_cases = mbm_cases(panda, per_set)
+    pyro_names = {c.name for c in panda_cases if int(c.name.split("/")[1]) <= pyro_per_set}
+    log(f"{len(panda_cases)} MBM problems, pyroboplan on {len(pyro_names)} of them")
+
+    results: dict = {"config": vars(args) | {"out": str(args.out)}, "vamp_published": VAMP_PUBLISHED, "runs": {}}
+    solvers = {
+        "maru13": (Ours(maru, args.resolution), NaiveOmpl(None), Pyroboplan(None)),
+        "mbm": (Ours(panda, args.resolution), NaiveOmpl(PANDA_FINGERS_OPEN), Pyroboplan(PANDA_FINGERS_OPEN)),
+    }
+    for family, cases, seeds in (("maru13", maru_cases, maru_seeds), ("mbm", panda_cases, [0])):
+        ours, naive, pyro = solvers[family]
+        log(f"[{family}] ours")
+        r_ours = run(ours, cases, args.budget, seeds, "ours")
+        log(f"[{family}] naive OMPL")
+        r_naive = run(naive, cases, args.peer_budget, seeds, "naive OMPL")
+        pyro_cases = cases if family == "maru13" else [c for c in cases if c.name in pyro_names]
+        log(f"[{family}] pyroboplan")
+        r_pyro = run(pyro, pyro_cases, args.peer_budget, seeds[:3] if family == "maru13" else seeds, "pyroboplan")
+        results["runs"][family] = {"ours": r_ours, "naive OMPL": r_naive, "pyroboplan": r_pyro}
+
+    summary = build_summary(results, args)
+    results["summary"] = summary
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.with_suffix(".json").write_text(json.dumps(results, indent=1, default=_json_default))
+    md = markdown(summary, args)
+    args.out.with_suffix(".md").write_text(md)
+    plot(results, args.out.with_suffix(".png"), args)
+    print(md)
+    return 0
+
+
+def _json_default(o):
+    if isinstance(o, np.generic):
+        return o.item()
+    if isinstance(o, Path):
+        return str(o)
+    return str(o)
+
+
+def build_summary(results, args) -> dict:
+    out = {}
+    for family, by_solver in results["runs"].items():
+        fam = {name: summarise(runs, args.budget if name == "ours" else args.peer_budget)
+               for name, runs in by_solver.items()}
+        # ratios on the problems every solver attempted (pyroboplan ran on a subset)
+        common = {r["problem"] for r in by_solver["pyroboplan"]}
+        sub = {name: summarise([r for r in runs if r["problem"] in common],
+                               args.budget if name == "ours" else args.peer_budget)
+               for name, runs in by_solver.items()}
+        fam["ratios"] = {
+            "naive_over_ours_median": ratio(fam["ours"].get("median_s"), fam["naive OMPL"].get("median_s")),
+            "naive_over_ours_mean": ratio(fam["ours"].get("mean_s"), fam["naive OMPL"].get("mean_s")),
+            "pyroboplan_over_ours_median_common": ratio(sub["ours"].get("median_s"), sub["pyroboplan"].get("median_s")),
+            "common_subset": sub,
+        }
+        fam["fallbacks"] = int(sum(r.get("fallback", False) for r in by_solver["ours"]))
+        out[family] = fam
+    mbm = out.get("mbm", {}).get("ours", {})
+    out["targets"] = {
+        "mbm_success_ge_99.5pct": mbm.get("success_rate", 0) >= 0.995,
+        "mbm_median_le_10ms": (mbm.get("median_s") or 1e9) <= 0.010,
+        "ours_3x_naive_mbm": (out.get("mbm", {}).get("ratios", {}).get("naive_over_ours_median") or 0) >= 3,
+        "ours_3x_naive_maru13": (out.get("maru13", {}).get("ratios", {}).get("naive_over_ours_median") or 0) >= 3,
+        "ours_10x_pyroboplan_mbm":
+            (out.get("mbm", {}).get("ratios", {}).get("pyroboplan_over_ours_median_common") or 0) >= 10,
+        "ours_10x_pyroboplan_maru13":
+            (out.get("maru13", {}).get("ratios", {}).get("pyroboplan_over_ours_median_common") or 0) >= 10,
+    }
+    return out
+
+
+def _ms(x):
+    return "—" if x is None or (isinstance(x, float) and not math.isfinite(x)) else f"{1e3 * x:.1f}"
+
+
+def markdown(summary, args) -> str:
+    lines = [
+        "# Arm planning vs. peers (RRT-Connect)",
+        "",
+        f"Budgets: ours {args.budget:g} s, peers {args.peer_budget:g} s per problem; failures count at the budget.",
+        f"Our motion resolution {args.resolution:g} rad (L-inf); naive OMPL uses OMPL's default (1 % of the space "
+        "extent, L2); pyroboplan its default 0.05 rad step.",
+        "",
+        "| problems | solver | n | success | median ms | p95 ms | mean ms |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for family in ("maru13", "mbm"):
+        for name in ("ours", "naive OMPL", "pyroboplan"):
+            s = summary[family][name]
+            if not s.get("n"):
+                continue
+            lines.append(f"| {family} | {name} | {s['n']} | {100 * s['success_rate']:.1f} % | {_ms(s['median_s'])} | "
+                         f"{_ms(s['p95_s'])} | {_ms(s['mean_s'])} |")
+    lines.append(f"| mbm | VAMP (published) | 700 | — | {1e3 * VAMP_PUBLISHED['mbm_panda_median_s']:.3f} | — | — |")
+    lines += ["", "| problems | naive/ours (median) | naive/ours (mean) | pyroboplan/ours (median, common subset) |",
+              "|---|---|---|---|"]
+    for family in ("maru13", "mbm"):
+        r = summary[family]["ratios"]
+        lines.append(f"| {family} | {_x(r['naive_over_ours_median'])} | {_x(r['naive_over_ours_mean'])} | "
+                     f"{_x(r['pyroboplan_over_ours_median_common'])} |")
+    lines += ["", "Targets: " + ", ".join(f"{k}: {'met' if v else 'MISSED'}" for k, v in summary["targets"].items()),
+              f"Exact-planning fallbacks after failed verification: maru13 {summary['maru13']['fallbacks']}, "
+              f"mbm {summary['mbm']['fallbacks']}.", ""]
+    return "\n".join(lines)
+
+
+def _x(v):
+    return "—" if v is None else f"{v:.1f}×"
+
+
+def plot(results, path: Path, args) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
+    for ax, family in zip(axes, ("maru13", "mbm")):
+        for name, color in (("ours", "tab:green"), ("naive OMPL", "tab:blue"), ("pyroboplan", "tab:red")):
+            runs = results["runs"][family][name]
+            if not runs:
+                continue
+            t = np.sort([r["time"] if r["success"] else np.inf for r in runs])
+            frac = np.arange(1, len(t) + 1) / len(t)
+            ax.step(np.where(np.isfinite(t), t, np.nan), frac, where="post", color=color, label=f"{name} (n={len(t)})")
+        if family == "mbm":
+            ax.axvline(VAMP_PUBLISHED["mbm_panda_median_s"], color="gray", ls="--", label="VAMP median (published)")
+        ax.set_xscale("log")
+        ax.set_xlabel("planning time per problem (s)")
+        ax.set_ylabel("fraction solved")
+        ax.set_title({"maru13": "Maru-1 13-DOF (seeds)", "mbm": "MotionBenchMaker Panda"}[family])
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(loc="lower right", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
