@@ -49,6 +49,7 @@ class ReactiveClient:
         from rclpy.qos import QoSProfile, ReliabilityPolicy
         from sensor_msgs.msg import LaserScan
         from trajectory_msgs.msg import JointTrajectory
+        from visualization_msgs.msg import MarkerArray
 
         reliable = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)
         self.spinning = spinning
@@ -59,6 +60,7 @@ class ReactiveClient:
         self.stamped: dict[int, object] = {}  # scan stamp (ns) -> the Twist answering it
         self.strips: list = []
         self.arm: list = []
+        self.markers: list = []
         # Created in this order on purpose: discovery announces endpoints in creation order, so once the
         # node has matched the last writer (scan) and the last reader (cmd_vel_stamped), it has the others.
         self.odom_pub = node.create_publisher(Odometry, f"{namespace}/odom", reliable)
@@ -70,6 +72,7 @@ class ReactiveClient:
             node.create_subscription(Twist, f"{namespace}/cmd_vel", self._keep(self.twists), reliable),
             node.create_subscription(Path, f"{private}/strip", self._keep(self.strips), reliable),
             node.create_subscription(JointTrajectory, f"{private}/arm_command", self._keep(self.arm), reliable),
+            node.create_subscription(MarkerArray, f"{private}/markers", self._keep(self.markers), reliable),
             node.create_subscription(TwistStamped, f"{private}/cmd_vel_stamped", self._keep_stamped, reliable),
         ]
 
@@ -92,7 +95,7 @@ class ReactiveClient:
         assert ok, "reactive_node did not subscribe to scan, odom, plan and goal_pose"
         subs = self._subscriptions
         ok = self.spinning.wait_for(lambda: all(s.get_publisher_count() > 0 for s in subs), timeout=timeout)
-        assert ok, "reactive_node's cmd_vel, strip, arm_command and cmd_vel_stamped publishers were not discovered"
+        assert ok, "reactive_node's cmd_vel, strip, arm_command, markers, cmd_vel_stamped publishers not discovered"
         self._handshake()
 
     def _handshake(self, attempts: int = 30) -> None:

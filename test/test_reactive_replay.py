@@ -255,4 +255,6 @@ def test_closed_loop_simulator_and_node_reach_the_goal_without_collision(node_pr
         min_clearance = min(min_clearance, sim.clearance())
     assert sim.goal_distance() <= world.goal_tolerance, f"stopped at {sim.robot_pose} after {sim.time:.1f} s"
     assert min_clearance > 0.0
+    assert client.spinning.wait_for(lambda: len(client.markers) > 0), "markers go out while someone listens"
+    assert [m.ns for m in client.markers[-1].markers][:3] == ["strip", "vias", "obstacles"]
     assert process.alive()
