@@ -395,7 +395,7 @@ def test_a_stale_scan_stops_the_base(client, reactive_node):
 def test_status_counts_match_what_was_sent(client, reactive_node):
     """1 scan without goal + 5 + 1 + 3 (stale test) valid scans, 1 of them stale, 3 malformed: a Twist per valid one."""
     expected_twists = 1 + 5 + 1 + 3
-    status = re.compile(r"scans (\d+), updates 8, dropped 3, stale 1")
+    status = re.compile(r"scans (\d+), updates 8, dropped 3, stale 1; update median")
     assert client.spinning.wait_for(lambda: status.search(reactive_node.log()), timeout=20), reactive_node.log()[-2000:]
     scans = int(status.findall(reactive_node.log())[-1])
     handshakes = scans - 3 - expected_twists
@@ -403,6 +403,14 @@ def test_status_counts_match_what_was_sent(client, reactive_node):
     answers = [client.stamped[k] for k in sorted(client.stamped) if k > 0]
     assert len(answers) == expected_twists
     assert client.plain_twists_end_with(answers), "cmd_vel carries the same commands, one per valid scan"
+
+
+def test_message_time_jumping_back_restarts_the_clock(client, reactive_node):
+    """A bag played in a loop starts over: fresh scans after the jump are not stale."""
+    assert client.step(_odom((0.0, 0.0, 0.0), 3.2), synthetic_scan(3.2, [OBSTACLE])).linear.x > 0.0
+    again = client.step(_odom((0.0, 0.0, 0.0), 1.25), synthetic_scan(1.25, [OBSTACLE]))
+    assert again.linear.x > 0.0
+    assert "time jumped back" in reactive_node.log()
 
 
 # ---------------------------------------------------------------- clock mode, bad parameters, launch file

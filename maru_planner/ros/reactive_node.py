@@ -28,6 +28,7 @@ import math
 import sys
 import time
 import traceback
+from collections import deque
 
 import numpy as np
 import rclpy
@@ -139,6 +140,7 @@ class ReactiveNode(Node):
         self.last_scan_received = time.monotonic()
         self.base_stopped = True
         self.counts = {"scans": 0, "updates": 0, "dropped": 0, "stale": 0}
+        self.update_ms: deque[float] = deque(maxlen=200)  # recent controller update times, for the status line
         self._goal_logged = False
 
         self._setup_arm()
@@ -188,7 +190,11 @@ class ReactiveNode(Node):
         self.get_logger().info(self.status())
 
     def status(self) -> str:
-        return "scans {scans}, updates {updates}, dropped {dropped}, stale {stale}".format(**self.counts)
+        text = "scans {scans}, updates {updates}, dropped {dropped}, stale {stale}".format(**self.counts)
+        if self.update_ms:
+            ms = np.array(self.update_ms)
+            text += f"; update median {np.median(ms):.2f} ms, max {ms.max():.2f} ms (last {len(ms)})"
+        return text
 
     # ------------------------------------------------------------ inputs
     def _now(self) -> float:
@@ -202,8 +208,16 @@ class ReactiveNode(Node):
     def on_odom(self, msg: Odometry) -> None:
         if self.pose is None:
             self.get_logger().info(f"receiving odometry on {self.odom_topic}")
+        stamp = conv.stamp_to_s(msg.header.stamp)
+        if self.use_stamps and self.odom_stamp is not None and stamp < self.odom_stamp - self.stale_timeout:
+            # e.g. `ros2 bag play --loop` starting over: restart the message clock instead of calling
+            # every later scan stale
+            jump = self.odom_stamp - stamp
+            self.get_logger().warning(f"odometry time jumped back {jump:.2f} s: restarting the clock")
+            self.newest_stamp = -math.inf
+            self.pending = None
         self.pose = conv.pose_from_odom(msg)
-        self.odom_stamp = conv.stamp_to_s(msg.header.stamp)
+        self.odom_stamp = stamp
         self._see_stamp(msg.header.stamp)
         self._process_pending(force=False)
 
@@ -288,6 +302,7 @@ class ReactiveNode(Node):
     def _update(self, scan, stamp: float, header_stamp: float) -> None:
         out = self.controller.update(pose=self.pose, scan=scan)
         self.counts["updates"] += 1
+        self.update_ms.append(out.update_time * 1e3)
         self._send_command(out.v, out.w, header_stamp)
         self.strip_pub.publish(conv.path_msg(np.asarray(out.strip), self.odom_frame, stamp))
         self._publish_arm(out, stamp)
