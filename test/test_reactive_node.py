@@ -445,7 +445,12 @@ def test_clock_mode_watchdog_stops_the_base_when_scans_stop(node_process, rclpy_
 
 @pytest.mark.parametrize(
     ("override", "message"),
-    [({"strip": "elastic"}, "strip must be 'modified' or 'plain'"), ({"k_r": "strong"}, "k_r")],
+    [
+        ({"strip": "elastic"}, "strip must be 'modified' or 'plain'"),
+        ({"k_r": "strong"}, "k_r"),
+        ({"stale_scan_timeout": -1.0}, "stale_scan_timeout must be a positive"),
+        ({"scan_reliability": "sometimes"}, "scan_reliability must be"),
+    ],
 )
 def test_bad_parameters_stop_the_node_with_a_clear_error(tmp_path, override, message):
     import subprocess

@@ -93,7 +93,7 @@ def _strip_param_defaults() -> dict[str, object]:
 
 
 def strip_params_from_config(path) -> StripParams:
-    """StripParams from a ``--params-file`` YAML (``reactive_node: ros__parameters:``), defaults elsewhere.
+    """StripParams from a ``--params-file`` YAML (section ``/**/reactive_node``), defaults elsewhere.
 
     Lets tools outside ROS (the bag recorder, benchmarks) run the controller
     exactly as the node configured from the same file would.
@@ -127,6 +127,8 @@ class ReactiveNode(Node):
         self.warnings = ThrottledWarnings(self.get_logger(), self._param("warn_throttle_period"))
         self.use_stamps = bool(self._param("use_message_stamps"))
         self.stale_timeout = float(self._param("stale_scan_timeout"))
+        if not math.isfinite(self.stale_timeout) or self.stale_timeout <= 0.0:
+            raise ValueError(f"stale_scan_timeout must be a positive number of seconds, got {self.stale_timeout}")
         self.odom_frame = str(self._param("odom_frame"))
         self.base_frame = str(self._param("base_frame"))
 
@@ -171,7 +173,7 @@ class ReactiveNode(Node):
             reliability=ReliabilityPolicy.RELIABLE if reliability == "reliable" else ReliabilityPolicy.BEST_EFFORT,
         )
         # Creation order matters: when several messages are ready at once the executor takes them in
-        # this order, so an odometry / goal / plan sent before a scan is applied before that scan.
+        # this order, so a goal or plan that arrived with a scan is applied before that scan.
         self.odom_topic = self.create_subscription(Odometry, "odom", self.on_odom, 10).topic_name
         self.create_subscription(PoseStamped, "goal_pose", self.on_goal, 10)
         self.create_subscription(Path, "plan", self.on_plan, 10)
