@@ -189,3 +189,23 @@ def test_cli_writes_json_and_png(tmp_path):
                  "--goal", "5", "2", "0", "--json", str(out)])
     assert code == 1 and json.loads(out.read_text())["status"] == "no_path_proven"
     assert main(["--map", str(tmp_path / "missing.yaml"), "--start", "1", "2", "0", "--goal", "5", "2", "0"]) == 2
+
+
+def test_shipped_maps_match_the_scene_builder():
+    from maru_planner.paths import config_path
+
+    for name, (grid, _) in SCENES.items():
+        loaded = OccupancyGrid.from_yaml(config_path("maps", f"paper002_{name}.yaml"))
+        assert loaded.resolution == grid.resolution and loaded.origin == grid.origin
+        assert np.array_equal(loaded.occupied, grid.occupied), name
+
+
+def test_mspp_local_falls_back_to_full_search_when_windows_fail(monkeypatch):
+    grid, prob = SCENES["hard"]
+    planner = MultiStagePlanner(prob["footprint"], local=True)
+    monkeypatch.setattr(planner, "_window_search", lambda *args, **kwargs: None)
+    result = planner.plan(grid, prob["start"], prob["goal"])
+    assert result.success and result.stats["deciding_stage"] == "full"
+    assert [s["name"] for s in result.stats["stages"]] == ["ECA", "BAA", "local", "full"]
+    assert "fallback" in result.stats["stages"][2]
+    assert_valid_path(grid, prob["footprint"], result.path, prob["start"], prob["goal"])

@@ -39,7 +39,6 @@ from maru_planner.base.se2 import (
     SEARCH_TIMED_OUT,
     SE2AStarPlanner,
     dilate,
-    footprint_cells,
     search_layers,
 )
 
@@ -244,8 +243,7 @@ class MultiStagePlanner(SE2AStarPlanner):
     def _window_layers(self, grid, box):
         """C-space layers of a window, seeing the obstacles just outside it."""
         r0, c0, r1, c1 = box
-        offsets = [footprint_cells(self.footprint, 2 * math.pi * k / self.headings, grid.resolution)
-                   for k in range(self.headings)]
+        offsets = self.offsets(grid.resolution)
         reach = max(int(np.max(np.abs(o))) if len(o) else 0 for o in offsets)
         R0, C0 = max(r0 - reach, 0), max(c0 - reach, 0)
         crop = grid.occupied[R0 : min(r1 + reach, grid.height), C0 : min(c1 + reach, grid.width)]

@@ -123,8 +123,13 @@ def write_maps(directory) -> list[Path]:
     written = []
     for name, (grid, _) in build_all().items():
         written.append(grid.save_yaml(directory / f"paper002_{name}.yaml"))
+    class NoAliases(yaml.SafeDumper):
+        def ignore_aliases(self, data):
+            return True
+
     with open(directory / "paper002_problems.yaml", "w") as f:
-        yaml.safe_dump({f"paper002_{k}": v for k, v in problems().items()}, f, sort_keys=False)
+        yaml.dump({f"paper002_{k}": v for k, v in problems().items()}, f, Dumper=NoAliases, sort_keys=False,
+                  default_flow_style=None)
     return written
 
 

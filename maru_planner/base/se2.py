@@ -29,6 +29,7 @@ import math
 import time
 
 import numpy as np
+from scipy import ndimage
 
 from maru_planner.base.astar import HAVE_NUMBA, _heap_pop, _heap_push, numba
 
@@ -119,24 +120,25 @@ def footprint_collides(occupied: np.ndarray, footprint, resolution: float, row: 
 
 def dilate(occupied: np.ndarray, offsets: np.ndarray) -> np.ndarray:
     """out[r, c] = any occupied[r + dr, c + dc] over the offsets (outside the map counts as free)."""
-    h, w = occupied.shape
-    if len(offsets) == 0:
-        return np.zeros_like(occupied)
+    if len(offsets) == 0 or not occupied.any():
+        return np.zeros_like(occupied, dtype=bool)
     reach = int(np.max(np.abs(offsets)))
-    padded = np.zeros((h + 2 * reach, w + 2 * reach), dtype=bool)
-    padded[reach : reach + h, reach : reach + w] = occupied
-    out = np.zeros_like(occupied)
-    for dr, dc in offsets:
-        out |= padded[reach + dr : reach + dr + h, reach + dc : reach + dc + w]
-    return out
+    # scipy's dilation reflects the structuring element: store the offsets negated
+    structure = np.zeros((2 * reach + 1, 2 * reach + 1), dtype=bool)
+    structure[reach - offsets[:, 0], reach - offsets[:, 1]] = True
+    return ndimage.binary_dilation(occupied, structure=structure, border_value=0)
 
 
-def cspace_layers(occupied: np.ndarray, footprint, resolution: float, headings: int) -> np.ndarray:
+def heading_offsets(footprint, resolution: float, headings: int) -> list[np.ndarray]:
+    """footprint_cells for each heading k * 2 pi / K."""
+    return [footprint_cells(footprint, 2 * math.pi * k / headings, resolution) for k in range(headings)]
+
+
+def cspace_layers(occupied: np.ndarray, footprint, resolution: float, headings: int, offsets=None) -> np.ndarray:
     """(K, H, W) bool: configuration-space obstacles for each heading k * 2 pi / K."""
     occupied = np.asarray(occupied, dtype=bool)
-    return np.stack(
-        [dilate(occupied, footprint_cells(footprint, 2 * math.pi * k / headings, resolution)) for k in range(headings)]
-    )
+    offsets = offsets if offsets is not None else heading_offsets(footprint, resolution, headings)
+    return np.stack([dilate(occupied, o) for o in offsets])
 
 
 def heading_index(theta: float, headings: int) -> int:
@@ -318,6 +320,13 @@ class SE2AStarPlanner:
         if not time_limit > 0:
             raise ValueError(f"time_limit must be > 0 s, got {time_limit}")
         self.time_limit = float(time_limit)
+        self._offsets: dict[float, list[np.ndarray]] = {}
+
+    def offsets(self, resolution: float) -> list[np.ndarray]:
+        """Rasterised footprint per heading, cached per resolution."""
+        if resolution not in self._offsets:
+            self._offsets[resolution] = heading_offsets(self.footprint, resolution, self.headings)
+        return self._offsets[resolution]
 
     def rot_cost_cells(self, resolution: float) -> float:
         return self.rotation_weight * (2 * math.pi / self.headings) / resolution
@@ -355,7 +364,8 @@ class SE2AStarPlanner:
     def search(self, grid, s_cell, g_cell, sk, gk, time_limit) -> dict:
         """C-space layers for the whole map, then the search; returns stats + states."""
         t = time.perf_counter()
-        layers = cspace_layers(grid.occupied, self.footprint, grid.resolution, self.headings)
+        layers = cspace_layers(grid.occupied, self.footprint, grid.resolution, self.headings,
+                               self.offsets(grid.resolution))
         cspace_time = time.perf_counter() - t
         out = search_layers(layers, [(sk, *s_cell)], g_cell, gk, self.rot_cost_cells(grid.resolution),
                             time_limit=max(time_limit - cspace_time, 1e-3))
