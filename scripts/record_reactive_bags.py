@@ -48,6 +48,8 @@ DEFAULT_BAGS = [
     ("single_static", 4.0, 5.0, "sqlite3"),
     ("goal_behind_obstacle", 4.0, 5.0, "sqlite3"),
     ("walking_person", 3.0, 5.0, "mcap"),
+    ("multiple_static", 2.0, 6.0, "sqlite3"),
+    ("irregular_scattered", 2.0, 6.0, "mcap"),
 ]
 
 

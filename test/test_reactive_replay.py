@@ -27,7 +27,7 @@ pytestmark = pytest.mark.ros
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
 DATA = REPO_ROOT / "test" / "data"
-SCENARIOS = ["single_static", "goal_behind_obstacle", "walking_person"]
+SCENARIOS = ["single_static", "goal_behind_obstacle", "walking_person", "multiple_static", "irregular_scattered"]
 _namespaces = itertools.count()
 
 
@@ -164,13 +164,14 @@ def _nearest_front_obstacle(scan_msg, laser_pose, window):
     return float(np.hypot(*points[i])), math.atan2(points[i, 1], points[i, 0])
 
 
-@pytest.mark.parametrize("scenario", ["single_static", "goal_behind_obstacle"])
+@pytest.mark.parametrize("scenario", ["single_static", "goal_behind_obstacle", "multiple_static"])
 def test_commands_turn_away_from_static_obstacles_close_ahead(scenario, recorded_bags, replays):
     """Whenever the nearest scan point is within d_0 + 0.5 m and off to one side ahead (5..45 deg), the base
     turns away from it (w of the opposite sign to the point's bearing).
 
-    Static worlds only: with a person walking across, passing behind them (turning towards the side they
-    come from) is the right move, and the strip does that.
+    Not checked with a person walking across (passing behind them, i.e. turning towards the side they come
+    from, is the right move) nor among irregularly scattered obstacles (the nearest point is not always
+    the one to avoid first).
     """
     result = replays(recorded_bags[scenario])
     limits = shipped_params()
