@@ -159,8 +159,12 @@ class BigCellGrid:
             yield big - 1
 
     def to_rc(self, bigs) -> np.ndarray:
+        """(k, 2) int32 (row, col) of flat indices."""
         flat = np.frombuffer(bigs, dtype=np.int32) if isinstance(bigs, array) else np.asarray(bigs, dtype=np.int32)
-        return np.column_stack(np.divmod(flat, self.shape[1])).astype(np.int32).reshape(-1, 2)
+        out = np.empty((len(flat), 2), dtype=np.int32)
+        np.floor_divide(flat, self.shape[1], out=out[:, 0])
+        np.remainder(flat, self.shape[1], out=out[:, 1])
+        return out
 
 
 class TimedOut(Exception):
@@ -204,7 +208,7 @@ def tunnel_finding(bg: BigCellGrid, start: int, goal: int, p: TunnelParams, bloc
     visited = bytearray(bg.shape[0] * bg.shape[1])
     visited[start] = 1
     tunnel = array("i", [start])
-    chain = [start]
+    chain = array("i", [start])  # 4 bytes per β, not a Python int object each
     full, count = bg.full, bg.count
     per_big = bg.size * bg.size
     g_rc, s_rc = bg.rc(goal), bg.rc(start)
@@ -274,15 +278,17 @@ def lumped_cell_removal(bg: BigCellGrid, members: bytearray, start: int, goal: i
     lumped = np.flatnonzero(lumped_mask(mask))
     depth = _bfs_depths(bg, members, start, blocked)
     # Subgoal queue: lumped cells met on the way back, farthest from the start first.
-    subgoals = sorted((int(b) for b in lumped if depth[b] >= 0), key=lambda b: (-depth[b], b))
+    lumped_depth = np.frombuffer(depth, dtype=np.int32)[lumped]
+    reachable = lumped_depth >= 0
+    subgoals = lumped[reachable][np.lexsort((lumped[reachable], -lumped_depth[reachable]))].astype(np.int32)
     back = [goal]
     current_subgoal = bg.rc(goal)
     cur = goal
     pending = 0  # index of the next subgoal in the queue
     while cur != start:
-        while pending < len(subgoals) and depth[subgoals[pending]] >= depth[cur]:
+        while pending < len(subgoals) and depth[int(subgoals[pending])] >= depth[cur]:
             pending += 1
-        next_subgoal = bg.rc(subgoals[pending] if pending < len(subgoals) else start)
+        next_subgoal = bg.rc(int(subgoals[pending]) if pending < len(subgoals) else start)
         best, best_f = -1, math.inf
         for nb in bg.neighbours(cur):
             if depth[nb] != depth[cur] - 1 or (blocked and _edge(cur, nb) in blocked):
@@ -292,7 +298,7 @@ def lumped_cell_removal(bg: BigCellGrid, members: bytearray, start: int, goal: i
             if f < best_f:
                 best, best_f = nb, f
         cur = best
-        if pending < len(subgoals) and cur == subgoals[pending]:
+        if pending < len(subgoals) and cur == int(subgoals[pending]):
             current_subgoal = bg.rc(cur)
         back.append(cur)
     back.reverse()
