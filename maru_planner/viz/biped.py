@@ -64,16 +64,17 @@ def draw_path(ax, path, robot, colour, label, every: int = 1) -> None:
 
 
 def draw_scene_figure(world, m, plans: dict, title: str = ""):
-    """3-D scene | 2-D map + track | 2-D map + virtual wall."""
-    fig = plt.figure(figsize=(17, 5))
-    ax3 = fig.add_subplot(1, 3, 1, projection="3d")
+    """3-D scene | one 2-D map with the path per entry of ``plans`` (id -> BasePlanResult)."""
+    cols = 1 + len(plans)
+    fig = plt.figure(figsize=(5.7 * cols, 5))
+    ax3 = fig.add_subplot(1, cols, 1, projection="3d")
     draw_scene_3d(ax3, world)
     ax3.set_title("3-D scene (colour = mapping class)", fontsize=9)
     handles = [plt.Rectangle((0, 0), 1, 1, color=c) for c in CLASS_COLOURS.values()]
     ax3.legend(handles, list(CLASS_COLOURS), fontsize=7, loc="upper left")
     colours = {"biped_track": "tab:green", "biped_wall": "tab:red"}
     for i, (name, plan) in enumerate(plans.items()):
-        ax = fig.add_subplot(1, 3, 2 + i)
+        ax = fig.add_subplot(1, cols, 2 + i)
         draw_map_2d(ax, m)
         track = plan.layers.get("track_edges")
         if track is not None and len(track):
@@ -96,3 +97,11 @@ def save_scene_png(path, *args, **kwargs) -> None:
     fig = draw_scene_figure(*args, **kwargs)
     fig.savefig(path, dpi=100)
     plt.close(fig)
+
+
+def save_result_png(path, result, planner_id: str) -> None:
+    """Picture of one biped result planned on a 3-D world (``result.layers`` holds the world and its map)."""
+    world, m = result.layers.get("world"), result.layers.get("map")
+    if world is None or m is None:
+        raise ValueError("the result carries no 3-D world (plan with --world)")
+    save_scene_png(path, world, m, {planner_id: result}, f"{world.name}: {planner_id} {result.status}")

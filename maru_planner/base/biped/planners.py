@@ -103,3 +103,14 @@ def biped_track(footprint=None, **params) -> BipedGridPlanner:
 
 def biped_wall(footprint=None, **params) -> BipedGridPlanner:
     return BipedGridPlanner("wall", footprint, **params)
+
+
+def world_defaults(world_path, start=None, goal=None):
+    """For ``maru-base-plan --world``: (start, goal, resolved world path); start/goal default to the world's."""
+    path = resolve_world_path(world_path)
+    world = load_world(path)
+    start = start if start is not None else world.start
+    goal = goal if goal is not None else world.goal
+    if start is None or goal is None:
+        raise ValueError(f"{path}: give --start/--goal, the world has none")
+    return tuple(start), tuple(goal), str(path)
