@@ -420,7 +420,7 @@ def test_clock_mode_watchdog_stops_the_base_when_scans_stop(node_process, rclpy_
     from maru_planner.ros import reactive_conversions as conv
 
     params = reactive_params_file(tmp_path, scan_reliability="reliable", use_message_stamps=False,
-                                  stale_scan_timeout=0.4)
+                                  stale_scan_timeout=2.0)
     process = node_process(NODE_MODULE, ["--ros-args", "-r", "__ns:=/clock_mode", "--params-file", str(params)])
     spinning = SpinningNode("clock_mode_client")
     try:
@@ -430,6 +430,7 @@ def test_clock_mode_watchdog_stops_the_base_when_scans_stop(node_process, rclpy_
         now = spinning.node.get_clock().now().nanoseconds / 1e9
         moving = client.step(_odom((0.0, 0.0, 0.0), now), synthetic_scan(now, [OBSTACLE]))
         assert moving.linear.x > 0.0, "a fresh scan on the node clock gets the base moving"
+        assert client.plain_twists_end_with([moving])
         moving_count = client.twist_count()
         # no more scans: the watchdog (not a scan) must send a zero Twist
         assert spinning.wait_for(lambda: client.twist_count() > moving_count, timeout=20), process.log()[-2000:]
