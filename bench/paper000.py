@@ -177,7 +177,7 @@ def revalidation_cost(robot, checker, scene, name: str, resolution: float, nodes
     t0 = time.monotonic()
     roadmap.build(nodes, time.monotonic() + 600)
     build = time.monotonic() - t0
-    _status, path = roadmap.query(np.asarray(prob.start), np.asarray(prob.goal), 10.0)
+    _mode, path = roadmap.query(np.asarray(prob.start), np.asarray(prob.goal), 10.0)
     moved = "box" if "box" in scene else next(iter(scene.obstacles))
     pose = scene.obstacles[moved].pose.copy()
     pose[1, 3] += 0.05

@@ -248,3 +248,18 @@ def test_concurrent_plans_from_several_threads():
     assert len(results) == 4 and all(r.success for r in results.values())
     again = mp.plan(request(planner_id="RCRRT", seed=1))
     assert np.array_equal(again.path, results[1].path)
+
+
+def test_roadmap_query_phase_runs_on_the_graph_and_grows_only_when_needed():
+    from maru_planner.planning.roadmap import Roadmap
+
+    gs = GroupSpace(["x", "y"], [0, 1], [0, 0], [1, 1], [0.5, 0.5])
+    roadmap = Roadmap(gs, maze_checker(), 0.01)
+    grown = roadmap.query(np.array([0.05, 0.05]), np.array([0.95, 0.95]), 2.0)  # empty roadmap: OMPL grows it
+    assert grown[0] == "grow" and grown[1] is not None
+    roadmap.build(300, 1e18)
+    size = roadmap.milestones
+    mode, path = roadmap.query(np.array([0.1, 0.1]), np.array([0.9, 0.9]), 2.0)
+    assert mode == "roadmap" and roadmap.milestones == size  # answered from the graph, nothing added
+    assert np.allclose(path[0], [0.1, 0.1]) and np.allclose(path[-1], [0.9, 0.9])
+    assert roadmap.edges.path_valid(path)

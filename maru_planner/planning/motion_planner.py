@@ -348,7 +348,7 @@ class MotionPlanner:
         if seconds <= 0:
             return None
         with OMPL_LOCK:
-            _status, path = roadmap.query(start, goal, seconds)
+            _mode, path = roadmap.query(start, goal, seconds)
         stats.nodes, stats.edges = roadmap.milestones, roadmap.edge_count
         return path
 

@@ -17,6 +17,9 @@ from dataclasses import dataclass
 import numpy as np
 from ompl import base as ob
 from ompl import geometric as og
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import connected_components, dijkstra
+from scipy.spatial import cKDTree
 
 from maru_planner.planning.space import (
     BatchedMotionValidator,
@@ -60,6 +63,7 @@ class Roadmap:
         self.scene_epoch = -1
         self.build_time = 0.0
         self.queries = 0
+        self._graph_cache = None
 
     @property
     def milestones(self) -> int:
@@ -83,16 +87,73 @@ class Roadmap:
         return self.build_time
 
     def query(self, start: np.ndarray, goal: np.ndarray, seconds: float):
-        """Solve start→goal on the roadmap (it may keep growing while searching). Returns (status, path|None)."""
+        """Solve start→goal on the roadmap. Returns (mode, path | None).
+
+        First the query phase on the roadmap as it is (:meth:`query_graph`); if start and goal
+        cannot be attached to one connected component, OMPL's ``PRM.solve``, which grows the
+        roadmap until they are connected or time runs out.
+        """
+        self.queries += 1
+        path = self.query_graph(start, goal)
+        if path is not None:
+            return "roadmap", path
+        return "grow", self._solve_ompl(start, goal, seconds)
+
+    def _solve_ompl(self, start: np.ndarray, goal: np.ndarray, seconds: float):
         self.planner.clearQuery()
         self.ss.getProblemDefinition().clearSolutionPaths()
         self.ss.setStartAndGoalStates(self.gs.to_state(start), self.gs.to_state(goal))
-        status = self.ss.solve(ob.timedPlannerTerminationCondition(max(seconds, 1e-3)))
-        self.queries += 1
+        self.ss.solve(ob.timedPlannerTerminationCondition(max(seconds, 1e-3)))
         if not self.ss.haveExactSolutionPath():
-            return status, None
+            return None
         states = self.ss.getSolutionPath().getStates()
-        return status, np.array([self.gs.to_array(s) for s in states])
+        return np.array([self.gs.to_array(s) for s in states])
+
+    def _search_graph(self):
+        """Vertices, k-d tree, sparse edge-length graph and components of the roadmap (cached per size)."""
+        key = (self.milestones, self.edge_count)
+        if self._graph_cache is None or self._graph_cache[0] != key:
+            verts, edges = self.graph()
+            n = len(verts)
+            lengths = np.linalg.norm(verts[edges[:, 0]] - verts[edges[:, 1]], axis=1) if len(edges) else np.zeros(0)
+            adj = csr_matrix((lengths, (edges[:, 0], edges[:, 1])), shape=(n, n)) if n else None
+            _, comp = connected_components(adj, directed=False) if n else (0, np.zeros(0, int))
+            tree = cKDTree(verts) if n else None
+            self._graph_cache = (key, verts, adj, comp, tree)
+        return self._graph_cache[1:]
+
+    def query_graph(self, start: np.ndarray, goal: np.ndarray, candidates: int = 8):
+        """PRM query phase: attach start and goal to their nearest reachable milestones of one
+        component (batched edge checks, nearest first) and run Dijkstra on the roadmap."""
+        verts, adj, comp, tree = self._search_graph()
+        if tree is None or len(verts) < 2:
+            return None
+        k = min(candidates, len(verts))
+        s_near = np.atleast_1d(tree.query(start, k=k)[1])
+        g_near = np.atleast_1d(tree.query(goal, k=k)[1])
+        s_ok: dict[int, bool] = {}
+        g_ok: dict[int, bool] = {}
+        for a in s_near:  # nearest pairs first; each edge is checked at most once
+            for b in g_near:
+                if comp[a] != comp[b]:
+                    continue
+                if a not in s_ok:
+                    s_ok[a] = self.edges.edge_valid(start, verts[a])
+                if not s_ok[a]:
+                    break
+                if b not in g_ok:
+                    g_ok[b] = self.edges.edge_valid(verts[b], goal)
+                if g_ok[b]:
+                    return self._shortest(verts, adj, int(a), int(b), start, goal)
+        return None
+
+    @staticmethod
+    def _shortest(verts, adj, a: int, b: int, start, goal):
+        _, pred = dijkstra(adj, directed=False, indices=a, return_predecessors=True)
+        chain = [b]
+        while chain[-1] != a:
+            chain.append(int(pred[chain[-1]]))
+        return np.vstack([start, verts[chain[::-1]], goal])
 
     def graph(self):
         """(vertices as an (n, dim) array, undirected edges as an (m, 2) index array)."""
