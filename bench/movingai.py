@@ -1,8 +1,8 @@
 """MovingAI grid benchmark: our 2-D A* (JPS, no corner cutting) beside pyastar2d, pathfinding, python-motion-planning.
 
 Every one of our paths is scored against the scenario's optimal length (the
-tolerance is half a unit of the last printed digit -- the dao/random files give
-~6 significant digits, room/maze/street 8 decimals -- or 1e-6 relative,
+tolerance is one unit of the last printed digit -- the dao/random files give
+6 significant digits, truncated, room/maze/street 8 decimals -- or 1e-6 relative,
 whichever is larger: the long maze lengths carry float rounding of the
 generator in their 8th digit). Peers run on the same
 queries in the same run: pyastar2d (C++; unit-cost diagonals and corner
@@ -64,9 +64,10 @@ def load_scenarios(path: Path) -> list[dict]:
             "start": (int(parts[5]), int(parts[4])),  # (row, col) = (y, x)
             "goal": (int(parts[7]), int(parts[6])),
             "optimal": float(length_text),
-            # the printed precision, or 1e-6 relative (the long maze/room lengths were summed in
-            # floating point by the generator: they differ from the exact sums in the 7th-8th digit)
-            "tol": max(0.5 * 10.0 ** -decimals, 1e-6 * float(length_text)) + 1e-9,
+            # one unit of the last printed digit (dao/random print 6 significant digits, truncated:
+            # 235.764 for 235.76450) or 1e-6 relative (the long maze/room lengths were summed in
+            # floating point by the generator and differ from the exact sums in the 7th-8th digit)
+            "tol": max(10.0 ** -decimals, 1e-6 * float(length_text)) + 1e-9,
         })
     return out
 

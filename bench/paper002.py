@@ -51,12 +51,15 @@ def run(repeats: int) -> dict:
         planners = {"mspp": MultiStagePlanner(fp), "mspp_local": MultiStagePlanner(fp, local=True),
                     "full": SE2AStarPlanner(fp)}
         times = {label: [] for label in planners}
-        results = {}
-        for _ in range(repeats):  # interleaved, so load changes hit every planner alike
-            for label, planner in planners.items():
+        results, excess = {}, []
+        for rep in range(repeats):  # interleaved, order alternating, so load and cache effects hit all alike
+            for label, planner in (list(planners.items()) if rep % 2 == 0 else list(planners.items())[::-1]):
                 t = time.perf_counter()
                 results[label] = planner.plan(grid, prob["start"], prob["goal"])
                 times[label].append(time.perf_counter() - t)
+            pre = sum(st.get("time", 0.0) for st in results["mspp"].stats["stages"] if st["name"] in ("ECA", "BAA"))
+            excess.append(times["mspp"][-1] - times["full"][-1] - pre)
+        row["mspp_excess_median"] = statistics.median(excess)
         for label, result in results.items():
             row[label] = {
                 "time": statistics.median(times[label]), "time_min": min(times[label]), "status": result.status,
@@ -68,7 +71,8 @@ def run(repeats: int) -> dict:
         m = row["mspp"]
         pre = sum(s["time"] for s in m["stages"] if s["name"] in ("ECA", "BAA"))
         row["mspp_pre_stages_time"] = pre
-        row["mspp_overhead_ok"] = m["time"] <= row["full"]["time"] + pre + 2e-3  # 2 ms timer/noise allowance
+        # paired per repeat: MSPP time - full A* time - MSPP's ECA+BAA time, median over repeats
+        row["mspp_overhead_ok"] = row["mspp_excess_median"] <= 0.5e-3  # 0.5 ms timer/bookkeeping allowance
         out[name] = row
         print(f"{name}: mspp {m['time'] * 1e3:.2f} ms ({m['deciding_stage']}), "
               f"local {row['mspp_local']['time'] * 1e3:.2f} ms, full {row['full']['time'] * 1e3:.2f} ms",
@@ -79,7 +83,8 @@ def run(repeats: int) -> dict:
 def write_markdown(rows: dict) -> str:
     lines = [
         "# Paper 002: MSPP vs full SE(2) A* (Table I + house)", "",
-        "Ours: 0.1 m cells, 32 headings, median of repeated runs. Collision checks = C-space look-ups during the",
+        "Ours: 0.1 m cells, 32 headings, median of repeated interleaved runs (machine shared with other jobs).",
+        "Collision checks = C-space look-ups during the",
         "searches + one per cell for the ECA labelling + 8 per 2-D A* expansion. Paper: 60x40x31 grid, 2007 PC.", "",
         "| problem | decided by (ours / paper) | MSPP ms | MSPP checks | MSPP-local ms | full A* ms | full checks "
         "| paper MSPP s | paper full A* s | paper checks MSPP / full |",
@@ -105,9 +110,9 @@ def write_markdown(rows: dict) -> str:
         imp = rows["impossible"]["mspp"]["time"]
         lines.append(f"- impossible decided in <= 50 ms: {'met' if imp <= 0.05 else 'MISSED'} ({imp * 1e3:.2f} ms)")
     ok = all(r["mspp_overhead_ok"] for r in rows.values())
-    lines.append(f"- MSPP never slower than full A* by more than ECA+BAA: {'met' if ok else 'MISSED'} ("
-                 + ", ".join(f"{n}: {r['mspp']['time'] * 1e3:.2f} <= {r['full']['time'] * 1e3:.2f} + "
-                             f"{r['mspp_pre_stages_time'] * 1e3:.2f}" for n, r in rows.items()) + ")")
+    lines.append(f"- MSPP never slower than full A* by more than ECA+BAA: {'met' if ok else 'MISSED'} (median over "
+                 "interleaved repeats of MSPP - full - (ECA+BAA), ms: "
+                 + ", ".join(f"{n}: {r['mspp_excess_median'] * 1e3:+.2f}" for n, r in rows.items()) + ")")
     lines += ["", "Beyond the paper (full search only around the narrow passages, BAA elsewhere):", ""]
     for name in ("medium", "hard", "house"):
         if name in rows:
@@ -143,10 +148,10 @@ def picture(rows: dict, path: Path):
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--quick", action="store_true", help="3 repeats instead of 7")
+    parser.add_argument("--quick", action="store_true", help="5 repeats instead of 15")
     parser.add_argument("--repeats", type=int)
     args = parser.parse_args(argv)
-    rows = run(args.repeats or (3 if args.quick else 7))
+    rows = run(args.repeats or (5 if args.quick else 15))
     RESULTS.mkdir(parents=True, exist_ok=True)
     md = write_markdown(rows)
     (RESULTS / "paper002.md").write_text(md)

@@ -187,7 +187,7 @@ class MultiStagePlanner(SE2AStarPlanner):
 
     def _solve_hard_runs(self, grid, guide, baa, sk, gk, stage, layers, deadline):
         """SE(2) A* in a window around each hard run; None when a run cannot be solved locally."""
-        runs = self._hard_runs(guide, baa)
+        runs = self._merge_runs(self._hard_runs(guide, baa), guide, grid)
         pieces, last = [], 0
         windows = []
         for a, b in runs:
@@ -208,6 +208,21 @@ class MultiStagePlanner(SE2AStarPlanner):
         pieces.append(("easy", guide[last:]))
         layers["windows"] = np.array(windows, dtype=int).reshape(-1, 4)
         return pieces
+
+    def _merge_runs(self, runs, guide, grid):
+        """Join consecutive hard runs whose windows overlap: one search instead of two over the same cells."""
+        margin = int(math.ceil(self.local_margin / grid.resolution))
+        merged: list[tuple[int, int]] = []
+        for a, b in runs:
+            if merged:
+                pa, pb = merged[-1]
+                r0, c0, r1, c1 = self._window(guide[pa : pb + 1], margin, grid.shape)
+                q0, d0, q1, d1 = self._window(guide[a : b + 1], margin, grid.shape)
+                if r0 < q1 and q0 < r1 and c0 < d1 and d0 < c1:
+                    merged[-1] = (pa, b)
+                    continue
+            merged.append((a, b))
+        return merged
 
     @staticmethod
     def _window(cells, margin, shape):

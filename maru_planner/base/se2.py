@@ -111,7 +111,12 @@ def footprint_cells(footprint, theta: float, resolution: float) -> np.ndarray:
 
 def footprint_collides(occupied: np.ndarray, footprint, resolution: float, row: int, col: int, theta: float) -> bool:
     """Does the footprint at cell (row, col), heading theta (grid frame) cover an occupied cell centre?"""
-    offsets = footprint_cells(footprint, theta, resolution) + np.array([row, col])
+    return offsets_collide(occupied, footprint_cells(footprint, theta, resolution), row, col)
+
+
+def offsets_collide(occupied: np.ndarray, offsets: np.ndarray, row: int, col: int) -> bool:
+    """Is any cell (row + dr, col + dc) inside the map occupied?"""
+    offsets = offsets + np.array([row, col])
     h, w = occupied.shape
     keep = (offsets[:, 0] >= 0) & (offsets[:, 0] < h) & (offsets[:, 1] >= 0) & (offsets[:, 1] < w)
     offsets = offsets[keep]
@@ -341,8 +346,7 @@ class SE2AStarPlanner:
         for name, pose in (("start", start), ("goal", goal)):
             cell = common.pose_cell(grid, pose, name)
             k = heading_index(grid.heading_to_grid(pose[2]), self.headings)
-            theta = 2 * math.pi * k / self.headings
-            if footprint_collides(grid.occupied, self.footprint, grid.resolution, cell[0], cell[1], theta):
+            if offsets_collide(grid.occupied, self.offsets(grid.resolution)[k], cell[0], cell[1]):
                 raise common.occupied_error(name, pose, "the footprint covers an occupied cell")
             cells.append((cell, k))
         return cells[0][0], cells[1][0], cells[0][1], cells[1][1]
