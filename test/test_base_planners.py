@@ -209,3 +209,16 @@ def test_mspp_local_falls_back_to_full_search_when_windows_fail(monkeypatch):
     assert [s["name"] for s in result.stats["stages"]] == ["ECA", "BAA", "local", "full"]
     assert "fallback" in result.stats["stages"][2]
     assert_valid_path(grid, prob["footprint"], result.path, prob["start"], prob["goal"])
+
+
+def test_se2_heap_grows_from_a_tiny_capacity():
+    from maru_planner.base.se2 import search_layers
+
+    grid, prob = SCENES["hard"]
+    planner = SE2AStarPlanner(prob["footprint"])
+    layers = cspace_layers(grid.occupied, prob["footprint"], grid.resolution, 32)
+    start, goal = grid.world_to_cell(*prob["start"][:2]), grid.world_to_cell(*prob["goal"][:2])
+    args = (layers, [(0, *start)], goal, 0, planner.rot_cost_cells(grid.resolution))
+    small, big = search_layers(*args, initial_capacity=4), search_layers(*args)
+    assert small["status"] == big["status"] == 0
+    assert small["cost"] == pytest.approx(big["cost"]) and np.array_equal(small["states"], big["states"])

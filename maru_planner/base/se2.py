@@ -169,7 +169,17 @@ else:  # pragma: no cover
 
 
 @_njit
-def _se2_kernel(blocked, starts, gr, gc, gk, rot_cost, deadline, max_expansions):
+def _grow(keys, gs, ids):
+    n = keys.shape[0]
+    k2, g2, i2 = np.empty(2 * n), np.empty(2 * n), np.empty(2 * n, dtype=np.int64)
+    k2[:n] = keys
+    g2[:n] = gs
+    i2[:n] = ids
+    return k2, g2, i2
+
+
+@_njit
+def _se2_kernel(blocked, starts, gr, gc, gk, rot_cost, deadline, max_expansions, initial_capacity):
     """A* over (k, r, c) on padded layers ``blocked`` (K, H, W; border blocked).
 
     ``starts``: (m, 3) start states (k, r, c) at cost 0; ``gk < 0`` accepts any
@@ -183,7 +193,7 @@ def _se2_kernel(blocked, starts, gr, gc, gk, rot_cost, deadline, max_expansions)
     g_best = np.full(n, np.inf)
     parent = np.full(n, -1, dtype=np.int64)
     closed = np.zeros(n, dtype=np.bool_)
-    capacity = 10 * n + starts.shape[0] + 1
+    capacity = initial_capacity + starts.shape[0] + 1  # grows on demand (lazy duplicates)
     keys = np.empty(capacity)
     gs = np.empty(capacity)
     ids = np.empty(capacity, dtype=np.int64)
@@ -260,6 +270,8 @@ def _se2_kernel(blocked, starts, gr, gc, gk, rot_cost, deadline, max_expansions)
                 if gk >= 0:
                     dk = abs(nk - gk)
                     h += rot_cost * min(dk, num_k - dk)
+                if size == keys.shape[0]:
+                    keys, gs, ids = _grow(keys, gs, ids)
                 size = _heap_push(keys, gs, ids, size, ng + h, ng, nb)
     return parent, -1, 0.0, expansions, checks, 1
 
@@ -276,6 +288,7 @@ def search_layers(
     *,
     time_limit: float = math.inf,
     max_expansions: int = 2**62,
+    initial_capacity: int | None = None,
 ) -> dict:
     """Run the SE(2) A* on (K, H, W) C-space layers (unpadded; outside = blocked).
 
@@ -290,6 +303,7 @@ def search_layers(
     parent, goal, cost, expansions, checks, status = _se2_kernel(
         padded, starts, int(goal_cell[0]) + 1, int(goal_cell[1]) + 1, int(goal_k), float(rot_cost_cells),
         float(deadline), int(max_expansions),
+        int(initial_capacity if initial_capacity is not None else min(10 * padded.size, 1 << 20)),
     )
     states = np.zeros((0, 3), dtype=np.int64)
     if status == SEARCH_FOUND:
