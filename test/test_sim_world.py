@@ -161,3 +161,17 @@ def test_cli_writes_json_and_png(tmp_path):
     assert set(data["update_ms"]) == {"median", "p99"}
     assert png.stat().st_size > 1000
     assert main(["--world", str(tmp_path / "nope.yaml"), "--quiet"]) == 2
+
+
+def test_fan_caster_matches_brute_force_caster():
+    from maru_planner.sim.geometry import fan_vs_circles
+
+    rng = np.random.default_rng(5)
+    circles = np.column_stack([rng.uniform(-6, 6, 300), rng.uniform(-6, 6, 300), rng.uniform(0.05, 0.4, 300)])
+    circles = circles[np.hypot(circles[:, 0], circles[:, 1]) > circles[:, 2] + 0.01]
+    angle0, inc, count = -2.356, math.radians(0.375), 721
+    a = angle0 + inc * np.arange(count)
+    dirs = np.stack([np.cos(a), np.sin(a)], axis=1)
+    brute = rays_vs_circles(np.zeros(2), dirs, circles, 10.0)
+    fan = fan_vs_circles(np.zeros(2), angle0, inc, count, circles, 10.0)
+    assert np.allclose(np.where(np.isinf(brute), -1, brute), np.where(np.isinf(fan), -1, fan))

@@ -34,6 +34,7 @@ class StripParams:
     max_angular: float = 1.0
     k_angular: float = 2.0  # w = k_angular * heading error
     lookahead: float = 0.6  # m along the strip to the base target
+    target_margin: float = 0.05  # m: the straight drive to the target must clear scan points by d_r + this
     beam_window: tuple[int, int] | None = (31, 331)  # obstacle_check window: the paper's central 150 deg
     force_beam_window: tuple[int, int] | None = None  # beams used for the forces (None = every valid beam)
     avoidance_range: float = 1.5  # obstacle_check threshold (AVOIDANCE_RANGE)
@@ -116,7 +117,8 @@ class ElasticStripController:
         self.params = params or StripParams()
         p = self.params
         self.strip = ElasticStrip(p.num_vias, p.via_spacing, p.k_c, p.k_r, p.d0, p.strip, p.iterations,
-                                  p.max_via_step, p.head_on_ratio, p.suppress_tangential)
+                                  p.max_via_step, p.head_on_ratio, p.suppress_tangential,
+                                  min_gap=2.0 * p.robot_radius)
         self.via = ViaTarget(reach=p.via_reach, blocked_radius=p.robot_radius)
         self.arm = None
         if p.arm_enabled:
@@ -129,6 +131,7 @@ class ElasticStripController:
         self._needs_start = True
         self.updates = 0
         self._pairs_seen = 0
+        self._blocked = False
         self.last_work: dict = {}
 
     # -- inputs -------------------------------------------------------------------------------
@@ -192,6 +195,7 @@ class ElasticStripController:
         goal_dir = to_goal / max(dist_goal, 1e-9)
 
         look_idx, look_point = self.strip.lookahead(p.lookahead)
+        self._blocked = False
         look_idx, look_point = self._clear_target(position, strip, look_idx, points_world)
         event = obstacle_check(scan, p.avoidance_range, p.beam_window) is not None
         if p.use_via_events:
@@ -232,16 +236,18 @@ class ElasticStripController:
         rel = points - start
         s = np.clip(rel @ seg / length2, 0.0, 1.0) if length2 > 1e-12 else np.zeros(len(points))
         closest = start + s[:, None] * seg
-        return bool(np.min(np.hypot(*(points - closest).T)) > self.params.robot_radius)
+        clearance = self.params.robot_radius + self.params.target_margin
+        return bool(np.min(np.hypot(*(points - closest).T)) > clearance)
 
     def _clear_target(self, position, strip, look_idx, points):
         """The farthest via up to the lookahead one whose straight segment from the robot is clear (else via 1)."""
         if len(points) == 0 or look_idx <= 1:
             return look_idx, strip[look_idx].copy()
         near = points[np.hypot(*(points - position).T) < self.params.lookahead + 2 * self.params.robot_radius]
-        for idx in range(look_idx, 1, -1):
+        for idx in range(look_idx, 0, -1):
             if self._segment_clear(position, strip[idx], near):
                 return idx, strip[idx].copy()
+        self._blocked = True
         return 1, strip[1].copy()
 
     def _robot_force(self, position: np.ndarray, target: np.ndarray, points: np.ndarray) -> np.ndarray:
@@ -253,7 +259,7 @@ class ElasticStripController:
         tangent = direction / norm if norm > 1e-9 else np.array([1.0, 0.0])
         p = self.params
         return external_forces(position[None, :], tangent[None, :], points, p.d0, p.k_r, p.strip,
-                               p.head_on_ratio)[0]
+                               p.head_on_ratio, min_gap=2.0 * p.robot_radius)[0]
 
     def _command(self, pose, target, robot_force, dist_goal, points_robot):
         """Eq. 43-45: Δ = (target - current) + F, heading atan2(Δ); then a unicycle law within limits."""
@@ -266,8 +272,8 @@ class ElasticStripController:
         w = p.k_angular * err
         v = p.max_linear * max(math.cos(err), 0.0) ** 2
         v *= min(1.0, dist_goal / p.slow_radius) if p.slow_radius > 0 else 1.0
-        if abs(err) > math.pi / 2:
-            v = 0.0
+        if abs(err) > math.pi / 2 or (self._blocked and not self.via.active):
+            v = 0.0  # turn in place: behind us, or no straight drive along the strip is clear
         if p.stop_distance > 0 and len(points_robot):
             ahead = (points_robot[:, 0] > 0) & (np.abs(points_robot[:, 1]) < p.robot_radius)
             if np.any(np.hypot(*points_robot[ahead].T) < p.robot_radius + p.stop_distance):

@@ -88,7 +88,8 @@ def modified_external_forces(
     d0: float,
     k_r: float,
     head_on_ratio: float = 0.25,
-    prefer: float = 1.0,
+    prefer: float | np.ndarray = 0.0,
+    min_gap: float = 0.0,
 ) -> np.ndarray:
     """Eq. 41: ef(L) + ef(R), the repulsions of the nearest left and the nearest right obstacle point.
 
@@ -96,11 +97,15 @@ def modified_external_forces(
     sides push and their sum lies along the strip (its sideways part smaller
     than ``head_on_ratio`` of the along-strip part), the left and right
     points straddle the strip and their sideways pushes cancel - the
-    situation where the plain form drives into the obstacle. The via is then
-    pushed sideways, with the magnitude of the stronger side force, towards
-    the side holding less obstacle within d0 (points weighted by d0 - d);
-    on a tie towards ``prefer`` (+1 left, -1 right: the way the strip already
-    bends). ``head_on_ratio=0`` disables the rule.
+    situation where the plain form drives into the obstacle. The same holds
+    when the two points are closer together (d_L + d_R) than ``min_gap`` (the
+    robot's diameter): a slot too narrow to pass, where the two pushes also
+    cancel and would centre the via in it. The via is then
+    pushed sideways, with the magnitude of the stronger side force. The side:
+    ``prefer`` when it is non-zero (per via; the strip passes the side a via
+    has already moved to, so neighbouring vias do not split around an
+    obstacle), else the side holding less obstacle within d0 (points weighted
+    by d0 - d), else left. ``head_on_ratio=0`` disables the rule.
     """
     if len(points) == 0 or len(vias) == 0:
         return np.zeros((len(vias), 2))
@@ -118,13 +123,16 @@ def modified_external_forces(
     lateral = np.einsum("ij,ij->i", forces, normals)
     mag_l = np.linalg.norm(f_l, axis=1)
     mag_r = np.linalg.norm(f_r, axis=1)
-    head_on = (mag_l > 0) & (mag_r > 0) & (np.abs(lateral) < head_on_ratio * np.abs(axial))
+    both = (mag_l > 0) & (mag_r > 0)
+    head_on = both & ((np.abs(lateral) < head_on_ratio * np.abs(axial)) | (d_l + d_r < min_gap))
     if np.any(head_on):
         weight = np.clip(d0 - dist[head_on], 0.0, None)
         # side > 0: point on the left; the signed lateral "mass" of obstacle within d0 of the via
         mass = np.sum(weight * np.sign(side[head_on]), axis=1)
         total = np.sum(weight, axis=1)
-        sign = np.where(np.abs(mass) <= 0.1 * total, prefer, -np.sign(mass))
+        by_mass = np.where(np.abs(mass) <= 0.1 * total, 1.0, -np.sign(mass))
+        chosen = np.broadcast_to(np.asarray(prefer, dtype=float), (len(vias),))[head_on]
+        sign = np.where(chosen != 0.0, np.sign(chosen), by_mass)
         push = np.maximum(mag_l, mag_r)[head_on]
         forces[head_on] += (sign * push)[:, None] * normals[head_on]
     return forces
@@ -138,13 +146,14 @@ def external_forces(
     k_r: float,
     strip: str = "modified",
     head_on_ratio: float = 0.25,
-    prefer: float = 1.0,
+    prefer: float | np.ndarray = 0.0,
+    min_gap: float = 0.0,
 ) -> np.ndarray:
     """Dispatch to the plain (eq. 39) or modified (eq. 41) external force."""
     if strip == "plain":
         return plain_external_forces(vias, points, d0, k_r)
     if strip == "modified":
-        return modified_external_forces(vias, tangents, points, d0, k_r, head_on_ratio, prefer)
+        return modified_external_forces(vias, tangents, points, d0, k_r, head_on_ratio, prefer, min_gap)
     raise ValueError(f"strip must be 'modified' or 'plain', got {strip!r}")
 
 
@@ -171,10 +180,8 @@ def remove_tangential(forces: np.ndarray, tangents: np.ndarray) -> np.ndarray:
     return forces - along[:, None] * tangents
 
 
-def side_preference(vias: np.ndarray) -> float:
-    """+1 if the strip bulges left of its chord (or is straight), -1 if it bulges right."""
-    if len(vias) < 3:
-        return 1.0
-    chord = vias[-1] - vias[0]
-    bulge = np.sum(chord[0] * (vias[1:-1, 1] - vias[0, 1]) - chord[1] * (vias[1:-1, 0] - vias[0, 0]))
-    return -1.0 if bulge < -1e-6 else 1.0
+def side_preference(vias: np.ndarray, planned: np.ndarray, tangents: np.ndarray, threshold: float) -> np.ndarray:
+    """Per via: +1/-1 if it has moved more than ``threshold`` left/right of its planned point, else 0."""
+    normals = np.stack([-tangents[:, 1], tangents[:, 0]], axis=1)
+    lateral = np.einsum("ij,ij->i", vias - planned, normals)
+    return np.where(np.abs(lateral) > threshold, np.sign(lateral), 0.0)

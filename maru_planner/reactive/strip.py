@@ -40,7 +40,7 @@ class ElasticStrip:
 
     def __init__(self, num_vias: int, spacing: float, k_c: float, k_r: float, d0: float,
                  strip: str = "modified", iterations: int = 2, max_step: float = 0.2,
-                 head_on_ratio: float = 0.25, suppress_tangential: bool = True):
+                 head_on_ratio: float = 0.25, suppress_tangential: bool = True, min_gap: float = 0.0):
         if num_vias < 3:
             raise ValueError(f"num_vias must be >= 3, got {num_vias}")
         self.num_vias = num_vias
@@ -51,6 +51,8 @@ class ElasticStrip:
         self.max_step = max_step
         self.head_on_ratio = head_on_ratio
         self.suppress_tangential = suppress_tangential
+        self.min_gap = min_gap
+        self.side_lock = 0.1  # m a via must have moved sideways before it keeps to that side (head-on rule)
         self._ref = np.zeros((0, 2))
         self._vias = np.zeros((num_vias, 2))
         self._ref_index = np.zeros(num_vias, dtype=int)
@@ -116,7 +118,10 @@ class ElasticStrip:
                 break
             v1, v2 = self._vias[1], self._vias[2]
             reached = np.hypot(*(v1 - p)) < 0.5 * self.spacing
-            passed = float(np.dot(p - v1, v2 - v1)) > 0.0
+            # passed along the strip, or along the planned path (a strip folded behind the robot)
+            i1 = self._ref_index[1]
+            planned_dir = self._ref[min(i1 + 1, len(self._ref) - 1)] - self._ref[max(i1 - 1, 0)]
+            passed = float(np.dot(p - v1, v2 - v1)) > 0.0 or float(np.dot(p - v1, planned_dir)) > 0.0
             if not (reached or passed):
                 break
             self._shift()
@@ -129,6 +134,7 @@ class ElasticStrip:
         if k < 2:
             return forces
         movable_last = not self._last_is_goal()
+        points = self._near_points(points)
         for _ in range(self.iterations):
             vias = self._vias[:k]
             forces = internal_forces(vias, self.k_c)
@@ -136,8 +142,9 @@ class ElasticStrip:
                 forces[-1] = self.k_c * (self._ref[self._ref_index[k - 1]] - vias[-1])
             if len(points):
                 tangents = unit_tangents(vias)
+                prefer = side_preference(vias, self._ref[self._ref_index[:k]], tangents, self.side_lock)
                 ext = external_forces(vias, tangents, points, self.d0, self.k_r, self.strip, self.head_on_ratio,
-                                      side_preference(vias))
+                                      prefer, self.min_gap)
                 if self.suppress_tangential:
                     ext = remove_tangential(ext, tangents)
                 forces += ext
@@ -150,6 +157,17 @@ class ElasticStrip:
             scale = np.minimum(1.0, self.max_step / np.maximum(norms, 1e-12))
             self._vias[:k] += forces * scale[:, None]
         return forces
+
+    def _near_points(self, points: np.ndarray) -> np.ndarray:
+        """Points inside the vias' bounding box grown by d0 plus the largest move this update (the rest exert
+        no force), found in O(points)."""
+        if len(points) == 0:
+            return points
+        vias = self._vias[: self._count]
+        grow = self.d0 + self.max_step * self.iterations
+        lo, hi = vias.min(axis=0) - grow, vias.max(axis=0) + grow
+        keep = (points[:, 0] >= lo[0]) & (points[:, 0] <= hi[0]) & (points[:, 1] >= lo[1]) & (points[:, 1] <= hi[1])
+        return points[keep]
 
     def lookahead(self, distance: float) -> tuple[int, np.ndarray]:
         """First via at least ``distance`` along the strip from via 0 (or the last via)."""

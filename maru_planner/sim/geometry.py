@@ -33,6 +33,45 @@ def rays_vs_circles(origin: np.ndarray, dirs: np.ndarray, circles: np.ndarray, m
     return np.minimum(out, t.min(axis=1))
 
 
+def fan_vs_circles(origin: np.ndarray, angle0: float, increment: float, count: int, circles: np.ndarray,
+                   max_range: float) -> np.ndarray:
+    """Like :func:`rays_vs_circles` for a fan of ``count`` rays at ``angle0 + k * increment`` (fan < 360 deg).
+
+    Only the beams inside each circle's angular extent are tested, so the
+    cost is O(beams + hit pairs) instead of O(beams x circles).
+    """
+    out = np.full(count, np.inf)
+    if len(circles) == 0:
+        return out
+    rel = circles[:, :2] - origin
+    dist = np.hypot(rel[:, 0], rel[:, 1])
+    radius = circles[:, 2]
+    inside = dist <= radius
+    if np.any(inside):
+        return np.zeros(count)
+    keep = dist - radius <= max_range
+    rel, dist, radius = rel[keep], dist[keep], radius[keep]
+    half_fan = 0.5 * increment * (count - 1)
+    mid = angle0 + half_fan
+    offset = (np.arctan2(rel[:, 1], rel[:, 0]) - mid + np.pi) % (2 * np.pi) - np.pi
+    half = np.arcsin(np.clip(radius / dist, 0.0, 1.0))
+    lo = np.maximum(np.ceil((offset - half + half_fan) / increment - 1e-9), 0).astype(int)
+    hi = np.minimum(np.floor((offset + half + half_fan) / increment + 1e-9), count - 1).astype(int)
+    n = np.maximum(hi - lo + 1, 0)
+    total = int(n.sum())
+    if total == 0:
+        return out
+    circle = np.repeat(np.arange(len(n)), n)
+    start = np.cumsum(n) - n
+    beam = lo[circle] + (np.arange(total) - start[circle])
+    angles = angle0 + increment * beam
+    proj = np.cos(angles) * rel[circle, 0] + np.sin(angles) * rel[circle, 1]
+    disc = radius[circle] ** 2 - (dist[circle] ** 2 - proj * proj)
+    t = np.where((disc >= 0) & (proj > 0), proj - np.sqrt(np.maximum(disc, 0.0)), np.inf)
+    np.minimum.at(out, beam, t)
+    return out
+
+
 def rays_vs_segments(origin: np.ndarray, dirs: np.ndarray, segments: np.ndarray) -> np.ndarray:
     """Distance along each unit ray (B, 2) to the first segment (M, 4: ax, ay, bx, by); inf if none."""
     out = np.full(len(dirs), np.inf)

@@ -11,10 +11,10 @@ import numpy as np
 from maru_planner.reactive.kinematics import clamp_twist, integrate_unicycle
 from maru_planner.reactive.scan import LaserScanData
 from maru_planner.sim.geometry import (
+    fan_vs_circles,
     point_in_polygon,
     points_to_segments,
     polygon_segments,
-    rays_vs_circles,
     rays_vs_segments,
     segments_intersect,
     transform,
@@ -79,7 +79,8 @@ class Simulator:
         origin = np.array([lx, ly])
         a = lth + self._beam_angles
         dirs = np.stack([np.cos(a), np.sin(a)], axis=1)
-        r = rays_vs_circles(origin, dirs, self.world.circles_at(self.time, self.mover_offset), laser.range_max)
+        r = fan_vs_circles(origin, lth + self._beam_angles[0], math.radians(laser.resolution_deg), laser.beams,
+                           self.world.circles_at(self.time, self.mover_offset), laser.range_max)
         r = np.minimum(r, rays_vs_segments(origin, dirs, self.world.segments))
         if self.world.occupancy is not None:
             r = np.minimum(r, self._rays_vs_map(origin, dirs, laser.range_max))
