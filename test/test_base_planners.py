@@ -222,3 +222,13 @@ def test_se2_heap_grows_from_a_tiny_capacity():
     small, big = search_layers(*args, initial_capacity=4), search_layers(*args)
     assert small["status"] == big["status"] == 0
     assert small["cost"] == pytest.approx(big["cost"]) and np.array_equal(small["states"], big["states"])
+
+
+def test_stamping_and_dilation_give_the_same_cspace():
+    from maru_planner.base.se2 import dilate, heading_offsets
+
+    rng = np.random.default_rng(3)
+    occ = rng.random((23, 31)) < 0.08
+    poly = np.array([[0.3, 0.0], [-0.2, 0.25], [-0.25, -0.1], [0.1, -0.2]])  # asymmetric
+    offsets = heading_offsets(poly, 0.05, 12)
+    assert np.array_equal(cspace_layers(occ, poly, 0.05, 12), np.stack([dilate(occ, o) for o in offsets]))

@@ -38,7 +38,7 @@ from maru_planner.base.se2 import (
     SEARCH_FOUND,
     SEARCH_TIMED_OUT,
     SE2AStarPlanner,
-    dilate,
+    cspace_layers,
     search_layers,
 )
 
@@ -262,7 +262,8 @@ class MultiStagePlanner(SE2AStarPlanner):
         reach = max(int(np.max(np.abs(o))) if len(o) else 0 for o in offsets)
         R0, C0 = max(r0 - reach, 0), max(c0 - reach, 0)
         crop = grid.occupied[R0 : min(r1 + reach, grid.height), C0 : min(c1 + reach, grid.width)]
-        return np.stack([dilate(crop, o)[r0 - R0 : r1 - R0, c0 - C0 : c1 - C0] for o in offsets])
+        layers = cspace_layers(crop, self.footprint, grid.resolution, self.headings, offsets)
+        return np.ascontiguousarray(layers[:, r0 - R0 : r1 - R0, c0 - C0 : c1 - C0])
 
     def _assemble(self, grid, pieces, start, goal) -> np.ndarray:
         """Concatenate easy stretches (headings interpolated) and hard SE(2) stretches."""

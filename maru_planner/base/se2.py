@@ -140,10 +140,36 @@ def heading_offsets(footprint, resolution: float, headings: int) -> list[np.ndar
 
 
 def cspace_layers(occupied: np.ndarray, footprint, resolution: float, headings: int, offsets=None) -> np.ndarray:
-    """(K, H, W) bool: configuration-space obstacles for each heading k * 2 pi / K."""
+    """(K, H, W) bool: configuration-space obstacles for each heading k * 2 pi / K.
+
+    With numba, every occupied cell stamps the (reflected) footprint of each
+    heading; otherwise one binary dilation per heading. Same result.
+    """
     occupied = np.asarray(occupied, dtype=bool)
     offsets = offsets if offsets is not None else heading_offsets(footprint, resolution, headings)
-    return np.stack([dilate(occupied, o) for o in offsets])
+    if not HAVE_NUMBA:
+        return np.stack([dilate(occupied, o) for o in offsets])
+    starts = np.cumsum([0] + [len(o) for o in offsets]).astype(np.int64)
+    flat_offsets = np.concatenate([np.asarray(o, dtype=np.int64).reshape(-1, 2) for o in offsets])
+    out = np.zeros((len(offsets),) + occupied.shape, dtype=np.bool_)
+    _stamp_kernel(np.argwhere(occupied).astype(np.int64), flat_offsets, starts, out)
+    return out
+
+
+@(numba.njit(cache=True, nogil=True) if HAVE_NUMBA else (lambda f: f))
+def _stamp_kernel(cells, offsets, starts, out):
+    """out[k, r - dr, c - dc] = True for every occupied (r, c) and offset (dr, dc) of heading k."""
+    num_k, height, width = out.shape
+    for k in range(num_k):
+        layer = out[k]
+        for j in range(starts[k], starts[k + 1]):
+            dr = offsets[j, 0]
+            dc = offsets[j, 1]
+            for i in range(cells.shape[0]):
+                r = cells[i, 0] - dr
+                c = cells[i, 1] - dc
+                if 0 <= r < height and 0 <= c < width:
+                    layer[r, c] = True
 
 
 def heading_index(theta: float, headings: int) -> int:
