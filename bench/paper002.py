@@ -119,7 +119,7 @@ def write_markdown(rows: dict) -> str:
             r = rows[name]
             lines.append(f"- {name}: MSPP {r['mspp']['time'] * 1e3:.2f} ms / {r['mspp']['expansions']} expansions "
                          f"-> local {r['mspp_local']['time'] * 1e3:.2f} ms / {r['mspp_local']['expansions']} "
-                         f"expansions (speed-up x{r["mspp"]["time"] / r["mspp_local"]["time"]:.1f}, path "
+                         f"expansions (speed-up x{r['mspp']['time'] / r['mspp_local']['time']:.1f}, path "
                          f"{r['mspp']['path_length']:.2f} m -> {r['mspp_local']['path_length']:.2f} m)")
     return "\n".join(lines) + "\n"
 
