@@ -45,11 +45,11 @@ TOPICS = {
 }
 #: (world, skip s, duration s, storage) of the bags committed under test/data/
 DEFAULT_BAGS = [
-    ("single_static", 4.0, 5.0, "sqlite3"),
-    ("goal_behind_obstacle", 4.0, 5.0, "sqlite3"),
-    ("walking_person", 3.0, 5.0, "mcap"),
-    ("multiple_static", 2.0, 6.0, "sqlite3"),
-    ("irregular_scattered", 2.0, 6.0, "mcap"),
+    ("single_static", 4.5, 4.0, "sqlite3"),
+    ("goal_behind_obstacle", 4.5, 4.0, "sqlite3"),
+    ("walking_person", 3.5, 4.0, "mcap"),
+    ("multiple_static", 2.5, 4.0, "sqlite3"),
+    ("irregular_scattered", 2.0, 4.0, "mcap"),
 ]
 
 
@@ -83,13 +83,17 @@ def _tf(pose, stamp_s: float, laser_pose) -> object:
     ])
 
 
-def record_world(world_path: Path, out: Path, *, seed: int = 0, skip: float = 0.0, duration: float = 5.0,
-                 rate: float = 10.0, storage: str = "sqlite3", params_file: Path | None = None) -> dict:
-    """Record one window of a run in ``world_path`` to the bag directory ``out``; returns a summary."""
+def record_world(world_path: Path, out: Path, *, seed: int = 0, skip: float = 0.0, duration: float = 4.0,
+                 rate: float | None = None, storage: str = "sqlite3", params_file: Path | None = None) -> dict:
+    """Record one window of a run in ``world_path`` to the bag directory ``out``; returns a summary.
+
+    ``rate``: laser ticks per second, by default the world's laser rate (the controller's steps are
+    per update, so the rate is part of the scenario).
+    """
     world = World.from_yaml(world_path)
     params = strip_params_from_config(params_file or config_path("reactive.yaml"))
     sim = Simulator(world, seed=seed)
-    dt = 1.0 / rate
+    dt = 1.0 / (rate or world.robot.laser.rate)
     goal = tuple(float(g) for g in world.robot.goal)
     _warm_up(sim, params, goal, skip, dt)
 
@@ -134,8 +138,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", type=Path, default=Path("test/data"), help="directory for the bag directories")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--skip", type=float, default=0.0, help="seconds driven before recording starts")
-    parser.add_argument("--duration", type=float, default=5.0, help="seconds recorded")
-    parser.add_argument("--rate", type=float, default=10.0, help="laser ticks per second")
+    parser.add_argument("--duration", type=float, default=4.0, help="seconds recorded")
+    parser.add_argument("--rate", type=float, help="laser ticks per second (default: the world's laser rate)")
     parser.add_argument("--storage", choices=["sqlite3", "mcap"], default="sqlite3")
     parser.add_argument("--params", type=Path, help="reactive_node params file (default config/reactive.yaml)")
     parser.add_argument("--force", action="store_true", help="replace existing bag directories")
