@@ -55,17 +55,20 @@ class BasePlannerNode(Node):
             self.declare_parameter(name, default)
         self.grid = None
         self.map_error = "no map received yet on " + self._param("map_topic")
-        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL,
-                             reliability=ReliabilityPolicy.RELIABLE)
+        latched = QoSProfile(
+            depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL, reliability=ReliabilityPolicy.RELIABLE
+        )
         self.create_subscription(OccupancyGridMsg, self._param("map_topic"), self._on_map, latched)
         self.path_pub = self.create_publisher(Path, "plan", latched)
-        self.layer_pubs = {name: self.create_publisher(OccupancyGridMsg, f"~/{name}_map", latched)
-                           for name in ("eca", "baa", "grown")}
+        self.layer_pubs = {
+            name: self.create_publisher(OccupancyGridMsg, f"~/{name}_map", latched) for name in ("eca", "baa", "grown")
+        }
         self.create_service(PlanBasePath, "plan_base_path", self._on_plan_base_path)
         self.create_service(GetPlan, "make_plan", self._on_get_plan)
         self.requests = 0
-        self.get_logger().info(f"base planner ready (default planner {self._param('planner_id')!r}, "
-                               f"planners {registry.planner_ids()})")
+        self.get_logger().info(
+            f"base planner ready (default planner {self._param('planner_id')!r}, planners {registry.planner_ids()})"
+        )
 
     def _param(self, name):
         return self.get_parameter(name).value
@@ -73,8 +76,11 @@ class BasePlannerNode(Node):
     # -------------------------------------------------------------------- map
     def _on_map(self, msg: OccupancyGridMsg):
         try:
-            self.grid = conv.grid_from_msg(msg, occupied_threshold=int(self._param("occupied_threshold")),
-                                           unknown_is_occupied=bool(self._param("unknown_is_occupied")))
+            self.grid = conv.grid_from_msg(
+                msg,
+                occupied_threshold=int(self._param("occupied_threshold")),
+                unknown_is_occupied=bool(self._param("unknown_is_occupied")),
+            )
             self.map_error = ""
             self.get_logger().info(f"map {self.grid.width} x {self.grid.height} cells of {self.grid.resolution} m")
         except ValueError as exc:
@@ -91,21 +97,27 @@ class BasePlannerNode(Node):
         for name, pose in (("start", start_msg), ("goal", goal_msg)):
             frame = pose.header.frame_id
             if frame and frame != self.grid.frame_id:
-                return E.INVALID_REQUEST, (f"{name} is in frame {frame!r}; poses must be in the map frame "
-                                           f"{self.grid.frame_id!r}"), None
+                return (
+                    E.INVALID_REQUEST,
+                    (f"{name} is in frame {frame!r}; poses must be in the map frame {self.grid.frame_id!r}"),
+                    None,
+                )
         if not (math.isfinite(time_limit) and time_limit >= 0):
             return E.INVALID_REQUEST, f"allowed_planning_time must be >= 0 s, got {time_limit}", None
         planner_id = planner_id or self._param("planner_id")
         if len(footprint) == 0:
             footprint = conv.footprint_from_param(self._param("footprint"))
-        params = {"headings": int(self._param("headings")),
-                  "time_limit": time_limit or float(self._param("allowed_planning_time"))}
+        params = {
+            "headings": int(self._param("headings")),
+            "time_limit": time_limit or float(self._param("allowed_planning_time")),
+        }
         try:
             if planner_id not in registry.PLANNERS:
                 raise InvalidPlanner(f"unknown base planner {planner_id!r}; known: {', '.join(registry.planner_ids())}")
             params = _accepted(registry.PLANNERS[planner_id], params)
-            result = registry.plan(planner_id, self.grid, conv.pose_from_msg(start_msg), conv.pose_from_msg(goal_msg),
-                                   footprint, **params)
+            result = registry.plan(
+                planner_id, self.grid, conv.pose_from_msg(start_msg), conv.pose_from_msg(goal_msg), footprint, **params
+            )
         except InvalidPlanner as exc:
             return E.INVALID_PLANNER, str(exc), None
         except MaruError as exc:
@@ -127,8 +139,13 @@ class BasePlannerNode(Node):
                 pub.publish(conv.grid_to_msg(self.grid, layer, stamp, frame))
 
     def _on_plan_base_path(self, request, response):
-        code, message, result = self.plan(request.planner_id, conv.footprint_from_points(request.footprint),
-                                          request.start, request.goal, request.allowed_planning_time)
+        code, message, result = self.plan(
+            request.planner_id,
+            conv.footprint_from_points(request.footprint),
+            request.start,
+            request.goal,
+            request.allowed_planning_time,
+        )
         response.error_code, response.error_msg = code, message
         response.path.header.frame_id = self.grid.frame_id if self.grid is not None else "map"
         if result is not None:
