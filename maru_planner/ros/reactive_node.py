@@ -319,7 +319,9 @@ class ReactiveNode(Node):
     def _publish_arm(self, out, stamp: float) -> None:
         if not self.arm_names or out.arm_joint_steps is None or out.arm_joint_positions is None:
             return
-        period = 0.1 if self.last_arm_stamp is None else max(stamp - self.last_arm_stamp, 1e-3)
+        # the scan period, for the velocities; a nominal one at start or after a time jump
+        delta = stamp - self.last_arm_stamp if self.last_arm_stamp is not None else 0.0
+        period = delta if 0.0 < delta <= 1.0 else 0.1
         self.last_arm_stamp = stamp
         self.arm_pub.publish(
             conv.arm_trajectory_msg(self.arm_names, out.arm_joint_positions, out.arm_joint_steps, period, stamp)
