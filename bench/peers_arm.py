@@ -41,6 +41,7 @@ ROOT = Path(__file__).resolve().parent
 RESULTS = ROOT / "results"
 TARBALL = ROOT.parent.parent / "shared/benchmarks/motionbenchmaker/vamp_panda_problems.tar.bz2"
 PANDA_ARM = [f"panda_joint{i}" for i in range(1, 8)]
+NAIVE_RES = "naive OMPL, our resolution"
 VAMP_PUBLISHED = {
     "source": "VAMP README / Thomason et al., ICRA 2024 (RRT-Connect, SIMD sphere checks, one desktop core)",
     "mbm_panda_median_s": 35e-6,
@@ -131,10 +132,14 @@ def peer_geometry(robot, scene, locked: dict | None):
 
 
 class NaiveOmpl:
+    """OMPL RRTConnect + a per-state Python validity function; OMPL's default motion resolution unless
+    ``resolution`` (rad, L2 step) is given -- then it checks edges at least as densely as ours."""
+
     name = "naive OMPL"
 
-    def __init__(self, locked):
+    def __init__(self, locked, resolution: float | None = None):
         self.locked = locked
+        self.resolution = resolution
 
     def solve(self, case: Case, budget: float, seed: int) -> dict:
         from ompl import base as ob
@@ -159,6 +164,8 @@ class NaiveOmpl:
             return not pin.computeCollisions(model, data, geom, gdata, q, True)
 
         ss.setStateValidityChecker(valid)
+        if self.resolution:
+            ss.getSpaceInformation().setStateValidityCheckingResolution(self.resolution / space.getMaximumExtent())
         start, goal = space.allocState(), space.allocState()
         for i, n in enumerate(names):
             start[i] = case.start[n] if n in case.start else 0.0
@@ -235,6 +242,12 @@ def summarise(runs: list[dict], budget: float) -> dict:
         "p95_s": float(np.percentile(times, 95)),
         "mean_s": float(times.mean()),
         "median_solved_s": float(np.median(times[ok])) if ok.any() else None,
+        **({"median_verify_s": float(np.median([r["verify_time"] for r in runs])),
+            "median_plan_s": float(np.median([r.get("plan_time", r["time"]) for r in runs])),
+            "fallbacks": int(sum(r.get("fallback", False) for r in runs)),
+            "median_exact_pair_checks": float(np.median([r.get("exact_pair_checks", 0) for r in runs]))}
+           if runs and "verify_time" in runs[0] else {}),
+        "failures": sorted({f"{r['problem']}: {r['status']}" for r in runs if not r["success"]})[:40],
     }
 
 
@@ -284,19 +297,23 @@ def main(argv=None) -> int:
 
     results: dict = {"config": vars(args) | {"out": str(args.out)}, "vamp_published": VAMP_PUBLISHED, "runs": {}}
     solvers = {
-        "maru13": (Ours(maru, args.resolution), NaiveOmpl(None), Pyroboplan(None)),
-        "mbm": (Ours(panda, args.resolution), NaiveOmpl(PANDA_FINGERS_OPEN), Pyroboplan(PANDA_FINGERS_OPEN)),
+        "maru13": (Ours(maru, args.resolution), NaiveOmpl(None), NaiveOmpl(None, args.resolution), Pyroboplan(None)),
+        "mbm": (Ours(panda, args.resolution), NaiveOmpl(PANDA_FINGERS_OPEN),
+                NaiveOmpl(PANDA_FINGERS_OPEN, args.resolution), Pyroboplan(PANDA_FINGERS_OPEN)),
     }
     for family, cases, seeds in (("maru13", maru_cases, maru_seeds), ("mbm", panda_cases, [0])):
-        ours, naive, pyro = solvers[family]
+        ours, naive, naive_res, pyro = solvers[family]
+        subset = cases if family == "maru13" else [c for c in cases if c.name in pyro_names]
         log(f"[{family}] ours")
         r_ours = run(ours, cases, args.budget, seeds, "ours")
         log(f"[{family}] naive OMPL")
         r_naive = run(naive, cases, args.peer_budget, seeds, "naive OMPL")
-        pyro_cases = cases if family == "maru13" else [c for c in cases if c.name in pyro_names]
+        log(f"[{family}] naive OMPL at our resolution")
+        r_naive_res = run(naive_res, subset, args.peer_budget, seeds, "naive OMPL, our resolution")
         log(f"[{family}] pyroboplan")
-        r_pyro = run(pyro, pyro_cases, args.peer_budget, seeds[:3] if family == "maru13" else seeds, "pyroboplan")
-        results["runs"][family] = {"ours": r_ours, "naive OMPL": r_naive, "pyroboplan": r_pyro}
+        r_pyro = run(pyro, subset, args.peer_budget, seeds[:3] if family == "maru13" else seeds, "pyroboplan")
+        results["runs"][family] = {"ours": r_ours, "naive OMPL": r_naive, NAIVE_RES: r_naive_res,
+                                   "pyroboplan": r_pyro}
 
     summary = build_summary(results, args)
     results["summary"] = summary
@@ -331,6 +348,8 @@ def build_summary(results, args) -> dict:
             "naive_over_ours_median": ratio(fam["ours"].get("median_s"), fam["naive OMPL"].get("median_s")),
             "naive_over_ours_mean": ratio(fam["ours"].get("mean_s"), fam["naive OMPL"].get("mean_s")),
             "pyroboplan_over_ours_median_common": ratio(sub["ours"].get("median_s"), sub["pyroboplan"].get("median_s")),
+            "naive_same_resolution_over_ours_median_common": ratio(sub["ours"].get("median_s"),
+                                                                   sub[NAIVE_RES].get("median_s")),
             "common_subset": sub,
         }
         fam["fallbacks"] = int(sum(r.get("fallback", False) for r in by_solver["ours"]))
@@ -365,22 +384,29 @@ def markdown(summary, args) -> str:
         "|---|---|---|---|---|---|---|",
     ]
     for family in ("maru13", "mbm"):
-        for name in ("ours", "naive OMPL", "pyroboplan"):
+        for name in ("ours", "naive OMPL", NAIVE_RES, "pyroboplan"):
             s = summary[family][name]
             if not s.get("n"):
                 continue
             lines.append(f"| {family} | {name} | {s['n']} | {100 * s['success_rate']:.1f} % | {_ms(s['median_s'])} | "
                          f"{_ms(s['p95_s'])} | {_ms(s['mean_s'])} |")
     lines.append(f"| mbm | VAMP (published) | 700 | — | {1e3 * VAMP_PUBLISHED['mbm_panda_median_s']:.3f} | — | — |")
-    lines += ["", "| problems | naive/ours (median) | naive/ours (mean) | pyroboplan/ours (median, common subset) |",
-              "|---|---|---|---|"]
+    lines += ["", "| problems | naive/ours (median) | naive/ours (mean) | naive at our resolution/ours (median, "
+              "subset) | pyroboplan/ours (median, subset) |", "|---|---|---|---|---|"]
     for family in ("maru13", "mbm"):
         r = summary[family]["ratios"]
         lines.append(f"| {family} | {_x(r['naive_over_ours_median'])} | {_x(r['naive_over_ours_mean'])} | "
+                     f"{_x(r['naive_same_resolution_over_ours_median_common'])} | "
                      f"{_x(r['pyroboplan_over_ours_median_common'])} |")
     lines += ["", "Targets: " + ", ".join(f"{k}: {'met' if v else 'MISSED'}" for k, v in summary["targets"].items()),
-              f"Exact-planning fallbacks after failed verification: maru13 {summary['maru13']['fallbacks']}, "
+              f"Re-plans at a finer resolution after a failed verification: maru13 {summary['maru13']['fallbacks']}, "
               f"mbm {summary['mbm']['fallbacks']}.", ""]
+    for family in ("maru13", "mbm"):
+        o = summary[family]["ours"]
+        lines.append(f"ours, {family}: median search+post-processing {_ms(o.get('median_plan_s'))} ms, median exact "
+                     f"verification {_ms(o.get('median_verify_s'))} ms, median coal pair checks "
+                     f"{o.get('median_exact_pair_checks', 0):.0f}; failures: {', '.join(o['failures']) or 'none'}")
+    lines.append("")
     return "\n".join(lines)
 
 
@@ -396,7 +422,8 @@ def plot(results, path: Path, args) -> None:
 
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
     for ax, family in zip(axes, ("maru13", "mbm")):
-        for name, color in (("ours", "tab:green"), ("naive OMPL", "tab:blue"), ("pyroboplan", "tab:red")):
+        for name, color in (("ours", "tab:green"), ("naive OMPL", "tab:blue"), (NAIVE_RES, "tab:cyan"),
+                            ("pyroboplan", "tab:red")):
             runs = results["runs"][family][name]
             if not runs:
                 continue

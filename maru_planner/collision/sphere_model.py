@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial import ConvexHull, Delaunay
 
-FIT_VERSION = 3  # bump when the fit changes, so cached models are refitted
+FIT_VERSION = 5  # bump when the fit changes, so cached models are refitted
 
 
 @dataclass(frozen=True)
@@ -223,11 +223,12 @@ def fit_geometry(geometry, options: SphereFitOptions) -> tuple[np.ndarray, np.nd
 
 
 def inner_radii(geometry, centers: np.ndarray, vertices: np.ndarray) -> np.ndarray:
-    """Radius of the largest ball around each centre that stays inside the geometry (0 if unknown).
+    """Radius of a ball around each centre that the exact checker would see as inside the geometry.
 
-    Boxes and cylinders: exact. Convex shapes, and meshes whose volume equals their hull's (convex
-    collision meshes, like the Panda's): depth in the hull. Other meshes: 0, so a contact near them
-    is always left to the exact model.
+    Boxes, cylinders, spheres, convex shapes: exact (depth of the centre). Triangle meshes: 0. coal tests a
+    mesh by its triangles, so for the exact model a mesh is its surface: an obstacle (or a hole in an open
+    mesh) inside it is not a collision; no ball is certainly "in collision" then, and every contact near a
+    mesh link is left to coal.
     """
     import coal
 
@@ -237,11 +238,9 @@ def inner_radii(geometry, centers: np.ndarray, vertices: np.ndarray) -> np.ndarr
         radial = np.linalg.norm(centers[:, :2], axis=1)
         depth = np.minimum(geometry.radius - radial, geometry.halfLength - np.abs(centers[:, 2]))
         return np.maximum(depth, 0.0)
-    if isinstance(geometry, coal.BVHModelBase):
-        hull = hull_volume(vertices)
-        if hull <= 0.0 or abs(float(geometry.computeVolume())) < 0.98 * hull:
-            return np.zeros(len(centers))
-    return depth_in_hull(centers, vertices)
+    if isinstance(geometry, coal.ConvexBase):
+        return depth_in_hull(centers, vertices)
+    return np.zeros(len(centers))
 
 
 def surface_of(geometry, options: SphereFitOptions) -> tuple[np.ndarray, np.ndarray]:

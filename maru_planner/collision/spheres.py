@@ -147,7 +147,7 @@ class SphereCollisionChecker:
         clusters = (sm.cluster_start, sm.cluster_joint, sm.cluster_center, sm.cluster_radius, sm.group_clusters)
         self._packed_robot = _kernels.pack_robot(*self._robot_args, *clusters) if self.use_numba else None
         self._robot_geoms = list(robot.collision_model.geometryObjects)
-        self._exact_shapes = [exact_shape(obj.geometry) for obj in self._robot_geoms]
+        self._exact_shapes = [obj.geometry for obj in self._robot_geoms]  # the exact checker's own shapes
         self._amb = np.zeros((sm.n_groups * 8 + len(self.self_pairs), 3), dtype=np.int64)
         self._rot = np.empty((self.tree.njoints, 3, 3))
         self._pos = np.empty((self.tree.njoints, 3))
@@ -372,21 +372,6 @@ class SphereCollisionChecker:
         if len(self._sphere_pairs):
             np.minimum.at(self_gap, p, self_outer)
         return env, self_gap
-
-
-def exact_shape(geometry):
-    """The shape coal checks near contacts on: a convex mesh as ``coal.Convex`` (same solid, GJK is ~5x
-    faster than a BVH traversal), anything else as it is."""
-    import coal
-
-    from maru_planner.collision.sphere_model import hull_volume
-
-    if isinstance(geometry, coal.BVHModelBase):
-        vertices = np.asarray(geometry.vertices(), dtype=float)
-        hull = hull_volume(vertices)
-        if hull > 0.0 and abs(float(geometry.computeVolume())) >= 0.98 * hull:
-            return coal.Convex.convexHull([v.copy() for v in vertices], True, "")
-    return geometry
 
 
 def _coal_tf(rot: np.ndarray, pos: np.ndarray):
