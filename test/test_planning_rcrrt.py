@@ -44,6 +44,14 @@ def make_rcrrt(checker, step=0.05, seed=1, goal=GOAL, start=START, resolution=0.
     return ss, planner, gs, edges
 
 
+def prepare(planner, origin=(0.5, 0.5)):
+    """An empty 2-D tree on the unit square with a 0.05 lattice through ``origin``."""
+    planner._reset_tree(2)
+    planner._step = 0.05
+    planner.lower, planner.upper = np.zeros(2), np.ones(2)
+    planner._prepare_lattice(np.array(origin))
+
+
 def solve(ss, seconds=10.0):
     return ss.solve(ob.timedPlannerTerminationCondition(seconds))
 
@@ -104,12 +112,10 @@ def test_sigma_rises_on_collisions_and_propagates_to_ancestors():
     assert (planner.sigma[: planner.count] > 0).any()
     assert planner.sigma.max() <= 1.0
     # Direct check of the update rule on a three-node chain: +1/m, +1/m^2, +1/m^3.
-    planner._reset_tree(2)
-    planner._step = 0.05
-    planner.lower, planner.upper = np.zeros(2), np.ones(2)
-    a = planner._add_node(np.array([0.5, 0.5]), (0, 0), -1)
-    b = planner._add_node(np.array([0.55, 0.5]), (1, 0), a)
-    c = planner._add_node(np.array([0.6, 0.5]), (2, 0), b)
+    prepare(planner)
+    a = planner._add_node(np.array([0.5, 0.5]), planner.encode((0, 0)), -1)
+    b = planner._add_node(np.array([0.55, 0.5]), planner.encode((1, 0)), a)
+    c = planner._add_node(np.array([0.6, 0.5]), planner.encode((2, 0)), b)
     planner._raise_sigma(c)
     assert planner.sigma[c] == pytest.approx(1 / 4)
     assert planner.sigma[b] == pytest.approx(1 / 16)
@@ -118,11 +124,9 @@ def test_sigma_rises_on_collisions_and_propagates_to_ancestors():
 
 def test_modified_nearest_neighbour_accepts_with_probability_one_minus_sigma():
     ss, planner, gs, edges = make_rcrrt(BoxWorldChecker([]), seed=8)
-    planner._reset_tree(2)
-    planner._step = 0.05
-    planner.lower, planner.upper = np.zeros(2), np.ones(2)
-    near = planner._add_node(np.array([0.5, 0.5]), (0, 0), -1)
-    far = planner._add_node(np.array([0.7, 0.5]), (4, 0), near)
+    prepare(planner)
+    near = planner._add_node(np.array([0.5, 0.5]), planner.encode((0, 0)), -1)
+    far = planner._add_node(np.array([0.7, 0.5]), planner.encode((4, 0)), near)
     rng = np.random.default_rng(0)
     target = np.array([0.45, 0.5])
     planner.sigma[near] = 1.0  # always rejected while another candidate accepts
@@ -139,12 +143,23 @@ def test_modified_nearest_neighbour_accepts_with_probability_one_minus_sigma():
     assert planner._select(target, 8, rng) == far  # exhausted: no longer a candidate
 
 
+def test_lattice_neighbours_already_in_the_tree_are_spent_on_both_sides():
+    ss, planner, gs, edges = make_rcrrt(BoxWorldChecker([]), seed=10)
+    prepare(planner)
+    a = planner._add_node(np.array([0.5, 0.5]), planner.encode((0, 0)), -1)
+    assert planner.untried[a] == 4
+    b = planner._add_node(np.array([0.55, 0.5]), planner.encode((1, 0)), a)
+    assert planner.expanded[a, 0] and planner.expanded[b, 1]  # a→+x reaches b, b→−x reaches a
+    assert planner.untried[a] == 3 and planner.untried[b] == 3
+    corner = planner._add_node(np.array([1.0, 0.0]), planner.encode((10, -10)), a)
+    assert planner.expanded[corner, 0] and planner.expanded[corner, 3]  # +x and −y leave the limits
+    assert planner.untried[corner] == 2
+
+
 def test_best_input_moves_toward_the_sample():
     ss, planner, gs, edges = make_rcrrt(BoxWorldChecker([]), seed=9)
-    planner._reset_tree(2)
-    planner._step = 0.05
-    planner.lower, planner.upper = np.zeros(2), np.ones(2)
-    i = planner._add_node(np.array([0.5, 0.5]), (0, 0), -1)
+    prepare(planner)
+    i = planner._add_node(np.array([0.5, 0.5]), planner.encode((0, 0)), -1)
     assert planner.best_input(i, np.array([0.5, 0.9])) == 2  # +y
     planner._spend(i, 2)
     assert planner.best_input(i, np.array([0.5, 0.9])) in (0, 1)  # +y spent: a sideways step

@@ -134,8 +134,8 @@ class RCRRT(ob.Planner):
         self.untried = np.zeros(capacity, dtype=int)
         self.sigma = np.zeros(capacity)
         self.active = np.zeros(capacity, dtype=bool)
-        self.lattice: dict[tuple, int] = {}
-        self.keys: list[tuple] = []
+        self.lattice: dict[int, int] = {}
+        self.keys: list[int | None] = []
         self.count = 0
         self.goal_node = -1
         self.nn = GrowingKDTree(dim)
@@ -151,7 +151,7 @@ class RCRRT(ob.Planner):
             new[: len(old)] = old
             setattr(self, name, new)
 
-    def _add_node(self, x: np.ndarray, key: tuple | None, parent: int) -> int:
+    def _add_node(self, x: np.ndarray, key: int | None, parent: int) -> int:
         if self.count == len(self.X):
             self._grow()
         i = self.count
@@ -166,26 +166,43 @@ class RCRRT(ob.Planner):
         self.lattice[key] = i
         self._mark_known_inputs(i, x, key)
         self.active[i] = self.untried[i] > 0
-        self.nn.add(i)
         return i
 
-    def _mark_known_inputs(self, i: int, x: np.ndarray, key: tuple) -> None:
+    def _prepare_lattice(self, start: np.ndarray) -> int:
+        """Integer codes for the lattice points ``start + step·n`` inside the limits; returns the start's.
+
+        Code = Σ (n_a − n_min_a)·stride_a (mixed radix), so a step along axis a adds ±stride_a.
+        """
+        step = self._step
+        n_min = np.ceil((self.lower - start) / step - 1e-9).astype(int)
+        n_max = np.floor((self.upper - start) / step + 1e-9).astype(int)
+        strides, s = [], 1
+        for a in range(self.dim):
+            strides.append(s)
+            s *= int(n_max[a] - n_min[a] + 1)
+        self.strides = strides
+        self._n_min = n_min
+        return self.encode(np.zeros(self.dim, dtype=int))
+
+    def encode(self, n) -> int:
+        """Lattice code of the integer coordinates ``n`` (steps from the start along each axis)."""
+        return int(sum((int(v) - int(m)) * st for v, m, st in zip(n, self._n_min, self.strides, strict=True)))
+
+    def _mark_known_inputs(self, i: int, x: np.ndarray, key: int) -> None:
         """Inputs leaving the limits or reaching a lattice point already in the tree are spent."""
         step = self._step
         exp = self.expanded[i]
-        for axis in range(self.dim):
-            for sign, u in ((1, 2 * axis), (-1, 2 * axis + 1)):
-                target = x[axis] + sign * step
-                if target > self.upper[axis] + 1e-12 or target < self.lower[axis] - 1e-12:
-                    exp[u] = True
-                    continue
-                nkey = key[:axis] + (key[axis] + sign,) + key[axis + 1 :]
-                j = self.lattice.get(nkey)
-                if j is not None:
-                    exp[u] = True
-                    back = u ^ 1
-                    if not self.expanded[j, back]:
-                        self._spend(j, back)
+        exp[0::2] |= x + step > self.upper + 1e-9
+        exp[1::2] |= x - step < self.lower - 1e-9
+        lattice, strides = self.lattice, self.strides
+        for u in np.flatnonzero(~exp):
+            u = int(u)
+            j = lattice.get(key + strides[u >> 1] if u % 2 == 0 else key - strides[u >> 1])
+            if j is not None:
+                exp[u] = True
+                back = u ^ 1
+                if not self.expanded[j, back]:
+                    self._spend(j, back)
         self.untried[i] = int((~exp).sum())
 
     def _spend(self, i: int, u: int) -> None:
@@ -214,7 +231,7 @@ class RCRRT(ob.Planner):
         rng = np.random.default_rng(int(seed))
         self._reset_tree(self.dim)
         self.exhausted = False
-        root = self._add_node(start, (0,) * self.dim, -1)
+        root = self._add_node(start, self._prepare_lattice(start), -1)
         if self._goal_reachable(root, goal, goal_range):
             return self._finish(root, goal)
         samples = rng.uniform(self.lower, self.upper, size=(_SAMPLE_BATCH, self.dim))
@@ -261,8 +278,7 @@ class RCRRT(ob.Planner):
         axis, sign = u >> 1, (1 if u % 2 == 0 else -1)
         x = self.X[i].copy()
         x[axis] += sign * self._step
-        key = self.keys[i]
-        key = key[:axis] + (key[axis] + sign,) + key[axis + 1 :]
+        key = self.keys[i] + sign * self.strides[axis]
         if not self._edge_valid(self.X[i], x):
             self.collisions += 1
             self._raise_sigma(i)
