@@ -151,14 +151,17 @@ def naive_rrtconnect(robot, checker, name: str, budget: float, seeds: int, resol
             # OMPL's resolution is a fraction of the space extent (L2): match our L-inf step at worst.
             si.setStateValidityCheckingResolution(resolution / si.getMaximumExtent())
             ss.setStartAndGoalStates(gs.to_state(prob.start), gs.to_state(prob.goal))
-            ss.setPlanner(og.RRTConnect(si))
+            planner = og.RRTConnect(si)
+            ss.setPlanner(planner)
             t0 = time.perf_counter()
             ss.solve(ob.timedPlannerTerminationCondition(budget))
             dt = time.perf_counter() - t0
+            data = ob.PlannerData(si)
+            planner.getPlannerData(data)
         ok = ss.haveExactSolutionPath()
         path = np.array([gs.to_array(s) for s in ss.getSolutionPath().getStates()]) if ok else None
         runs.append({
-            "success": bool(ok), "solve_time": dt, "total_time": dt, "nodes": 0,
+            "success": bool(ok), "solve_time": dt, "total_time": dt, "nodes": data.numVertices(),
             "collision_checks": checker.check_count - c0, "roadmap_build_time": 0.0,
             "path_length": float(np.linalg.norm(np.diff(path, axis=0), axis=1).sum()) if ok else float("nan"),
             "raw_path_length": float("nan"), "waypoints": len(path) if ok else 0,
