@@ -103,7 +103,7 @@ def record_world(world_path: Path, out: Path, *, seed: int = 0, skip: float = 0.
     ctrl = ElasticStripController(params)
     ctrl.set_path(conv.path_points_from_msg(plan[1]))
     v = w = 0.0
-    ticks, outcome = 0, "window"
+    ticks, outcome, strips = 0, "window", []
     with BagWriter(out, storage=storage) as bag:
         for topic, msgtype in TOPICS.items():
             bag.add_topic(topic, msgtype)
@@ -115,6 +115,8 @@ def record_world(world_path: Path, out: Path, *, seed: int = 0, skip: float = 0.
             scan = _wire(conv.scan_msg(dataclasses.replace(sim.scan(), stamp=stamp), LASER, scan_time=dt))
             out_cmd = ctrl.update(conv.pose_from_odom(odom[1]), conv.scan_from_msg(scan[1]))
             v, w = out_cmd.v, out_cmd.w
+            if ticks % 10 == 0:
+                strips.append(np.asarray(out_cmd.strip).copy())
             bag.write("/tf", _ns(stamp), _tf(sim.robot_pose, stamp, params.laser_pose))
             bag.write("/odom", _ns(stamp), odom[0])
             bag.write("/scan", _ns(stamp), scan[0])
@@ -129,7 +131,51 @@ def record_world(world_path: Path, out: Path, *, seed: int = 0, skip: float = 0.
     summary = summarize(out)
     size = sum(f.stat().st_size for f in out.iterdir())
     return {"world": world.name, "bag": str(out), "storage": storage, "ticks": ticks, "outcome": outcome,
-            "duration_s": round(summary.duration_s, 3), "bytes": size, "counts": summary.counts}
+            "duration_s": round(summary.duration_s, 3), "bytes": size, "counts": summary.counts,
+            "world_obj": world, "strips": strips}
+
+
+def save_picture(path: Path, recordings: list[dict]) -> None:
+    """One panel per bag, drawn from what the bag holds: odometry path, scan points, and the core's strips."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from maru_planner.bag import read_messages
+    from maru_planner.reactive import scan_to_points, to_world
+    from maru_planner.viz.reactive import draw_world
+
+    cols = 2 if len(recordings) > 1 else 1
+    rows = -(-len(recordings) // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(6.5 * cols, 3.6 * rows), squeeze=False)
+    for ax in axes.flat[len(recordings):]:
+        ax.axis("off")
+    for ax, rec in zip(axes.flat, recordings):
+        draw_world(ax, rec["world_obj"], show_movers=False)
+        poses, points = [], []
+        pose = None
+        for record in read_messages(rec["bag"], topics=["/odom", "/scan"]):
+            msg = conv.decode_bag_record(record.msgtype, record.rawdata)
+            if record.topic == "/odom":
+                pose = conv.pose_from_odom(msg)
+                poses.append(pose)
+            elif pose is not None and len(poses) % 5 == 1:
+                local = scan_to_points(conv.scan_from_msg(msg), (0.22, 0.0, 0.0), max_range=3.0)
+                points.append(to_world(local, pose))
+        if points:
+            cloud = np.vstack(points)
+            ax.plot(cloud[:, 0], cloud[:, 1], ".", ms=1.5, color="tab:red", label="/scan points")
+        for i, strip in enumerate(rec["strips"]):
+            ax.plot(strip[:, 0], strip[:, 1], "-o", ms=2, lw=0.8, color="tab:blue", alpha=0.6,
+                    label="strip (core)" if i == 0 else None)
+        path_xy = np.array(poses)
+        ax.plot(path_xy[:, 0], path_xy[:, 1], "-", lw=2, color="k", label="/odom")
+        ax.set_title(f"{rec['world']}: {rec['ticks']} ticks, {rec['storage']}, {rec['bytes'] / 1024:.0f} KiB")
+        ax.legend(loc="lower right", fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -143,6 +189,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--storage", choices=["sqlite3", "mcap"], default="sqlite3")
     parser.add_argument("--params", type=Path, help="reactive_node params file (default config/reactive.yaml)")
     parser.add_argument("--force", action="store_true", help="replace existing bag directories")
+    parser.add_argument("--png", type=Path, help="picture of the recorded windows")
     args = parser.parse_args(argv)
 
     if args.world is not None:
@@ -151,6 +198,7 @@ def main(argv: list[str] | None = None) -> int:
         jobs = [(config_path("worlds", f"{name}.yaml"), skip, dur, st) for name, skip, dur, st in DEFAULT_BAGS]
     args.out.mkdir(parents=True, exist_ok=True)
     print(f"{'world':<24}{'storage':<9}{'ticks':>6}{'outcome':>11}{'KiB':>8}  bag")
+    recordings = []
     for world_path, skip, duration, storage in jobs:
         out = args.out / f"reactive_{Path(world_path).stem}"
         if out.exists():
@@ -164,6 +212,10 @@ def main(argv: list[str] | None = None) -> int:
         s = record_world(Path(world_path), out, seed=args.seed, skip=skip, duration=duration, rate=args.rate,
                          storage=storage, params_file=args.params)
         print(f"{s['world']:<24}{s['storage']:<9}{s['ticks']:>6}{s['outcome']:>11}{s['bytes'] / 1024:>8.0f}  {out}")
+        recordings.append(s)
+    if args.png is not None:
+        save_picture(args.png, recordings)
+        print(f"picture: {args.png}")
     return 0
 
 
