@@ -177,3 +177,25 @@ def test_controller_reports_arm_steps():
     ctrl.set_goal((3.0, 0.0))
     out = ctrl.update((0, 0, 0), lms200(np.full(361, np.inf)))
     assert out.arm_joint_steps.shape == (14,) and out.arm_joint_positions.shape == (14,)
+
+
+def test_stop_distance_halts_base_in_front_of_close_obstacle():
+    free = StripParams(arm_enabled=False, laser_pose=(0.0, 0.0, 0.0), robot_radius=0.3)
+    guarded = StripParams(arm_enabled=False, laser_pose=(0.0, 0.0, 0.0), robot_radius=0.3, stop_distance=0.3)
+    r = np.full(361, np.inf)
+    r[170:191] = 0.5  # a narrow post 0.5 m straight ahead
+    outs = []
+    for params in (free, guarded):
+        ctrl = ElasticStripController(params)
+        ctrl.set_goal((5.0, 0.0))
+        outs.append(ctrl.update((0.0, 0.0, 0.0), lms200(r)))
+    assert outs[1].v == 0.0 and outs[0].v > 0.0
+
+
+def test_from_dict_converts_lists_and_validates_windows():
+    params = StripParams.from_dict({"beam_window": [10, 100], "laser_pose": [0.1, 0.0, 0.0], "strip": "plain"})
+    assert params.beam_window == (10, 100) and params.laser_pose == (0.1, 0.0, 0.0)
+    with pytest.raises(ValueError, match="beam_window"):
+        StripParams(beam_window=(50, 10))
+    with pytest.raises(ValueError, match="is_sort_rule"):
+        StripParams(is_sort_rule="any")
