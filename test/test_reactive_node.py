@@ -243,6 +243,9 @@ def test_bag_records_decode_to_rclpy_messages():
     assert conv.pose_from_odom(back) == pytest.approx((1.0, 2.0, 0.5))
     with pytest.raises(ValueError, match="no rclpy class"):
         conv.decode_bag_record("tf2_msgs/msg/TFMessage", b"")
+    with pytest.raises(ValueError, match="not of the form"):
+        conv.message_class("nav_msgs/Odometry")
+    assert conv.message_class("visualization_msgs/msg/MarkerArray").__name__ == "MarkerArray"
 
 
 def test_throttled_warnings_count_what_they_suppress():

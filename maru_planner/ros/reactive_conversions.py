@@ -8,6 +8,7 @@ PoseStamped from the simulator. Nothing here holds state.
 
 from __future__ import annotations
 
+import importlib
 import math
 
 import numpy as np
@@ -23,14 +24,6 @@ from visualization_msgs.msg import Marker, MarkerArray
 from maru_planner.reactive import LaserScanData, ScanError
 
 NS_PER_S = 1_000_000_000
-#: ROS message classes by full type name, for decoding bag records with rclpy.
-MESSAGE_CLASSES = {
-    "sensor_msgs/msg/LaserScan": LaserScan,
-    "nav_msgs/msg/Odometry": Odometry,
-    "nav_msgs/msg/Path": Path,
-    "geometry_msgs/msg/PoseStamped": PoseStamped,
-    "geometry_msgs/msg/Twist": Twist,
-}
 
 
 # ---------------------------------------------------------------- time and angles
@@ -227,8 +220,17 @@ def strip_markers(
 
 
 # ---------------------------------------------------------------- bags
+def message_class(msgtype: str):
+    """The rclpy class of a full type name such as ``sensor_msgs/msg/LaserScan``."""
+    parts = msgtype.split("/")
+    if len(parts) != 3 or not all(parts):
+        raise ValueError(f"message type {msgtype!r} is not of the form 'package/msg/Name'")
+    try:
+        return getattr(importlib.import_module(f"{parts[0]}.{parts[1]}"), parts[2])
+    except (ImportError, AttributeError) as exc:
+        raise ValueError(f"no rclpy class for {msgtype} in this install ({exc})") from exc
+
+
 def decode_bag_record(msgtype: str, rawdata: bytes):
-    """CDR bytes from a bag -> the rclpy message (types this node uses)."""
-    if msgtype not in MESSAGE_CLASSES:
-        raise ValueError(f"no rclpy class registered for {msgtype}; known: {sorted(MESSAGE_CLASSES)}")
-    return deserialize_message(bytes(rawdata), MESSAGE_CLASSES[msgtype])
+    """CDR bytes from a bag -> the rclpy message, ready to publish."""
+    return deserialize_message(bytes(rawdata), message_class(msgtype))
