@@ -275,20 +275,34 @@ def lumped_cell_removal(bg: BigCellGrid, members: bytearray, start: int, goal: i
                         blocked: set) -> tuple[list, np.ndarray]:
     """LCRP: backtrack from β_goal to β_start inside T; returns (B start→goal, lumped cells (k, 2))."""
     mask = np.frombuffer(bytes(members), dtype=np.uint8).reshape(bg.shape).astype(bool)
-    lumped = np.flatnonzero(lumped_mask(mask))
+    lumped = np.flatnonzero(lumped_mask(mask)).astype(np.int32)
+    del mask
     depth = _bfs_depths(bg, members, start, blocked)
-    # Subgoal queue: lumped cells met on the way back, farthest from the start first.
-    lumped_depth = np.frombuffer(depth, dtype=np.int32)[lumped]
+    # Subgoals: the lumped cell met on the way back at each depth (smallest index on ties), as a
+    # per-depth table: the walk goes down one depth per step, so the next subgoal is the first
+    # entry below the current depth.
+    depth_np = np.frombuffer(depth, dtype=np.int32)
+    lumped_depth = depth_np[lumped]
     reachable = lumped_depth >= 0
-    subgoals = lumped[reachable][np.lexsort((lumped[reachable], -lumped_depth[reachable]))].astype(np.int32)
+    by_depth = np.full(max(depth[goal], 0) + 1, np.iinfo(np.int32).max, dtype=np.int32)
+    inside = reachable & (lumped_depth <= depth[goal])
+    np.minimum.at(by_depth, lumped_depth[inside], lumped[inside])
+    none = np.iinfo(np.int32).max
+
+    def next_subgoal_below(d: int) -> int:
+        for k in range(d - 1, -1, -1):
+            if by_depth[k] != none:
+                return k
+        return -1
+
     back = [goal]
     current_subgoal = bg.rc(goal)
     cur = goal
-    pending = 0  # index of the next subgoal in the queue
+    pending = next_subgoal_below(depth[goal])  # depth of the next subgoal, -1 = β_start
     while cur != start:
-        while pending < len(subgoals) and depth[int(subgoals[pending])] >= depth[cur]:
-            pending += 1
-        next_subgoal = bg.rc(int(subgoals[pending]) if pending < len(subgoals) else start)
+        if pending >= depth[cur]:
+            pending = next_subgoal_below(depth[cur])
+        next_subgoal = bg.rc(int(by_depth[pending]) if pending >= 0 else start)
         best, best_f = -1, math.inf
         for nb in bg.neighbours(cur):
             if depth[nb] != depth[cur] - 1 or (blocked and _edge(cur, nb) in blocked):
@@ -298,7 +312,7 @@ def lumped_cell_removal(bg: BigCellGrid, members: bytearray, start: int, goal: i
             if f < best_f:
                 best, best_f = nb, f
         cur = best
-        if pending < len(subgoals) and cur == int(subgoals[pending]):
+        if pending >= 0 and cur == int(by_depth[pending]):
             current_subgoal = bg.rc(cur)
         back.append(cur)
     back.reverse()
