@@ -84,11 +84,12 @@ def result_to_json(result) -> dict:
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="maru-base-plan", description=__doc__.split("\n")[0])
-    parser.add_argument("--map", required=True, help="map_server YAML")
+    parser.add_argument("--map", help="map_server YAML (not needed with --world)")
+    parser.add_argument("--world", help="3-D world YAML for biped-track / biped-wall (start/goal default to its own)")
     parser.add_argument("--planner", default=registry.DEFAULT_PLANNER,
                         help=f"one of {', '.join(registry.planner_ids())}")
-    parser.add_argument("--start", nargs=3, type=float, required=True, metavar=("X", "Y", "THETA"))
-    parser.add_argument("--goal", nargs=3, type=float, required=True, metavar=("X", "Y", "THETA"))
+    parser.add_argument("--start", nargs=3, type=float, metavar=("X", "Y", "THETA"))
+    parser.add_argument("--goal", nargs=3, type=float, metavar=("X", "Y", "THETA"))
     parser.add_argument("--footprint", default="rect:0.9:0.3",
                         help="'x,y x,y ...' vertices (use --footprint=... when the first is negative), "
                         "rect:L:W or disc:R (default rect:0.9:0.3)")
@@ -101,16 +102,28 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
+    args.planner = args.planner.replace("-", "_")  # biped-track == biped_track
+    params, grid = _params(args.param), None
     try:
         footprint = parse_footprint(args.footprint)
-        grid = OccupancyGrid.from_yaml(args.map, unknown_is_occupied=not args.unknown_free)
+        if args.world:
+            from maru_planner.base.biped.planners import world_defaults
+
+            args.start, args.goal, params["world"] = world_defaults(args.world, args.start, args.goal)
+        if args.map:
+            grid = OccupancyGrid.from_yaml(args.map, unknown_is_occupied=not args.unknown_free)
+        elif not args.world:
+            raise ValueError("--map is required (or --world with a biped planner)")
+        if args.start is None or args.goal is None:
+            raise ValueError("--start and --goal are required")
     except (OSError, ValueError) as exc:
         print(f"maru-base-plan: {exc}", file=sys.stderr)
         return 2
-    print(f"planning with {args.planner} on {args.map} ({grid.width} x {grid.height} cells)...", file=sys.stderr)
+    where = f"{args.map} ({grid.width} x {grid.height} cells)" if grid is not None else args.world
+    print(f"planning with {args.planner} on {where}...", file=sys.stderr)
     t0 = time.perf_counter()
     try:
-        result = registry.plan(args.planner, grid, args.start, args.goal, footprint, **_params(args.param))
+        result = registry.plan(args.planner, grid, args.start, args.goal, footprint, **params)
     except MaruError as exc:
         print(f"maru-base-plan: {exc}", file=sys.stderr)
         return 2
@@ -119,7 +132,11 @@ def main(argv=None) -> int:
     if args.json:
         with open(args.json, "w") as f:
             json.dump(result_to_json(result), f, indent=1)
-    if args.png:
+    if args.png and "world" in result.layers:
+        from maru_planner.viz.biped import save_result_png
+
+        save_result_png(args.png, result, args.planner)
+    elif args.png:
         from maru_planner.viz.grids import save_plan_png
 
         save_plan_png(args.png, grid, result, args.start, args.goal, footprint,

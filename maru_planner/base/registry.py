@@ -7,9 +7,11 @@ Adding a planner is one line in ``PLANNERS`` (helper-8: tunnel, biped_track, bip
 from __future__ import annotations
 
 from maru_planner.base.astar import GridAStarPlanner
+from maru_planner.base.biped.planners import biped_track, biped_wall
 from maru_planner.base.mspp import MultiStagePlanner
 from maru_planner.base.result import BasePlanResult
 from maru_planner.base.se2 import SE2AStarPlanner
+from maru_planner.base.tunnel import TunnelGridPlanner
 from maru_planner.errors import InvalidPlanner, InvalidRequest
 
 
@@ -22,6 +24,9 @@ PLANNERS = {
     "se2": SE2AStarPlanner,
     "mspp": MultiStagePlanner,
     "mspp_local": _mspp_local,
+    "tunnel": TunnelGridPlanner,  # paper 003
+    "biped_track": biped_track,  # paper 004 (param world = 3-D world YAML)
+    "biped_wall": biped_wall,
 }
 
 DEFAULT_PLANNER = "mspp"
