@@ -12,7 +12,8 @@
 
 Parameters (``config/base_planner.yaml``): ``planner_id``, ``footprint``
 (flat x, y list in base_link), ``headings``, ``allowed_planning_time``,
-``unknown_is_occupied``, ``occupied_threshold``, ``map_topic``.
+``unknown_is_occupied``, ``occupied_threshold``, ``map_topic``, ``biped_world``
+(3-D world YAML for ``biped_track`` / ``biped_wall``; empty = plan on /map).
 Poses are in the map frame (an empty frame_id is taken as the map's).
 """
 
@@ -45,6 +46,7 @@ NODE_PARAMETERS = {
     "unknown_is_occupied": True,
     "occupied_threshold": 65,
     "map_topic": "map",
+    "biped_world": "",
 }
 
 
@@ -111,6 +113,8 @@ class BasePlannerNode(Node):
             "headings": int(self._param("headings")),
             "time_limit": time_limit or float(self._param("allowed_planning_time")),
         }
+        if planner_id.startswith("biped_") and self._param("biped_world"):
+            params["world"] = str(self._param("biped_world"))
         try:
             if planner_id not in registry.PLANNERS:
                 raise InvalidPlanner(f"unknown base planner {planner_id!r}; known: {', '.join(registry.planner_ids())}")
