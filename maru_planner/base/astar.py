@@ -249,8 +249,8 @@ def _jps_kernel(blocked, sr, sc, gr, gc, g_best, parent, seen, closed, keys, gs,
         else:
             pr = parent[node] // width
             pc = parent[node] - pr * width
-            dr = (r > pr) - (r < pr)
-            dc = (c > pc) - (c < pc)
+            dr = int(r > pr) - int(r < pr)
+            dc = int(c > pc) - int(c < pc)
             if dr != 0 and dc != 0:
                 dirs_r[0], dirs_c[0] = dr, 0
                 dirs_r[1], dirs_c[1] = 0, dc
@@ -323,8 +323,8 @@ def _trace_kernel(parent, start, goal, width, fill):
         r, c = node // width, node % width
         pr, pc = prev // width, prev % width
         if fill:
-            sr = (pr > r) - (pr < r)
-            sc = (pc > c) - (pc < c)
+            sr = int(pr > r) - int(pr < r)
+            sc = int(pc > c) - int(pc < c)
             while r != pr or c != pc:
                 r += sr
                 c += sc
