@@ -168,3 +168,29 @@ def test_astar_occupied_start_gives_no_path():
     occ[0, 0] = True
     path, cost, _ = astar_2d(occ, (0, 0), (2, 2))
     assert len(path) == 0 and math.isinf(cost)
+
+
+def test_kernels_run_without_the_jit():
+    """The same kernels interpreted (NUMBA_DISABLE_JIT=1) give the same answers: the fallback stays correct."""
+    import os
+    import subprocess
+    import sys
+
+    code = """
+import math, numpy as np
+from maru_planner.base.astar import astar_2d
+from maru_planner.base.grid import OccupancyGrid
+from maru_planner.base.se2 import SE2AStarPlanner, rectangle
+rng = np.random.default_rng(1)
+occ = rng.random((15, 18)) < 0.2
+occ[0, 0] = occ[14, 17] = False
+a, j, p = (astar_2d(occ, (0, 0), (14, 17), **kw).cost for kw in ({"method": "astar"}, {}, {"use_numba": False}))
+assert (math.isinf(a) and math.isinf(j) and math.isinf(p)) or (abs(a - j) < 1e-9 and abs(a - p) < 1e-9), (a, j, p)
+grid = OccupancyGrid(np.zeros((12, 12), bool), 0.1)
+r = SE2AStarPlanner(rectangle(0.4, 0.2), headings=8).plan(grid, (0.25, 0.25, 0.0), (0.95, 0.85, 1.5708))
+assert r.success and len(r.path) > 2, r.message
+print("ok")
+"""
+    env = dict(os.environ, NUMBA_DISABLE_JIT="1")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120)
+    assert out.returncode == 0 and "ok" in out.stdout, out.stdout + out.stderr
