@@ -87,6 +87,9 @@ def record_world(world_path: Path, out: Path, *, seed: int = 0, skip: float = 0.
                  rate: float | None = None, storage: str = "sqlite3", params_file: Path | None = None) -> dict:
     """Record one window of a run in ``world_path`` to the bag directory ``out``; returns a summary.
 
+    Receive timestamps are the header stamps plus 0..3 ns, so that readers order the messages of one
+    tick as they happened (goal, plan; then tf, odom, scan, cmd_vel) whatever they do with ties.
+
     ``rate``: laser ticks per second, by default the world's laser rate (the controller's steps are
     per update, so the rate is part of the scenario).
     """
@@ -108,7 +111,7 @@ def record_world(world_path: Path, out: Path, *, seed: int = 0, skip: float = 0.
         for topic, msgtype in TOPICS.items():
             bag.add_topic(topic, msgtype)
         bag.write("/goal_pose", _ns(start), _wire(conv.pose_stamped_msg(goal, ODOM, start))[0])
-        bag.write("/plan", _ns(start), plan[0])
+        bag.write("/plan", _ns(start) + 1, plan[0])
         while sim.time < skip + duration - 1e-9:
             stamp = STAMP_BASE + sim.time
             odom = _wire(conv.odom_msg(sim.robot_pose, v, w, stamp, ODOM, BASE))
@@ -118,9 +121,9 @@ def record_world(world_path: Path, out: Path, *, seed: int = 0, skip: float = 0.
             if ticks % 10 == 0:
                 strips.append(np.asarray(out_cmd.strip).copy())
             bag.write("/tf", _ns(stamp), _tf(sim.robot_pose, stamp, params.laser_pose))
-            bag.write("/odom", _ns(stamp), odom[0])
-            bag.write("/scan", _ns(stamp), scan[0])
-            bag.write("/cmd_vel", _ns(stamp), serialize_message(conv.twist_msg(v, w)))
+            bag.write("/odom", _ns(stamp) + 1, odom[0])
+            bag.write("/scan", _ns(stamp) + 2, scan[0])
+            bag.write("/cmd_vel", _ns(stamp) + 3, serialize_message(conv.twist_msg(v, w)))
             ticks += 1
             if out_cmd.reached_goal:
                 outcome = "goal"
