@@ -9,7 +9,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.patches import Circle, Polygon  # noqa: E402
 
-STRIP_COLOURS = {"modified": "tab:blue", "plain": "tab:red", "baseline": "tab:gray"}
+STRIP_COLOURS = {"modified": "tab:blue", "plain": "tab:red", "baseline": "tab:gray", "modified_literal": "tab:purple",
+                 "modified_straight": "tab:cyan"}
 
 
 def draw_world(ax, world, t: float = 0.0, mover_offset: float = 0.0, show_movers: bool = True) -> None:
