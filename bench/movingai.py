@@ -218,7 +218,8 @@ def write_outputs(summary: dict, records: list[dict], args) -> None:
     lines = [
         "# MovingAI benchmark (2-D A*, 8-connected, octile, no corner cutting)", "",
         f"Run: {'--quick' if args.quick else 'full'}; median time per query in ms; exact = path length equal to",
-        "the scenario's optimal length (to its printed precision). pyastar2d allows corner cutting and costs",
+        "the scenario's optimal length (to one unit of its last printed digit, or 1e-6 relative when larger).",
+        "pyastar2d allows corner cutting and costs",
         "diagonals 1, so its lengths are not the MovingAI ones. Peers' speed-ups are on their own query subset",
         "(ours timed on the same queries, restricted to shorter queries: see --peer-max-length).", "",
         "| set | queries | ours exact | ours ms | pyastar2d ms | ours / pyastar2d | pyastar2d exact (cuts) "
