@@ -214,3 +214,16 @@ def test_asymmetric_scene_passes_only_with_the_side_dependent_clearance():
     wide_both = dataclasses.replace(w, robot=dataclasses.replace(w.robot, body_right=w.robot.body_left))
     conservative = map_3d_to_2d(wide_both)
     assert not TrackFollowingPlanner(w.robot).plan(conservative, w.start, w.goal).success
+
+
+def test_both_planners_on_a_plain_grid_map_the_house():
+    from maru_planner.base import registry
+    from maru_planner.base.grid import OccupancyGrid
+
+    house = OccupancyGrid.from_yaml(config_path("maps", "house_250.yaml"))
+    footprint = np.array([[0.2, 0.18], [-0.2, 0.18], [-0.2, -0.18], [0.2, -0.18]])
+    for planner_id in ("biped_track", "biped_wall"):
+        plan = registry.plan(planner_id, house, (2.5, 21.0, 0.0), (22.0, 3.0, 0.0), footprint, time_limit=60.0)
+        assert plan.success, (planner_id, plan.message)
+        m = plan.layers["map"]
+        _assert_walkable(m, BipedRobot(gait_length=0.4, gait_width=0.36, body_left=0.18, body_right=0.18), plan.path)

@@ -234,6 +234,10 @@ class VirtualWallPlanner:
             distance = math.hypot(goal[0] - pose[0], goal[1] - pose[1])
             if distance <= p.goal_tolerance:
                 return self._arrive(checker, pose, goal, poses)
+            if distance <= p.lookahead / 2:
+                arrived = self._arrive(checker, pose, goal, poses)  # close: side-step straight onto the goal
+                if arrived[0] == res.SOLVED:
+                    return arrived
             if distance < best_distance - 1e-6:
                 best_distance, since_best = distance, 0
             else:
@@ -338,7 +342,7 @@ class VirtualWallPlanner:
         return None, 0.0
 
     def _arrive(self, checker, pose, goal, poses):
-        """Step onto the goal and turn to its heading about the centre, if free."""
+        """Step (sideways if need be, a biped can) onto the goal and turn to its heading about the centre."""
         final = (goal[0], goal[1], pose[2])
         if checker.sweep_collides(np.array([pose, final]), checker.resolution / 2):
             return res.NO_PATH, "could not make the last step onto the goal", []
