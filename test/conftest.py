@@ -2,12 +2,15 @@
 
 Every process that starts rclpy in the suite (this one and the node
 subprocesses it spawns, which inherit ``os.environ``) talks DDS on 127.0.0.1
-only, on a domain id picked at random for this run.
+only, on a domain id picked at random for this run among those no other DDS
+participant on this machine is using (test runs may share a machine).
 """
 
 from __future__ import annotations
 
 import os
+import random
+import socket
 import subprocess
 import sys
 import threading
@@ -21,8 +24,29 @@ from maru_planner.ros.env import configure_loopback_dds
 REPO_ROOT = Path(__file__).resolve().parent.parent
 
 
+def _domain_in_use(domain: int, participants: int = 4) -> bool:
+    """Whether a Fast DDS participant on this machine holds a discovery port of ``domain``.
+
+    RTPS port mapping: participant ``i`` of domain ``d`` takes UDP 7410 + 250 d + 2 i (metatraffic unicast).
+    """
+    for index in range(participants):
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+            try:
+                probe.bind(("127.0.0.1", 7410 + 250 * domain + 2 * index))
+            except OSError:
+                return True
+    return False
+
+
+def _unused_domain_id() -> int:
+    """A random ROS domain id in 1..100 that no other run on this machine uses (any one if all are taken)."""
+    domains = list(range(1, 101))
+    random.SystemRandom().shuffle(domains)
+    return next((d for d in domains if not _domain_in_use(d)), domains[0])
+
+
 def pytest_configure(config):
-    configure_loopback_dds(random_domain=True)
+    configure_loopback_dds(domain_id=_unused_domain_id())
     os.environ.setdefault("MPLBACKEND", "Agg")
 
 

@@ -46,13 +46,19 @@ class Recorder:
     """Subscribes to TOPICS and keeps (topic, receive time ns, CDR bytes) in arrival order."""
 
     def __init__(self, node):
+        from rclpy.qos import DurabilityPolicy, QoSProfile
         from rclpy.serialization import serialize_message
 
         self.records: list[tuple[str, int, bytes]] = []
         self._lock = threading.Lock()
+        # Deep queues: a loaded test process may fall behind for a while without losing a message.
+        # The trajectory reader is latched like the node's publisher, so a late match loses no plan.
+        volatile = QoSProfile(depth=1000)
+        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
         for topic, msgtype in TOPICS.items():
+            qos = latched if topic.endswith("/planned_trajectory") else volatile
             node.create_subscription(
-                _message_class(msgtype), topic, lambda msg, t=topic: self._keep(t, serialize_message(msg)), 50
+                _message_class(msgtype), topic, lambda msg, t=topic: self._keep(t, serialize_message(msg)), qos
             )
 
     def _keep(self, topic: str, raw: bytes) -> None:
@@ -92,13 +98,14 @@ def session_bag(node_process, rclpy_session, tmp_path_factory):
     node = spinning.node
     recorder = Recorder(node)
     client = PlanningClient(node=node)
-    assert client.plan_client.wait_for_service(timeout_sec=60.0), proc.log()
+    assert client.plan_client.wait_for_service(timeout_sec=120.0), proc.log()
+    client.wait_until_ready(timeout=120.0)  # the node has matched our service clients too
     from sensor_msgs.msg import JointState
 
     publisher = node.create_publisher(JointState, "/joint_states", 10)
-    assert spinning.wait_for(lambda: publisher.get_subscription_count() >= 2)  # the node and the recorder
-    # the node's marker timer greets the recorder's new subscription with the scene
-    assert spinning.wait_for(lambda: recorder.count(f"{NODE}/markers") >= 1, timeout=20.0)
+    assert spinning.wait_for(lambda: publisher.get_subscription_count() >= 2, 60.0)  # the node and the recorder
+    # the node's marker timer greets the recorder's new subscription with the scene (so it has matched it)
+    assert spinning.wait_for(lambda: recorder.count(f"{NODE}/markers") >= 1, timeout=60.0)
     stop = threading.Event()
     published: list[dict[str, float]] = []
 
@@ -116,6 +123,7 @@ def session_bag(node_process, rclpy_session, tmp_path_factory):
     responses = []
     try:
         assert spinning.wait_for(lambda: recorder.count("/joint_states") >= 5)
+        _wait_until_node_has_joint_states(client)
         for i in range(PLANS):
             if i == 1:
                 pose = np.eye(4)
@@ -126,21 +134,40 @@ def session_bag(node_process, rclpy_session, tmp_path_factory):
             response = client.plan(goal, start=None, planner_id="RRTConnect", time_budget=5.0, seed=i)
             assert response.error.code == PlanningError.SUCCESS, response.error.message
             responses.append(response)
-        assert spinning.wait_for(lambda: recorder.count(f"{NODE}/planned_trajectory") >= PLANS, timeout=10.0)
-        assert spinning.wait_for(lambda: recorder.count(f"{NODE}/markers") >= PLANS, timeout=10.0)
+        # markers: the greeting, one per plan (sent after its answer), one for the scene change
+        assert spinning.wait_for(lambda: recorder.count(f"{NODE}/planned_trajectory") >= PLANS, timeout=60.0)
+        assert spinning.wait_for(lambda: recorder.count(f"{NODE}/markers") >= PLANS + 2, timeout=60.0)
     finally:
         stop.set()
         thread.join(timeout=2.0)
     path = tmp_path_factory.mktemp("bags") / "planning_session"
     recorder.write(path)
-    yield path, responses, published, spinning, client
+    yield path, responses, published, spinning, client, publisher
     spinning.destroy()
+
+
+def _wait_until_node_has_joint_states(client, timeout: float = 60.0) -> None:
+    """Until the node has matched the /joint_states publisher it drops what is sent: wait for the first one.
+
+    The probe has no goal: INVALID_REQUEST once the node has a joint state, NO_START_STATE before.
+    """
+    from maru_planner.ros.planning_client import plan_request
+    from maru_planner_interfaces.msg import PlanningError
+
+    deadline = time.monotonic() + timeout
+    while True:
+        answer = client.call(client.plan_client, plan_request(None, start=None, time_budget=1.0), 30.0)
+        if answer.error.code != PlanningError.NO_START_STATE:
+            assert answer.error.code == PlanningError.INVALID_REQUEST, answer.error.message
+            return
+        assert time.monotonic() < deadline, "the node never received /joint_states"
+        time.sleep(0.05)
 
 
 def test_session_bag_holds_every_topic(session_bag):
     from maru_planner.bag.rosbag_io import summarize
 
-    path, responses, published, _, _ = session_bag
+    path, responses, published, _, _, _ = session_bag
     summary = summarize(path)
     assert summary.topics == TOPICS
     assert summary.counts[f"{NODE}/planned_trajectory"] == len(responses) == PLANS
@@ -153,7 +180,7 @@ def test_replay_reads_back_types_counts_and_increasing_timestamps(session_bag):
 
     from maru_planner.bag.rosbag_io import read_messages
 
-    path, responses, _, _, _ = session_bag
+    path, responses, _, _, _, _ = session_bag
     by_topic: dict[str, list] = {topic: [] for topic in TOPICS}
     for record in read_messages(path):
         assert record.msgtype == TOPICS[record.topic]
@@ -189,18 +216,31 @@ def test_replayed_joint_states_drive_the_next_plan(session_bag):
     from maru_planner.bag.rosbag_io import read_messages
     from maru_planner_interfaces.msg import PlanningError
 
-    path, _, _, spinning, client = session_bag
-    publisher = spinning.node.create_publisher(JointState, "/joint_states", 10)
-    assert spinning.wait_for(lambda: publisher.get_subscription_count() >= 1)
+    # the session's publisher: the node has matched it (the session's plans started from its messages)
+    path, _, _, _, client, publisher = session_bag
     records = list(read_messages(path, ["/joint_states"]))[:10]
     for record in records:
         publisher.publish(record.rawdata)  # the recorded bytes, as `ros2 bag play` would send them
         time.sleep(0.02)
     last = deserialize_message(records[-1].rawdata, JointState)
-    time.sleep(0.5)
-    goal = dict(START, r_arm_j4=START["r_arm_j4"] + 0.45)
-    response = client.plan(goal, start=None, planner_id="RRTConnect", time_budget=5.0, seed=11)
-    assert response.error.code == PlanningError.SUCCESS, response.error.message
-    first = dict(zip(response.trajectory.joint_names, response.trajectory.points[0].positions, strict=True))
     expected = dict(zip(last.name, last.position, strict=True))
+    goal = dict(START, r_arm_j4=START["r_arm_j4"] + 0.45)
+
+    def first_point(response) -> dict[str, float]:
+        return dict(zip(response.trajectory.joint_names, response.trajectory.points[0].positions, strict=True))
+
+    def plan_started_at_last(response) -> bool:
+        if response.error.code != PlanningError.SUCCESS:
+            return False
+        first = first_point(response)
+        return bool(np.allclose([first[n] for n in JOINTS], [expected[n] for n in JOINTS], atol=1e-9))
+
+    # the messages are on their way, nothing orders them with the plan request: plan until they are in
+    deadline = time.monotonic() + 60.0
+    response = client.plan(goal, start=None, planner_id="RRTConnect", time_budget=5.0, seed=11)
+    while not plan_started_at_last(response) and time.monotonic() < deadline:
+        time.sleep(0.1)
+        response = client.plan(goal, start=None, planner_id="RRTConnect", time_budget=5.0, seed=11)
+    assert response.error.code == PlanningError.SUCCESS, response.error.message
+    first = first_point(response)
     np.testing.assert_allclose([first[n] for n in JOINTS], [expected[n] for n in JOINTS], atol=1e-9)

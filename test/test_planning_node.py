@@ -71,8 +71,57 @@ def client(planner_node, tester):
     from maru_planner.ros.planning_client import PlanningClient
 
     planning = PlanningClient(node=tester.node)
-    assert planning.plan_client.wait_for_service(timeout_sec=60.0), "plan_motion never appeared:\n" + planner_node.log()
+    appeared = planning.plan_client.wait_for_service(timeout_sec=120.0)
+    assert appeared, "plan_motion never appeared:\n" + planner_node.log()
+    planning.wait_until_ready(timeout=120.0)  # the node has matched us too: no first answer gets lost
     return planning
+
+
+@pytest.fixture(scope="module")
+def joint_states(client, tester):
+    """The module's /joint_states publisher, proven delivered (see ``_plan_from_joint_states``).
+
+    Created by the first test that needs it, so the tests before it see a node without joint states.
+    """
+    from sensor_msgs.msg import JointState
+
+    publisher = tester.node.create_publisher(JointState, "/joint_states", 10)
+    assert tester.wait_for(lambda: publisher.get_subscription_count() > 0, timeout=60.0)
+    state = _easy_goal(PAPER_START, 0.1)
+    response = _plan_from_joint_states(client, tester, publisher, state, _easy_goal(PAPER_START, 0.3))
+    _assert_success(response)
+    return publisher
+
+
+def _publish_state(tester, publisher, state: dict[str, float], times: int = 3) -> None:
+    from maru_planner.ros.planning_conversions import joint_state_msg
+
+    for _ in range(times):
+        publisher.publish(joint_state_msg(list(state), list(state.values()), tester.node.get_clock().now().to_msg()))
+        time.sleep(0.02)
+
+
+def _starts_at(response, state: dict[str, float]) -> bool:
+    if response.error.code != _codes().SUCCESS:
+        return False
+    names, _, positions = _positions(response)
+    return bool(np.allclose(positions[0], [state[n] for n in names], atol=1e-6))
+
+
+def _plan_from_joint_states(client, tester, publisher, state, goal, seed: int = 1, timeout: float = 60.0):
+    """Publish ``state`` on /joint_states and plan with an empty start until the plan starts there.
+
+    /joint_states and the plan request travel on different DDS endpoints: nothing orders them, and
+    right after discovery the node may not have matched a new publisher yet (what it misses is lost).
+    Returns the last response; the caller's assertions say what was wrong if it never started there.
+    """
+    deadline = time.monotonic() + timeout
+    while True:
+        _publish_state(tester, publisher, state)
+        response = client.plan(goal, start=None, time_budget=5.0, seed=seed)
+        if _starts_at(response, state) or time.monotonic() > deadline:
+            return response
+        time.sleep(0.1)
 
 
 def _codes():
@@ -161,7 +210,7 @@ def test_robot_description_is_latched(client, tester):
     received = []
     qos = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
     tester.node.create_subscription(String, "/robot_description", received.append, qos)
-    assert tester.wait_for(lambda: received, timeout=20.0)
+    assert tester.wait_for(lambda: received, timeout=60.0)
     assert "maru1_upper_body" in received[0].data and "<robot" in received[0].data
 
 
@@ -257,22 +306,10 @@ def test_compute_ik_service(client, core):
     assert response.error.code == _codes().NO_IK_SOLUTION and "r_hand" in response.error.message
 
 
-def test_empty_start_uses_latest_joint_states(client, tester):
-    from maru_planner.ros.planning_conversions import joint_state_msg
-
-    publisher = tester.node.create_publisher(joint_state_msg([], []).__class__, "/joint_states", 10)
-    start = _easy_goal(PAPER_START, 0.2)  # differs from PAPER_START, so the node cannot be using a default
+def test_empty_start_uses_latest_joint_states(client, tester, joint_states):
+    start = _easy_goal(PAPER_START, 0.2)  # differs from PAPER_START and the fixture's state
     goal = _easy_goal(PAPER_START, 0.5)
-
-    def publish_and_plan():
-        message = joint_state_msg(list(start), list(start.values()), tester.node.get_clock().now().to_msg())
-        for _ in range(5):
-            publisher.publish(message)
-            time.sleep(0.05)
-        return client.plan(goal, start=None, time_budget=5.0, seed=1)
-
-    assert tester.wait_for(lambda: publisher.get_subscription_count() > 0, timeout=20.0)
-    response = publish_and_plan()
+    response = _plan_from_joint_states(client, tester, joint_states, start, goal)
     _assert_success(response)
     names, _, positions = _positions(response)
     np.testing.assert_allclose(positions[0], [start[n] for n in names], atol=1e-6)
@@ -341,11 +378,25 @@ def test_scene_topic_adds_and_removes_obstacles(client, tester):
     pose = np.eye(4)
     pose[:3, 3] = [-1.0, 0.0, 0.0]
     message = obstacle_msg("behind", "box", [0.1, 0.1, 0.1], pose)
-    assert tester.wait_for(lambda: publisher.get_subscription_count() > 0, timeout=20.0)
-    publisher.publish(message)
-    assert tester.wait_for(lambda: "behind" in [o.name for o in client.get_scene().obstacles], timeout=10.0)
+    assert tester.wait_for(lambda: publisher.get_subscription_count() > 0, timeout=60.0)
+
+    def listed() -> bool:
+        return "behind" in [o.name for o in client.get_scene().obstacles]
+
+    # Until the node has matched this new publisher what it sends is lost: send until it shows. A repeated
+    # ADD replaces the same box; one writer's messages arrive in order, so none can land after the REMOVE.
+    assert _publish_until(tester, publisher, message, listed), "the ADD never reached the scene"
     publisher.publish(SceneObstacle(name="behind", operation=SceneObstacle.REMOVE))
-    assert tester.wait_for(lambda: "behind" not in [o.name for o in client.get_scene().obstacles], 10.0)
+    assert tester.wait_for(lambda: not listed(), timeout=30.0)
+
+
+def _publish_until(tester, publisher, message, condition, timeout: float = 60.0) -> bool:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        publisher.publish(message)
+        if tester.wait_for(condition, timeout=min(1.0, max(deadline - time.monotonic(), 0.0)), period=0.05):
+            return True
+    return False
 
 
 # ---------------------------------------------------------------- bad input
@@ -443,13 +494,14 @@ def test_malformed_obstacle_leaves_scene_unchanged(client):
 
 
 def test_eight_concurrent_clients_each_get_their_own_answer(planner_node, tester):
-    from maru_planner.ros.planning_client import plan_request
+    from maru_planner.ros.planning_client import call_until_answered, plan_request
     from maru_planner_interfaces.srv import PlanMotion
 
     node = tester.node
     clients = [node.create_client(PlanMotion, "plan_motion") for _ in range(8)]
     for c in clients:
-        assert c.wait_for_service(timeout_sec=30.0)
+        assert c.wait_for_service(timeout_sec=60.0)
+        call_until_answered(c, PlanMotion.Request(), timeout=60.0)  # an empty request: INVALID_REQUEST at once
     goals = [_easy_goal(PAPER_START, 0.05 * (i + 1)) for i in range(8)]
     futures = [
         c.call_async(plan_request(g, start=PAPER_START, planner_id="RRTConnect", time_budget=10.0, seed=i))
@@ -463,24 +515,20 @@ def test_eight_concurrent_clients_each_get_their_own_answer(planner_node, tester
         np.testing.assert_allclose(positions[-1], [goal[n] for n in names], atol=1e-6)
 
 
-def test_a_long_plan_does_not_block_joint_states_or_scene_updates(client, tester):
+def test_a_long_plan_does_not_block_joint_states_or_scene_updates(client, tester, joint_states):
     """While an RRT search runs (it cannot solve the paper problem, so it uses its whole budget),
-    scene services answer and /joint_states are taken in; a plan sent meanwhile starts from them."""
-    from sensor_msgs.msg import JointState
+    scene services answer and /joint_states are taken in; a plan sent meanwhile starts from them.
 
+    ``joint_states`` is already matched by the node, and the three service calls after publishing
+    come back only after the node has taken in the joint states sent before them."""
     from maru_planner.ros.planning_client import plan_request
-    from maru_planner.ros.planning_conversions import joint_state_msg
 
-    publisher = tester.node.create_publisher(JointState, "/joint_states", 10)
-    assert tester.wait_for(lambda: publisher.get_subscription_count() > 0, timeout=20.0)
     long_plan = client.plan_client.call_async(
         plan_request(PAPER_GOAL, start=PAPER_START, planner_id="RRT", time_budget=8.0, seed=5)
     )
     time.sleep(0.3)
     moved = _easy_goal(PAPER_START, 0.15)
-    for _ in range(5):
-        publisher.publish(joint_state_msg(list(moved), list(moved.values())))
-        time.sleep(0.05)
+    _publish_state(tester, joint_states, moved, times=5)
     pose = np.eye(4)
     pose[:3, 3] = [-1.0, -0.5, 0.3]
     added = client.add_obstacle("meanwhile", "sphere", [0.05], pose)
@@ -494,7 +542,7 @@ def test_a_long_plan_does_not_block_joint_states_or_scene_updates(client, tester
         plan_request(_easy_goal(PAPER_START, 0.4), planner_id="RRTConnect", time_budget=10.0, seed=2)
     )
     assert not long_plan.done()
-    assert tester.wait_for(lambda: long_plan.done() and follow_up.done(), timeout=60.0)
+    assert tester.wait_for(lambda: long_plan.done() and follow_up.done(), timeout=120.0)
     assert long_plan.result().error.code == _codes().TIMED_OUT
     names, _, positions = _positions(follow_up.result())
     np.testing.assert_allclose(positions[0], [moved[n] for n in names], atol=1e-9)
@@ -511,7 +559,7 @@ DISCONNECTING_CLIENT = textwrap.dedent(
     client = PlanningClient(node_name="leaving_client")
     goal = dict(zip({names!r}, {goal!r}))
     start = dict(zip({names!r}, {start!r}))
-    assert client.plan_client.wait_for_service(timeout_sec=30.0)
+    client.wait_until_ready(timeout=60.0)  # both directions matched: the call below reaches the node
     client.plan_client.call_async(plan_request(goal, start=start, planner_id="RRT", time_budget=4.0))
     print("sent", flush=True)
     time.sleep(1.0)
@@ -521,31 +569,47 @@ DISCONNECTING_CLIENT = textwrap.dedent(
 )
 
 
-def test_survives_a_client_that_disconnects_mid_call(client, planner_node):
+def test_survives_a_client_that_disconnects_mid_call(client, tester, planner_node):
     script = DISCONNECTING_CLIENT.format(
         names=GROUP_JOINTS, goal=[PAPER_GOAL[n] for n in GROUP_JOINTS], start=[PAPER_START[n] for n in GROUP_JOINTS]
     )
-    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
+    timed_out = planner_node.log().count("plan_motion: TIMED_OUT")
+    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=180)
     assert "sent" in result.stdout, result.stderr
-    time.sleep(4.0)  # the abandoned plan finishes and its answer goes nowhere
+    # the abandoned plan (RRT cannot solve it) runs out its budget and its answer goes nowhere
+    ended = tester.wait_for(lambda: planner_node.log().count("plan_motion: TIMED_OUT") > timed_out, 60.0, 0.1)
+    assert ended, "the abandoned plan never ended:\n" + planner_node.log()[-2000:]
     assert planner_node.alive(), planner_node.log()
     _good_request_still_succeeds(client)
 
 
 def test_trajectory_and_markers_are_published(client, tester):
+    from rclpy.qos import DurabilityPolicy, QoSProfile
     from trajectory_msgs.msg import JointTrajectory
     from visualization_msgs.msg import MarkerArray
 
     trajectories, markers = [], []
     node = tester.node
-    node.create_subscription(JointTrajectory, f"{NODE}/planned_trajectory", trajectories.append, 10)
+    # Latched like the node's publisher: even if the node matches this reader only after publishing
+    # the plan, the reader still gets it. An older plan may come first; the wait below picks ours.
+    latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    node.create_subscription(JointTrajectory, f"{NODE}/planned_trajectory", trajectories.append, latched)
     node.create_subscription(MarkerArray, f"{NODE}/markers", markers.append, 10)
-    assert tester.wait_for(lambda: node.count_publishers(f"{NODE}/markers") > 0, timeout=20.0)
-    assert tester.wait_for(lambda: markers, timeout=20.0)  # the node greets a new subscriber with the scene
+    assert tester.wait_for(lambda: node.count_publishers(f"{NODE}/markers") > 0, timeout=60.0)
+    # the node greets a new subscriber with the scene (so it has matched this reader: nothing later is lost)
+    assert tester.wait_for(lambda: markers, timeout=60.0)
     response = _plan(client, _easy_goal(PAPER_START, 0.35), planner_id="RRTConnect")
     _assert_success(response)
-    assert tester.wait_for(lambda: trajectories and any(_namespaces(m) >= {"hand_path"} for m in markers), 20.0)
-    last = trajectories[-1]
+    stamp = response.trajectory.header.stamp
+
+    def ours(msg) -> bool:
+        return msg.header.stamp == stamp
+
+    def plan_markers_of_ours() -> bool:
+        return any(mk.ns == "hand_path" and ours(mk) for m in markers for mk in m.markers)
+
+    assert tester.wait_for(lambda: any(ours(t) for t in trajectories) and plan_markers_of_ours(), 60.0)
+    last = [t for t in trajectories if ours(t)][-1]
     assert list(last.joint_names) == list(response.trajectory.joint_names)
     assert len(last.points) == len(response.trajectory.points)
     spaces = set().union(*(_namespaces(m) for m in markers))

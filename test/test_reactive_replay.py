@@ -99,7 +99,9 @@ def replay_bag(bag: Path, node_process, spinning_factory, tmp_path: Path, inject
                 client.scan_pub.publish(_malformed_scans(conv.stamp_to_s(msg.header.stamp))[next(bad)])
             client.step(odom, msg)
             result.scans.append(msg)
-    assert spinning.wait_for(lambda: len(client.strips) >= len(result.scans) and len(client.arm) >= len(result.scans))
+    assert spinning.wait_for(
+        lambda: len(client.strips) >= len(result.scans) and len(client.arm) >= len(result.scans), timeout=60
+    )
     answers = [client.stamped[conv.stamp_to_ns(scan.header.stamp)] for scan in result.scans]
     assert client.plain_twists_end_with(answers), "cmd_vel must carry the same commands as cmd_vel_stamped"
     result.twists = [(t.linear.x, t.angular.z) for t in answers]
@@ -269,6 +271,6 @@ def test_closed_loop_simulator_and_node_reach_the_goal_without_collision(node_pr
         min_clearance = min(min_clearance, sim.clearance())
     assert sim.goal_distance() <= world.goal_tolerance, f"stopped at {sim.robot_pose} after {sim.time:.1f} s"
     assert min_clearance > 0.0
-    assert client.spinning.wait_for(lambda: len(client.markers) > 0), "markers go out while someone listens"
+    assert client.spinning.wait_for(lambda: len(client.markers) > 0, 60), "markers go out while someone listens"
     assert [m.ns for m in client.markers[-1].markers][:3] == ["strip", "vias", "obstacles"]
     assert process.alive()

@@ -54,6 +54,22 @@ class PlanningClient:
 
     # ------------------------------------------------------------ calls
 
+    def wait_until_ready(self, timeout: float = 60.0) -> None:
+        """Wait until every service of the node answers (see :func:`call_until_answered`).
+
+        The probes change nothing: an empty plan / IK request (answered INVALID_REQUEST),
+        removing an obstacle name no scene uses (INVALID_SCENE), reading the scene.
+        """
+        deadline = time.monotonic() + timeout
+        probes = (
+            (self.scene_client, GetScene.Request()),
+            (self.plan_client, PlanMotion.Request()),
+            (self.ik_client, ComputeIK.Request()),
+            (self.apply_client, ApplyScene.Request(obstacles=[_removal(" no such obstacle ")])),
+        )
+        for client, request in probes:
+            call_until_answered(client, request, max(deadline - time.monotonic(), 0.001))
+
     def call(self, client, request, timeout: float = 60.0):
         """Send ``request`` and wait for the response (the node must be spun by an executor)."""
         return call_service(client, request, timeout)
@@ -121,7 +137,7 @@ class PlanningClient:
         return self.apply_scene([obstacle_msg(name, shape, dimensions, pose, frame_id)], **kwargs)
 
     def remove_obstacle(self, name: str, **kwargs):
-        return self.apply_scene([SceneObstacle(name=name, operation=SceneObstacle.REMOVE)], **kwargs)
+        return self.apply_scene([_removal(name)], **kwargs)
 
     def get_scene(self, timeout: float = 30.0) -> GetScene.Response:
         return self.call(self.scene_client, GetScene.Request(), timeout)
@@ -145,13 +161,33 @@ def call_service(client, request, timeout: float = 60.0):
     if not client.wait_for_service(timeout_sec=timeout):
         raise TimeoutError(f"service {client.srv_name} not available after {timeout} s")
     future = client.call_async(request)
-    deadline = time.monotonic() + timeout
-    while not future.done():
-        if time.monotonic() > deadline:
-            client.remove_pending_request(future)
-            raise TimeoutError(f"no response from {client.srv_name} within {timeout} s")
-        time.sleep(0.0002)
+    answered = threading.Event()
+    future.add_done_callback(lambda _future: answered.set())
+    if not answered.wait(timeout):  # blocks without polling: no CPU taken from the node being called
+        client.remove_pending_request(future)
+        raise TimeoutError(f"no response from {client.srv_name} within {timeout} s")
     return future.result()
+
+
+def call_until_answered(client, request, timeout: float = 60.0):
+    """Send a harmless ``request`` again and again until one is answered; return that answer.
+
+    ``wait_for_service`` only says that this client has matched the server. Right after
+    discovery the server may not have matched the client's response reader yet, and
+    rmw_fastrtps then drops the answer (the client would wait for nothing). An answer
+    that comes back proves both directions, so later calls are safe. Only for requests
+    that change nothing (they may be served more than once).
+    """
+    deadline = time.monotonic() + timeout
+    attempt = 1.0
+    while True:
+        left = deadline - time.monotonic()
+        if left <= 0.0:
+            raise TimeoutError(f"{client.srv_name} never answered within {timeout} s")
+        try:
+            return call_service(client, request, min(attempt, left))
+        except TimeoutError:
+            attempt = min(2.0 * attempt, 8.0)  # a slow server gets more time on each try
 
 
 def plan_request(
@@ -199,6 +235,10 @@ def obstacle_msg(name: str, shape: str, dimensions, pose, frame_id: str = "base_
     msg.shape.dimensions = [float(v) for v in dimensions]
     msg.pose = _pose(pose)
     return msg
+
+
+def _removal(name: str) -> SceneObstacle:
+    return SceneObstacle(name=name, operation=SceneObstacle.REMOVE)
 
 
 def _joint_state(values: dict[str, float]) -> JointState:
