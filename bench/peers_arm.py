@@ -252,7 +252,13 @@ def summarise(runs: list[dict], budget: float) -> dict:
 
 
 def run(solver, cases, budget, seeds, label) -> list[dict]:
+    """Every case x seed; one untimed warm-up solve first (numba loads its cached machine code, OMPL and
+    pinocchio set up their first objects), so one-time process costs do not land on the first problem."""
     runs = []
+    try:
+        solver.solve(cases[0], min(budget, 0.2), seeds[0])
+    except Exception:  # the timed run reports it
+        pass
     t0 = time.monotonic()
     for k, case in enumerate(cases):
         for seed in seeds:
