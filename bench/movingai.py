@@ -31,8 +31,9 @@ REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
 from maru_planner.base.astar import astar_2d, path_cost  # noqa: E402
+from maru_planner.paths import benchmarks_dir  # noqa: E402
 
-DATA = REPO.parent / "shared" / "benchmarks" / "movingai"
+DATA = benchmarks_dir() / "movingai"
 RESULTS = REPO / "bench" / "results"
 SETS = ("dao", "room", "maze", "street", "random")
 

@@ -31,9 +31,10 @@ from paper003_maps import HOUSE_GOAL, HOUSE_RADIUS, HOUSE_START, far_free_pair, 
 from maru_planner.base.astar import astar_2d  # noqa: E402
 from maru_planner.base.grid import OccupancyGrid  # noqa: E402
 from maru_planner.base.tunnel import TunnelPlanner  # noqa: E402
+from maru_planner.paths import benchmarks_dir  # noqa: E402
 
 RESULTS = ROOT / "bench" / "results"
-MOVINGAI = Path("/work/shared/benchmarks/movingai")
+MOVINGAI = benchmarks_dir() / "movingai"
 MOVINGAI_MAPS = ["dao/arena.map", "dao/den312d.map", "dao/ost003d.map", "room/16room_000.map",
                  "maze/maze512-4-0.map", "random/random512-20-0.map", "street/Berlin_0_256.map"]
 

@@ -30,3 +30,15 @@ def config_path(*parts: str) -> Path:
 
 def urdf_path(*parts: str) -> Path:
     return share_dir().joinpath("urdf", *parts)
+
+
+def benchmarks_dir() -> Path:
+    """Public benchmark data (MovingAI, BARN, MotionBenchMaker); not shipped with the package.
+
+    ``MARU_BENCHMARKS_DIR`` wins; else ``../shared/benchmarks`` next to a source checkout.
+    The directory may not exist: callers skip or fail with a message naming it.
+    """
+    override = os.environ.get("MARU_BENCHMARKS_DIR")
+    if override:
+        return Path(override)
+    return Path(__file__).resolve().parent.parent.parent / "shared" / "benchmarks"
