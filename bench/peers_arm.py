@@ -32,6 +32,7 @@ from maru_planner.collision import CollisionChecker, obstacle_geometry, self_col
 from maru_planner.collision.spheres import SphereCollisionChecker
 from maru_planner.collision.verified import plan_verified
 from maru_planner.moveit_scene import PANDA_FINGERS_OPEN, iter_mbm_problems
+from maru_planner.paths import benchmarks_dir
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig
 from maru_planner.planning.problems import PROBLEMS
 from maru_planner.robot import RobotModel, load_example_robot
@@ -39,7 +40,7 @@ from maru_planner.scene import Scene
 
 ROOT = Path(__file__).resolve().parent
 RESULTS = ROOT / "results"
-TARBALL = ROOT.parent.parent / "shared/benchmarks/motionbenchmaker/vamp_panda_problems.tar.bz2"
+TARBALL = benchmarks_dir() / "motionbenchmaker" / "vamp_panda_problems.tar.bz2"
 PANDA_ARM = [f"panda_joint{i}" for i in range(1, 8)]
 NAIVE_RES = "naive OMPL, our resolution"
 VAMP_PUBLISHED = {

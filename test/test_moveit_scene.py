@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 
@@ -16,9 +14,10 @@ from maru_planner.moveit_scene import (
     request_from_moveit,
     scene_from_moveit,
 )
+from maru_planner.paths import benchmarks_dir
 from maru_planner.robot import load_example_robot
 
-TARBALL = Path(__file__).resolve().parents[2] / "shared/benchmarks/motionbenchmaker/vamp_panda_problems.tar.bz2"
+TARBALL = benchmarks_dir() / "motionbenchmaker" / "vamp_panda_problems.tar.bz2"
 
 SCENE = """
 robot_state:
