@@ -25,6 +25,7 @@ import numpy as np
 
 from maru_planner.base import registry
 from maru_planner.base.grid import OccupancyGrid
+from maru_planner.base.result import jsonable
 from maru_planner.base.se2 import rectangle
 from maru_planner.errors import MaruError
 
@@ -58,27 +59,13 @@ def _params(pairs: list[str]) -> dict:
     return params
 
 
-def _jsonable(value):
-    if isinstance(value, dict):
-        return {k: _jsonable(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_jsonable(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    if isinstance(value, np.generic):
-        return value.item()
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
-
-
 def result_to_json(result) -> dict:
     return {
         "success": bool(result.success),
         "status": result.status,
         "message": result.message,
         "path": result.path.tolist(),
-        "stats": _jsonable(result.stats),
+        "stats": jsonable(result.stats),
     }
 
 

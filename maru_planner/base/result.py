@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -60,3 +61,18 @@ class BasePlanResult:
         if len(self.path) < 2:
             return 0.0
         return float(np.sum(np.linalg.norm(np.diff(self.path[:, :2], axis=0), axis=1)))
+
+
+def jsonable(value):
+    """``value`` with numpy arrays/scalars as plain lists/numbers and non-finite floats as None (strict JSON)."""
+    if isinstance(value, dict):
+        return {k: jsonable(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return jsonable(value.tolist())
+    if isinstance(value, np.generic):
+        return jsonable(value.item())
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value

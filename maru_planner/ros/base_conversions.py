@@ -104,17 +104,4 @@ def footprint_from_param(values) -> np.ndarray:
 
 
 def stats_json(stats: dict) -> str:
-    def clean(v):
-        if isinstance(v, dict):
-            return {k: clean(x) for k, x in v.items()}
-        if isinstance(v, list | tuple):
-            return [clean(x) for x in v]
-        if isinstance(v, np.ndarray):
-            return clean(v.tolist())
-        if isinstance(v, np.generic):
-            return clean(v.item())
-        if isinstance(v, float) and not math.isfinite(v):
-            return None
-        return v
-
-    return json.dumps(clean(stats))
+    return json.dumps(R.jsonable(stats))
