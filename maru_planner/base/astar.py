@@ -498,13 +498,7 @@ class GridAStarPlanner:
         t0 = time.perf_counter()
         stats = {"expansions": 0, "collision_checks": 0, "planning_time": 0.0, "deciding_stage": "astar"}
         try:
-            common.check_grid(grid)
-            start, goal = common.as_pose(start, "start"), common.as_pose(goal, "goal")
-            s_cell, g_cell = common.pose_cell(grid, start, "start"), common.pose_cell(grid, goal, "goal")
-            grown = grid.inflate(self.inflation_radius) if self.inflation_radius > 0 else grid
-            for name, pose, cell in (("start", start, s_cell), ("goal", goal, g_cell)):
-                if grown.occupied[cell]:
-                    raise common.occupied_error(name, pose, f"within {self.inflation_radius:.3f} m of an obstacle")
+            start, goal, s_cell, g_cell, grown = common.disc_request(grid, start, goal, self.inflation_radius)
         except common.RequestError as exc:
             stats["planning_time"] = time.perf_counter() - t0
             return common.failure(exc.status, str(exc), stats)

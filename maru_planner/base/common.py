@@ -1,4 +1,4 @@
-"""Request checks and path assembly shared by the grid planners (A*, SE(2) A*, MSPP)."""
+"""Request checks and path assembly shared by the grid planners (A*, SE(2) A*, MSPP, tunnel)."""
 
 from __future__ import annotations
 
@@ -56,6 +56,21 @@ def check_grid(grid) -> None:
 def occupied_error(name: str, pose, what: str) -> RequestError:
     status = R.START_OCCUPIED if name == "start" else R.GOAL_OCCUPIED
     return RequestError(status, f"{name} ({pose[0]:.3f}, {pose[1]:.3f}, {pose[2]:.3f}) is in collision: {what}")
+
+
+def disc_request(grid, start, goal, radius: float):
+    """Check a request for a disc robot of ``radius`` on ``grid``; raises RequestError.
+
+    Returns (start pose, goal pose, start cell, goal cell, grid grown by ``radius``).
+    """
+    check_grid(grid)
+    start, goal = as_pose(start, "start"), as_pose(goal, "goal")
+    s_cell, g_cell = pose_cell(grid, start, "start"), pose_cell(grid, goal, "goal")
+    grown = grid.inflate(radius) if radius > 0 else grid
+    for name, pose, cell in (("start", start, s_cell), ("goal", goal, g_cell)):
+        if grown.occupied[cell]:
+            raise occupied_error(name, pose, f"within {radius:.3f} m of an obstacle")
+    return start, goal, s_cell, g_cell, grown
 
 
 def wrap_angle(a: float) -> float:

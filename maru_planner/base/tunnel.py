@@ -510,11 +510,11 @@ class TunnelPlanner:
 # ----------------------------------------------------------------- world frame
 
 
-def cells_to_path(cells: np.ndarray, to_world, start_theta: float, goal_theta: float) -> np.ndarray:
+def cells_to_path(grid, cells: np.ndarray, start_theta: float, goal_theta: float) -> np.ndarray:
     """(row, col) cells → (x, y, θ) rows; θ follows each segment, the ends keep the request's θ."""
     if len(cells) == 0:
         return np.zeros((0, 3))
-    xy = np.array([to_world(int(r), int(c)) for r, c in cells], dtype=float).reshape(-1, 2)
+    xy = grid.cells_to_world(cells)
     theta = np.empty(len(xy))
     if len(xy) > 1:
         d = np.diff(xy, axis=0)
@@ -550,18 +550,12 @@ class TunnelGridPlanner:
         t0 = time.perf_counter()
         stats = {"expansions": 0, "collision_checks": 0, "planning_time": 0.0, "deciding_stage": "tunnel"}
         try:
-            common.check_grid(grid)
-            start, goal = common.as_pose(start, "start"), common.as_pose(goal, "goal")
-            s_cell, g_cell = common.pose_cell(grid, start, "start"), common.pose_cell(grid, goal, "goal")
-            grown = grid.inflate(self.robot_radius) if self.robot_radius > 0 else grid
-            for name, pose, cell in (("start", start, s_cell), ("goal", goal, g_cell)):
-                if grown.occupied[cell]:
-                    raise common.occupied_error(name, pose, f"within {self.robot_radius:.3f} m of an obstacle")
+            start, goal, s_cell, g_cell, grown = common.disc_request(grid, start, goal, self.robot_radius)
         except common.RequestError as exc:
             stats["planning_time"] = time.perf_counter() - t0
             return common.failure(exc.status, str(exc), stats)
         plan = self.planner.plan_cells(grown.occupied, s_cell, g_cell)
-        path = cells_to_path(plan.waypoints, grid.cell_to_world, start[2], goal[2])
+        path = cells_to_path(grid, plan.waypoints, start[2], goal[2])
         if len(path):
             path[0, :2] = start[:2]
             path[-1, :2] = goal[:2]
@@ -570,8 +564,9 @@ class TunnelGridPlanner:
         stats["collision_checks"] = stats["expansions"]
         last = plan.attempts[-1] if plan.attempts else None
         stats["deciding_stage"] = f"tunnel b={last.big_cell_size}" if last else "tunnel"
-        if len(path) > 1:
-            stats["cost"] = float(np.sum(np.linalg.norm(np.diff(path[:, :2], axis=0), axis=1)))
         layers = {"grown": grown.occupied, "attempts": plan.attempts, "raw_cells": plan.raw_cells,
                   "waypoints": plan.waypoints}
-        return res.BasePlanResult(plan.status, plan.message, path, stats, layers)
+        result = res.BasePlanResult(plan.status, plan.message, path, stats, layers)
+        if len(path) > 1:
+            stats["cost"] = result.path_length()
+        return result
