@@ -43,13 +43,17 @@ def _problem(panda):
 def test_coarse_plan_fails_verification_and_is_refined(panda):
     scene, request = _problem(panda)
     fast, exact = SphereCollisionChecker(panda, scene), CollisionChecker(panda, scene)
-    coarse = MotionPlanner(panda, fast, PlannerConfig(resolution=2.5))  # an edge checks its end state only
-    first = coarse.plan(request)
-    assert first.success, "at this resolution an edge checks its end state only and steps over the plate"
-    assert not verify_path(exact, full_path(panda, request, first), 0.01).valid
-    out = plan_verified(coarse, exact, request, resolution=0.01, max_refinements=5)
-    assert out.fallback_used
-    assert out.success and out.verification.valid
+    # At resolution 2.5 an edge checks its end state only and steps over the plate; with no re-plan
+    # allowed, the facade's exact re-check must turn that path into a failure.
+    config = PlannerConfig(resolution=2.5, verify_resolution=0.01, max_refinements=0)
+    first = MotionPlanner(panda, fast, config, exact_checker=exact).plan(request)
+    assert not first.success and first.path is None
+    assert "failed verification on the exact model" in first.message
+    assert first.verification is not None and not first.verification.valid
+    assert first.stats.replans == 0 and not first.stats.verified
+    out = plan_verified(MotionPlanner(panda, fast, config), exact, request, resolution=0.01, max_refinements=5)
+    assert out.fallback_used and out.result.stats.replans >= 1
+    assert out.success and out.verification.valid and out.result.stats.verified
     assert verify_path(exact, full_path(panda, request, out.result), 0.005).valid
 
 

@@ -1,16 +1,10 @@
-"""Plan on the fast sphere checker, then verify the path on the exact model (and fall back if it fails).
+"""Plan on the fast sphere checker, verified on the exact model: a thin wrapper over ``MotionPlanner``.
 
-:func:`plan_verified` is what "a sphere approximation for planning, verified on the exact model" means
-in this package (see ``docs/fast_collision.md``):
-
-1. ``planner.plan(request)`` with the planner's own checker (a :class:`SphereCollisionChecker`);
-2. the returned path, with the joints outside the group at their start values, is re-checked with the
-   exact :class:`~maru_planner.collision.CollisionChecker` at ``resolution`` (default: a quarter of the
-   planner's motion resolution) by :func:`~maru_planner.collision.spheres.verify_path`;
-3. if that finds a collision, the request is planned again in the time left with the motion resolution
-   halved (the sphere checker with ``confirm=True`` answers like the exact model at every state it
-   checks, so a failed verification can only mean an edge stepped over a thin obstacle), up to
-   ``max_refinements`` times; a path that failed verification is never returned as a success.
+The verification itself lives in the planning facade: ``MotionPlanner.plan`` on a
+:class:`~maru_planner.collision.SphereCollisionChecker` re-checks the final path on the exact model at
+``config.verify_step`` and re-plans at half the motion resolution while it fails, up to
+``config.max_refinements`` times (see ``docs/fast_collision.md``). :func:`plan_verified` keeps the older
+call shape (an explicit exact checker, resolution and refinements) and returns a :class:`VerifiedResult`.
 """
 
 from __future__ import annotations
@@ -21,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from maru_planner.collision.spheres import PathVerification, verify_path
+from maru_planner.collision.spheres import PathVerification
 
 
 @dataclass
@@ -31,7 +25,7 @@ class VerifiedResult:
     result: object  # maru_planner.planning.MotionResult
     verification: PathVerification | None  # None when there was no path to verify
     verify_time: float = 0.0
-    fallback_used: bool = False
+    fallback_used: bool = False  # at least one re-plan after a failed verification
     total_time: float = 0.0
 
     @property
@@ -51,30 +45,11 @@ def full_path(robot, request, result) -> np.ndarray:
 
 
 def plan_verified(planner, exact_checker, request, resolution: float | None = None, max_refinements: int = 2):
-    """Plan with ``planner`` (fast checker), verify on ``exact_checker``; see the module doc."""
-    from maru_planner.planning import MotionPlanner, PlanStatus
+    """``planner``'s plan of ``request``, verified on ``exact_checker`` every ``resolution`` rad."""
+    from maru_planner.planning import MotionPlanner
 
     t0 = time.monotonic()
-    resolution = resolution or 0.25 * planner.config.resolution
-    out = VerifiedResult(planner.plan(request), None)
-    current, refinements = planner, 0
-    while out.result.success:
-        t1 = time.monotonic()
-        out.verification = verify_path(exact_checker, full_path(planner.robot, request, out.result), resolution)
-        out.verify_time += time.monotonic() - t1
-        if out.verification.valid:
-            break
-        out.result.status = PlanStatus.PLANNING_FAILED
-        out.result.message = (
-            f"path failed verification on the exact model (segment {out.verification.first_invalid_segment})"
-        )
-        left = request.time_budget - (time.monotonic() - t0)
-        if refinements >= max_refinements or left <= 0:
-            break
-        refinements += 1
-        config = dataclasses.replace(current.config, resolution=0.5 * current.config.resolution)
-        current = MotionPlanner(planner.robot, planner.checker, config)
-        out.result = current.plan(dataclasses.replace(request, time_budget=left))
-        out.fallback_used = True
-    out.total_time = time.monotonic() - t0
-    return out
+    config = dataclasses.replace(planner.config, verify_resolution=resolution, max_refinements=max_refinements)
+    result = MotionPlanner(planner.robot, planner.checker, config, exact_checker=exact_checker).plan(request)
+    stats = result.stats
+    return VerifiedResult(result, result.verification, stats.verify_time, stats.replans > 0, time.monotonic() - t0)

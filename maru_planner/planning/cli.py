@@ -7,6 +7,7 @@ Examples::
         --start -0.9 -0.7 1.57 0.7 0.7 -0.9 -0.9 -0.8 1.57 2.0 0.7 -1.9 -1.25 \\
         --goal 0.9 -0.8 1.57 1.14 0.7 -1.24 -1.9 -0.7 1.57 2.44 0.7 -2.24 -1.25 --planner RRTConnect
     maru-plan --robot panda --group arm --start ... --goal ...     # example-robot-data robots
+    maru-plan --problem maru13 --collision-model spheres --seed 1  # fast sphere checker, exact-verified path
 
 ``--start``/``--goal`` values follow the group's joint order (``--list-groups`` prints it).
 Exit status: 0 on success, 1 when planning failed (the JSON says why), 2 for bad arguments.
@@ -23,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from maru_planner import errors
-from maru_planner.planning.config import PlannerConfig
+from maru_planner.planning.config import COLLISION_MODELS, PlannerConfig
 from maru_planner.planning.problems import PROBLEMS
 from maru_planner.planning.registry import PLANNER_IDS
 from maru_planner.planning.types import MotionRequest, MotionResult, PlanStatus, status_of_error
@@ -46,6 +47,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=None, help="random seed (same seed, same path); default random")
     p.add_argument("--attempts", type=int, default=1)
     p.add_argument("--resolution", type=float, default=PlannerConfig.resolution, help="motion-check step (rad)")
+    p.add_argument(
+        "--collision-model",
+        choices=COLLISION_MODELS,
+        default="exact",
+        help="exact: pinocchio + coal; spheres: batched sphere checker, the path then verified on the exact model",
+    )
     p.add_argument("--velocity-scaling", type=float, default=1.0)
     p.add_argument("--acceleration-scaling", type=float, default=1.0)
     p.add_argument("--no-simplify", action="store_true", help="keep the raw planner path")
@@ -106,7 +113,6 @@ def _rest_state(robot) -> dict[str, float]:
 
 
 def run(args) -> MotionResult:
-    from maru_planner.collision import CollisionChecker
     from maru_planner.planning.motion_planner import MotionPlanner
 
     if args.problem:
@@ -121,9 +127,11 @@ def run(args) -> MotionResult:
     if not args.group:
         raise errors.InvalidGroup(f"no --group given; known: {', '.join(robot.groups)}")
     scene = load_scene(args.scene)
-    checker = CollisionChecker(robot, scene)
-    config = PlannerConfig(resolution=args.resolution, default_planner="RRTConnect")
-    planner = MotionPlanner(robot, checker, config)
+    config = PlannerConfig(
+        resolution=args.resolution, default_planner="RRTConnect", collision_model=args.collision_model
+    )
+    _progress(f"building the {args.collision_model} collision model")
+    planner = MotionPlanner.from_scene(robot, scene, config)
     start = _values(robot, args.group, args.start, "start")
     rest = _rest_state(robot)
     request = MotionRequest(
@@ -142,6 +150,11 @@ def run(args) -> MotionResult:
     t0 = time.monotonic()
     result = planner.plan(request)
     _progress(f"{result.status.value} in {time.monotonic() - t0:.3f} s: {result.message}")
+    if args.collision_model == "spheres":
+        _progress(
+            f"exact re-check: {'free' if result.stats.verified else 'not passed'}, "
+            f"{result.stats.verify_time:.3f} s, {result.stats.replans} re-plan(s)"
+        )
     if args.png and result.success:
         from maru_planner.viz.plans import plot_plan
 

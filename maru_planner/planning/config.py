@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+COLLISION_MODELS = ("exact", "spheres")
+
 
 @dataclass
 class PlannerConfig:
@@ -17,6 +19,14 @@ class PlannerConfig:
         and time parameterisation (the search gets the rest; unused reserve is not lost).
     trajectory_dt: sample period of the time-parameterised trajectory (s).
     prm_roadmap_nodes: milestones a PRM roadmap is grown to before its first query (paper: ~780).
+    collision_model: the checker :func:`~maru_planner.planning.checkers.make_checkers` (and so
+        ``MotionPlanner.from_scene``, ``maru-plan``, ``planning_node``) builds: "exact" (pinocchio + coal
+        on the URDF's collision geometry) or "spheres" (the batched sphere checker; every path it plans
+        is re-checked on the exact model before it is returned). A planner given a checker directly
+        plans on that checker; a sphere checker is always verified.
+    verify_resolution: joint step (rad) of that re-check; None = a quarter of ``resolution``.
+    max_refinements: re-plans, each at half the previous ``resolution``, after a path fails
+        verification (within the same time budget); then the request fails (PLANNING_FAILED).
     """
 
     resolution: float = 0.02
@@ -26,6 +36,9 @@ class PlannerConfig:
     postprocess_reserve: float = 0.1
     trajectory_dt: float = 0.05
     prm_roadmap_nodes: int = 800
+    collision_model: str = "exact"
+    verify_resolution: float | None = None
+    max_refinements: int = 2
 
     def __post_init__(self):
         if not self.resolution > 0:
@@ -34,3 +47,17 @@ class PlannerConfig:
             raise ValueError(f"PlannerConfig.postprocess_reserve must be in [0, 1), got {self.postprocess_reserve}")
         if not self.trajectory_dt > 0:
             raise ValueError(f"PlannerConfig.trajectory_dt must be > 0 s, got {self.trajectory_dt}")
+        if self.collision_model not in COLLISION_MODELS:
+            raise ValueError(
+                f"PlannerConfig.collision_model must be one of {', '.join(COLLISION_MODELS)}, "
+                f"got {self.collision_model!r}"
+            )
+        if self.verify_resolution is not None and not self.verify_resolution > 0:
+            raise ValueError(f"PlannerConfig.verify_resolution must be > 0 rad, got {self.verify_resolution}")
+        if self.max_refinements < 0:
+            raise ValueError(f"PlannerConfig.max_refinements must be >= 0, got {self.max_refinements}")
+
+    @property
+    def verify_step(self) -> float:
+        """The joint step of the exact re-check of a sphere-checker path."""
+        return self.verify_resolution or 0.25 * self.resolution

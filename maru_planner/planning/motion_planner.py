@@ -25,6 +25,7 @@ from ompl import util as ou
 
 from maru_planner import errors
 from maru_planner.planning import postprocess
+from maru_planner.planning.checkers import collision_model_of, is_sphere_checker, make_checkers
 from maru_planner.planning.config import PlannerConfig
 from maru_planner.planning.registry import check_planner_id, make_planner, merged_params
 from maru_planner.planning.roadmap import Roadmap
@@ -59,12 +60,25 @@ def _finite_time(value, name: str) -> float:
 
 
 class MotionPlanner:
-    """Arm motion planning on OMPL for one robot model and collision checker (see module doc)."""
+    """Arm motion planning on OMPL for one robot model and collision checker (see module doc).
 
-    def __init__(self, robot, checker, config: PlannerConfig | None = None, scene=None):
+    Planning on a :class:`~maru_planner.collision.SphereCollisionChecker` returns only paths verified
+    on the exact model: the final path is re-checked with ``exact_checker`` (default: a
+    :class:`~maru_planner.collision.CollisionChecker` on the same scene) every
+    ``config.verify_step`` rad; a path that fails is re-planned at half the motion resolution in the
+    time left, up to ``config.max_refinements`` times, and never returned as a success.
+    ``stats.verified``, ``verify_time`` and ``replans`` say how that went.
+    """
+
+    def __init__(self, robot, checker, config: PlannerConfig | None = None, scene=None, exact_checker=None):
         self.robot = robot
         self.checker = checker
         self.config = config or PlannerConfig()
+        if exact_checker is None and is_sphere_checker(checker):
+            from maru_planner.collision import CollisionChecker
+
+            exact_checker = CollisionChecker(robot, checker.scene)
+        self.exact_checker = exact_checker  # None: the plan's own checker is the exact model
         self._lock = threading.RLock()
         self._scene_epoch = 0
         self._roadmaps: dict[tuple, Roadmap] = {}
@@ -73,11 +87,22 @@ class MotionPlanner:
         if scene is not None:
             self.set_scene(scene)
 
+    @classmethod
+    def from_scene(cls, robot, scene=None, config: PlannerConfig | None = None) -> MotionPlanner:
+        """A planner on the checker ``config.collision_model`` names ("exact" | "spheres")."""
+        config = config or PlannerConfig()
+        checkers = make_checkers(robot, scene, config.collision_model)
+        planner = cls(robot, checkers.checker, config, exact_checker=checkers.exact)
+        planner.scene = scene
+        return planner
+
     # --- scene ------------------------------------------------------------------------------
     def set_scene(self, scene) -> None:
-        """Give the checker a new scene; cached PRM roadmaps are re-validated at their next query."""
+        """Give the checker(s) a new scene; cached PRM roadmaps are re-validated at their next query."""
         with self._lock:
             self.checker.set_scene(scene)
+            if self.exact_checker is not None:
+                self.exact_checker.set_scene(scene)
             self.scene = scene
             self._scene_epoch += 1
 
@@ -85,23 +110,68 @@ class MotionPlanner:
     def plan(self, request: MotionRequest) -> MotionResult:
         """Plan ``request``; never raises (errors become the result's status and message)."""
         t0 = time.monotonic()
-        stats = PlanStats(planner_id=getattr(request, "planner_id", "") or self.config.default_planner)
+        with self._lock:
+            result = self._plan_once(request, t0, self.config.resolution)
+            if self.exact_checker is not None:
+                result = self._verify(request, result, t0)
+        result.stats.total_time = time.monotonic() - t0
+        return result
+
+    def _plan_once(self, request: MotionRequest, t0: float, resolution: float) -> MotionResult:
+        """One search + post-processing at motion step ``resolution``, errors caught into the result."""
+        stats = PlanStats(
+            planner_id=getattr(request, "planner_id", "") or self.config.default_planner,
+            collision_model=collision_model_of(self.checker),
+        )
         result = MotionResult(status=PlanStatus.PLANNING_FAILED, stats=stats)
         try:
-            with self._lock:
-                self._plan(request, result, t0)
+            self._plan(request, result, t0, resolution)
         except errors.MaruError as exc:
-            result.status = status_of_error(exc)
-            result.message = exc.message
-            result.error = exc
+            _set_error(result, exc)
         except Exception as exc:  # a bug or a checker failure: report it, keep serving
             result.status = PlanStatus.PLANNING_FAILED
             result.message = f"internal error: {type(exc).__name__}: {exc}"
             result.error = exc
-        stats.total_time = time.monotonic() - t0
         return result
 
-    def _plan(self, req: MotionRequest, result: MotionResult, t0: float) -> None:
+    def _verify(self, request: MotionRequest, result: MotionResult, t0: float) -> MotionResult:
+        """Re-check ``result``'s path on the exact model; re-plan at half the step while it fails (class doc)."""
+        from maru_planner.collision.spheres import verify_path
+
+        resolution, verify_time, replans = self.config.resolution, 0.0, 0
+        while result.success:
+            t_ver = time.monotonic()
+            path = self._full_path(request, result)
+            result.verification = verify_path(self.exact_checker, path, self.config.verify_step)
+            verify_time += time.monotonic() - t_ver
+            if result.verification.valid:
+                result.stats.verified = True
+                break
+            segment = result.verification.first_invalid_segment
+            out_of_time = time.monotonic() >= t0 + float(request.time_budget)
+            if replans >= self.config.max_refinements or out_of_time:
+                _set_error(result, errors.PlanningFailed(
+                    f"path failed verification on the exact model (segment {segment}) after {replans} re-plan(s)"
+                    + (", time budget spent" if out_of_time else ""),
+                    source="planner",
+                ))  # fmt: skip
+                result.path, result.trajectory = None, None
+                break
+            replans += 1
+            resolution *= 0.5
+            result = self._plan_once(request, t0, resolution)
+        result.stats.verify_time, result.stats.replans = verify_time, replans
+        return result
+
+    def _full_path(self, request: MotionRequest, result: MotionResult) -> np.ndarray:
+        """The result's waypoints as full configurations (joints outside the group at their start values)."""
+        indices = [self.robot.joint_names.index(n) for n in result.joint_names]
+        start = self._start_state(request, indices)
+        out = np.repeat(start[None], len(result.path), axis=0)
+        out[:, indices] = np.asarray(result.path, dtype=float)
+        return out
+
+    def _plan(self, req: MotionRequest, result: MotionResult, t0: float, resolution: float) -> None:
         stats = result.stats
         budget = _finite_time(req.time_budget, "time_budget")
         deadline = t0 + budget
@@ -136,10 +206,10 @@ class MotionPlanner:
         start, goal = start_full[indices], goal_full[indices]
         checks0 = self.checker.check_count
         try:
-            raw = self._search(planner_id, gs, start, goal, seed, attempts, deadline, stats)
+            raw = self._search(planner_id, gs, start, goal, seed, attempts, deadline, stats, resolution)
             stats.raw_waypoints = len(raw)
             stats.raw_path_length = postprocess.path_length(raw)
-            path = self._simplify(req, gs, raw, seed, deadline, stats)
+            path = self._simplify(req, gs, raw, seed, deadline, stats, resolution)
         finally:
             stats.collision_checks = int(self.checker.check_count - checks0)
 
@@ -240,7 +310,7 @@ class MotionPlanner:
         raise error_cls(f"{what} configuration is in collision: {named}", pairs=pairs)
 
     # --- search -----------------------------------------------------------------------------
-    def _search(self, planner_id, gs, start, goal, seed, attempts, deadline, stats) -> np.ndarray:
+    def _search(self, planner_id, gs, start, goal, seed, attempts, deadline, stats, resolution) -> np.ndarray:
         if np.allclose(start, goal, atol=1e-12, rtol=0):
             stats.attempts_used = 0
             return np.vstack([start, goal])
@@ -256,9 +326,11 @@ class MotionPlanner:
             t_solve = time.monotonic()
             build_before = stats.roadmap_build_time
             if planner_id == "PRM":
-                path, failure = self._search_prm(gs, start, goal, params, search_deadline, stats)
+                path, failure = self._search_prm(gs, start, goal, params, search_deadline, stats, resolution)
             else:
-                path, failure = self._search_tree(planner_id, gs, start, goal, params, seed + attempt, seconds, stats)
+                path, failure = self._search_tree(
+                    planner_id, gs, start, goal, params, seed + attempt, seconds, stats, resolution
+                )
             # PRM: query time only; the roadmap build is reported apart (roadmap_build_time)
             stats.solve_time += time.monotonic() - t_solve - (stats.roadmap_build_time - build_before)
             if path is not None:
@@ -271,8 +343,8 @@ class MotionPlanner:
             )
         raise errors.PlanningFailed(failure, source="planner")
 
-    def _search_tree(self, planner_id, gs, start, goal, params, seed, seconds, stats):
-        edges = EdgeChecker(gs, self.checker, self.config.resolution)
+    def _search_tree(self, planner_id, gs, start, goal, params, seed, seconds, stats, resolution):
+        edges = EdgeChecker(gs, self.checker, resolution)
         with seeded_ompl(seed):
             ss = og.SimpleSetup(gs.space)
             si = ss.getSpaceInformation()
@@ -300,24 +372,24 @@ class MotionPlanner:
         scene = getattr(self.checker, "scene", None) or self.scene
         return (self._scene_epoch, id(scene), getattr(scene, "version", None))
 
-    def _roadmap_for(self, gs: GroupSpace, params) -> Roadmap:
+    def _roadmap_for(self, gs: GroupSpace, params, resolution: float) -> Roadmap:
         outside = np.setdiff1d(np.arange(len(gs.base)), gs.indices)
-        key = (tuple(gs.indices), tuple(np.round(gs.base[outside], 9)), self.config.resolution, tuple(params.items()))
+        key = (tuple(gs.indices), tuple(np.round(gs.base[outside], 9)), resolution, tuple(params.items()))
         roadmap = self._roadmaps.get(key)
         if roadmap is None:
-            roadmap = Roadmap(gs, self.checker, self.config.resolution, params["max_nearest_neighbors"])
+            roadmap = Roadmap(gs, self.checker, resolution, params["max_nearest_neighbors"])
             roadmap.scene_epoch = self._scene_key()
             self._roadmaps = {key: roadmap}  # one roadmap at a time: bounded memory
         return roadmap
 
-    def _search_prm(self, gs, start, goal, params, search_deadline, stats):
+    def _search_prm(self, gs, start, goal, params, search_deadline, stats, resolution):
         """Query the cached roadmap; after a scene change, verify the answer and fall back to re-validation.
 
         A roadmap built before the last scene change is "stale": its answer is checked against the
         current scene in one batched call (cheap) and returned if free. Only when that check fails is
         the whole roadmap re-validated, and rebuilt if any milestone or edge died.
         """
-        roadmap = self._roadmap_for(gs, params)
+        roadmap = self._roadmap_for(gs, params, resolution)
         stale = roadmap.scene_epoch != self._scene_key()
         path = self._query_roadmap(roadmap, start, goal, search_deadline, stats)
         if path is None or not stale:
@@ -334,7 +406,7 @@ class MotionPlanner:
             roadmap.scene_epoch = self._scene_key()
             return path, None
         self._roadmaps.clear()
-        roadmap = self._roadmap_for(gs, params)
+        roadmap = self._roadmap_for(gs, params, resolution)
         return self._query_roadmap(roadmap, start, goal, search_deadline, stats), None
 
     def _query_roadmap(self, roadmap: Roadmap, start, goal, search_deadline, stats):
@@ -353,15 +425,21 @@ class MotionPlanner:
         return path
 
     # --- post-processing --------------------------------------------------------------------
-    def _simplify(self, req, gs, raw, seed, deadline, stats) -> np.ndarray:
+    def _simplify(self, req, gs, raw, seed, deadline, stats, resolution) -> np.ndarray:
         if not getattr(req, "simplify", True) or len(raw) <= 2:
             return raw
         t_simp = time.monotonic()
-        edges = EdgeChecker(gs, self.checker, self.config.resolution)
+        edges = EdgeChecker(gs, self.checker, resolution)
         rng = np.random.default_rng(seed)
         path, _checks = postprocess.shortcut(raw, edges.edge_valid, rng, deadline, self.config.simplify_max_tries)
         stats.simplify_time = time.monotonic() - t_simp
         return path
+
+
+def _set_error(result: MotionResult, exc: errors.MaruError) -> None:
+    result.status = status_of_error(exc)
+    result.message = exc.message
+    result.error = exc
 
 
 def _tree_size(planner, si) -> tuple[int, int]:

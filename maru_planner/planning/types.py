@@ -126,6 +126,10 @@ class PlanStats:
     attempts_used: int = 0
     raw_waypoints: int = 0
     raw_path_length: float = 0.0
+    collision_model: str = "exact"  # the checker planned on: "exact" or "spheres"
+    verified: bool = False  # "spheres": the returned path was re-checked on the exact model and is free
+    verify_time: float = 0.0  # s spent re-checking paths on the exact model
+    replans: int = 0  # re-plans at a finer resolution after a path failed that check
 
     def to_dict(self) -> dict:
         return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in asdict(self).items()}
@@ -142,6 +146,7 @@ class MotionResult:
     path: np.ndarray | None = None
     trajectory: Trajectory | None = None
     stats: PlanStats = field(default_factory=PlanStats)
+    verification: object | None = None  # PathVerification of the last exact re-check ("spheres" only)
 
     @property
     def success(self) -> bool:

@@ -34,7 +34,6 @@ from trajectory_msgs.msg import JointTrajectory
 from visualization_msgs.msg import MarkerArray
 
 from maru_planner import errors
-from maru_planner.collision import CollisionChecker
 from maru_planner.paths import config_path, urdf_path
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig
 from maru_planner.robot import RobotModel
@@ -61,6 +60,7 @@ PARAMETERS = {
     "default_group": "upper_body",
     "default_planner": "RRTConnect",
     "resolution": 0.02,  # rad: collision-check step along an edge
+    "collision_model": "exact",  # "exact" (coal) or "spheres" (fast; paths verified on the exact model)
     "max_planning_time": 60.0,  # s: larger allowed_planning_time is answered INVALID_REQUEST
     "default_attempts": 1,
     "ik_timeout": 1.0,  # s: ComputeIK budget when the request gives none
@@ -174,9 +174,13 @@ class PlanningNode(Node):
 
     def _make_context(self) -> PlanningContext:
         robot = self._make_robot()
-        checker = CollisionChecker(robot, self._scene.scene())
-        config = PlannerConfig(resolution=self._param("resolution"), default_planner=self._param("default_planner"))
-        return PlanningContext(robot, checker, MotionPlanner(robot, checker, config=config))
+        config = PlannerConfig(
+            resolution=self._param("resolution"),
+            default_planner=self._param("default_planner"),
+            collision_model=self._param("collision_model"),
+        )
+        planner = MotionPlanner.from_scene(robot, self._scene.scene(), config)
+        return PlanningContext(robot, planner.checker, planner)
 
     def _load_scene_dict(self) -> dict:
         scene_file = self._param("scene_file")

@@ -1,0 +1,48 @@
+"""Which collision checker a planner plans on, and the exact one its paths are verified on.
+
+``make_checkers(robot, scene, model)`` is the one place that turns ``PlannerConfig.collision_model``
+into checkers (used by ``MotionPlanner.from_scene``, ``maru-plan``, ``planning_node`` and the benches):
+
+- "exact": the pinocchio + coal :class:`~maru_planner.collision.CollisionChecker`; nothing to verify.
+- "spheres": the batched :class:`~maru_planner.collision.SphereCollisionChecker` to plan on, plus an
+  exact checker on the same scene to re-check the final path (``docs/fast_collision.md``).
+"""
+
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass
+
+from maru_planner.planning.config import COLLISION_MODELS
+
+
+@dataclass(frozen=True)
+class Checkers:
+    """``checker`` plans; ``exact`` verifies its paths (None: ``checker`` is the exact model)."""
+
+    checker: object
+    exact: object | None
+
+
+def make_checkers(robot, scene=None, model: str = "exact") -> Checkers:
+    """Checkers for ``model`` ("exact" | "spheres") on ``scene`` (None = empty scene)."""
+    from maru_planner.collision import CollisionChecker
+
+    if model == "exact":
+        return Checkers(CollisionChecker(robot, scene), None)
+    if model == "spheres":
+        from maru_planner.collision.spheres import SphereCollisionChecker
+
+        return Checkers(SphereCollisionChecker(robot, scene), CollisionChecker(robot, scene))
+    raise ValueError(f"collision model must be one of {', '.join(COLLISION_MODELS)}, got {model!r}")
+
+
+def is_sphere_checker(checker) -> bool:
+    """True for a :class:`SphereCollisionChecker` (whose paths need verification on the exact model)."""
+    # A sphere checker can only exist once its module is imported: exact-only users skip numba's import.
+    spheres = sys.modules.get("maru_planner.collision.spheres")
+    return spheres is not None and isinstance(checker, spheres.SphereCollisionChecker)
+
+
+def collision_model_of(checker) -> str:
+    return "spheres" if is_sphere_checker(checker) else "exact"
