@@ -53,30 +53,15 @@ class OccupancyMap:
 
     @classmethod
     def from_yaml(cls, path: str | Path) -> OccupancyMap:
+        """Read a map_server map with the base planners' reader; unknown cells are free here."""
+        from maru_planner.base.grid import OccupancyGrid
+
         path = Path(path)
         try:
-            meta = yaml.safe_load(path.read_text())
-        except (OSError, yaml.YAMLError) as exc:
+            grid = OccupancyGrid.from_yaml(path, unknown_is_occupied=False)
+        except (OSError, ValueError, yaml.YAMLError) as exc:
             raise WorldError(f"map {path}: cannot read ({exc})") from exc
-        if not isinstance(meta, dict):
-            raise WorldError(f"map {path}: expected a mapping")
-        for key in ("image", "resolution", "origin"):
-            if key not in meta:
-                raise WorldError(f"map {path}: missing field '{key}'")
-        from PIL import Image
-
-        image_path = (path.parent / meta["image"]).resolve()
-        try:
-            pixels = np.asarray(Image.open(image_path).convert("L"), dtype=float)
-        except OSError as exc:
-            raise WorldError(f"map {path}: cannot read image {image_path} ({exc})") from exc
-        occ = pixels / 255.0 if meta.get("negate", 0) else (255.0 - pixels) / 255.0
-        occupied = occ > float(meta.get("occupied_thresh", 0.65))
-        resolution = float(meta["resolution"])
-        if resolution <= 0:
-            raise WorldError(f"map {path}: resolution must be > 0")
-        origin = meta["origin"]
-        return cls(occupied[::-1].copy(), resolution, (float(origin[0]), float(origin[1])))
+        return cls(grid.occupied, grid.resolution, grid.origin[:2])
 
     def cells(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         col = np.floor((points[..., 0] - self.origin[0]) / self.resolution).astype(int)
