@@ -127,7 +127,6 @@ class ElasticStripController:
             self.arm = ArmReactive(k_c=p.k_c, k_r=p.k_r, d0=p.arm_d_safe + p.arm_link_radius, alpha=p.arm_alpha,
                                    max_joint_step=p.arm_max_joint_step, strip=p.strip)
         self.goal: np.ndarray | None = None
-        self._path: np.ndarray | None = None
         self._needs_start = True
         self.updates = 0
         self._pairs_seen = 0
@@ -141,19 +140,13 @@ class ElasticStripController:
         if goal.size not in (2, 3) or not np.all(np.isfinite(goal)):
             raise ValueError(f"goal must be 2 or 3 finite numbers, got {goal}")
         self.goal = np.array([goal[0], goal[1], goal[2] if goal.size == 3 else 0.0])
-        self._path = None
         self._needs_start = True
         self.via.clear()
 
     def set_path(self, path) -> None:
         """Initial path (n, 2|3) in the world frame; its last point becomes the goal unless one is set after."""
         path = np.asarray(path, dtype=float)
-        if path.ndim != 2 or path.shape[0] < 1 or path.shape[1] not in (2, 3):
-            raise ValueError(f"path must have shape (n, 2) or (n, 3), got {path.shape}")
-        if not np.all(np.isfinite(path)):
-            raise ValueError("path contains NaN or inf")
-        self.strip.set_path(path)
-        self._path = path
+        self.strip.set_path(path)  # checks the shape and values
         last = path[-1]
         self.goal = np.array([last[0], last[1], last[2] if path.shape[1] == 3 else 0.0])
         self._needs_start = False
