@@ -92,10 +92,10 @@ class BasePlannerNode(Node):
 
     # --------------------------------------------------------------- planning
     def plan(self, planner_id: str, footprint, start_msg, goal_msg, time_limit: float):
-        """Returns (error_code, message, result or None)."""
+        """Returns (error_code, message, result or None, nav_msgs/Path of the result or None)."""
         self.requests += 1
         if self.grid is None:
-            return E.NO_MAP, f"no map: {self.map_error}", None
+            return E.NO_MAP, f"no map: {self.map_error}", None, None
         for name, pose in (("start", start_msg), ("goal", goal_msg)):
             frame = pose.header.frame_id
             if frame and frame != self.grid.frame_id:
@@ -103,9 +103,10 @@ class BasePlannerNode(Node):
                     E.INVALID_REQUEST,
                     (f"{name} is in frame {frame!r}; poses must be in the map frame {self.grid.frame_id!r}"),
                     None,
+                    None,
                 )
         if not (math.isfinite(time_limit) and time_limit >= 0):
-            return E.INVALID_REQUEST, f"allowed_planning_time must be >= 0 s, got {time_limit}", None
+            return E.INVALID_REQUEST, f"allowed_planning_time must be >= 0 s, got {time_limit}", None, None
         planner_id = planner_id or self._param("planner_id")
         if len(footprint) == 0:
             footprint = conv.footprint_from_param(self._param("footprint"))
@@ -123,27 +124,30 @@ class BasePlannerNode(Node):
                 planner_id, self.grid, conv.pose_from_msg(start_msg), conv.pose_from_msg(goal_msg), footprint, **params
             )
         except InvalidPlanner as exc:
-            return E.INVALID_PLANNER, str(exc), None
+            return E.INVALID_PLANNER, str(exc), None, None
         except MaruError as exc:
-            return E.INVALID_REQUEST, str(exc), None
+            return E.INVALID_REQUEST, str(exc), None, None
         except Exception as exc:  # keep serving; say what broke
             self.get_logger().error(f"planner {planner_id!r} raised {type(exc).__name__}: {exc}")
-            return E.UNKNOWN, f"planner {planner_id!r} failed: {type(exc).__name__}: {exc}", None
-        self._publish(result)
-        return conv.STATUS_TO_ERROR[result.status], result.message, result
+            return E.UNKNOWN, f"planner {planner_id!r} failed: {type(exc).__name__}: {exc}", None, None
+        path_msg = self._publish(result)
+        return conv.STATUS_TO_ERROR[result.status], result.message, result, path_msg
 
-    def _publish(self, result):
+    def _publish(self, result) -> Path:
+        """Publish the path (when solved) and the watched layers; returns the path message for the response."""
         stamp = self.get_clock().now().to_msg()
         frame = self.grid.frame_id
+        path_msg = conv.path_to_msg(result.path, stamp, frame)
         if result.success:
-            self.path_pub.publish(conv.path_to_msg(result.path, stamp, frame))
+            self.path_pub.publish(path_msg)
         for name, pub in self.layer_pubs.items():
             layer = result.layers.get(name)
             if layer is not None and pub.get_subscription_count() > 0:
                 pub.publish(conv.grid_to_msg(self.grid, layer, stamp, frame))
+        return path_msg
 
     def _on_plan_base_path(self, request, response):
-        code, message, result = self.plan(
+        code, message, result, path_msg = self.plan(
             request.planner_id,
             conv.footprint_from_points(request.footprint),
             request.start,
@@ -153,7 +157,7 @@ class BasePlannerNode(Node):
         response.error_code, response.error_msg = code, message
         response.path.header.frame_id = self.grid.frame_id if self.grid is not None else "map"
         if result is not None:
-            response.path = conv.path_to_msg(result.path, self.get_clock().now().to_msg(), self.grid.frame_id)
+            response.path = path_msg
             stats = result.stats
             response.deciding_stage = str(stats.get("deciding_stage", ""))
             response.planning_time = float(stats.get("planning_time", 0.0))
@@ -164,9 +168,9 @@ class BasePlannerNode(Node):
         return response
 
     def _on_get_plan(self, request, response):
-        code, message, result = self.plan("", [], request.start, request.goal, 0.0)
+        code, message, result, path_msg = self.plan("", [], request.start, request.goal, 0.0)
         if result is not None and result.success:
-            response.plan = conv.path_to_msg(result.path, self.get_clock().now().to_msg(), self.grid.frame_id)
+            response.plan = path_msg
         else:
             response.plan.header.frame_id = self.grid.frame_id if self.grid is not None else "map"
         self._log_outcome("make_plan", code, message)
