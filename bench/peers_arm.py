@@ -4,9 +4,9 @@
 
 Solvers, all RRT-Connect, on the same problems in one run:
 - ours: ``MotionPlanner`` (planner "RRTConnect", no simplification) on the batched sphere checker
-  (``SphereCollisionChecker``: exact answer at every checked state), the path then verified on the exact
-  pinocchio/coal model by ``plan_verified`` (falls back to exact planning if verification fails).
-  Time = the whole ``plan_verified`` call (validation, search, time parameterisation, verification).
+  (``SphereCollisionChecker``: exact answer at every checked state, ``collision_model="spheres"``); the facade
+  verifies the path on the exact pinocchio/coal model and re-plans at a finer resolution if that fails.
+  Time = the whole ``MotionPlanner.plan`` call (validation, search, time parameterisation, verification).
 - naive OMPL: ``ompl.geometric.RRTConnect`` through ``SimpleSetup`` with OMPL's defaults, the state validity
   checker a plain Python function calling ``pinocchio.computeCollisions`` on the mesh model per state.
 - pyroboplan: ``RRTPlanner`` with ``rrt_connect=True, bidirectional_rrt=True`` (its RRT-Connect), default step.
@@ -28,9 +28,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from maru_planner.collision import CollisionChecker, obstacle_geometry, self_collision_pairs
-from maru_planner.collision.spheres import SphereCollisionChecker
-from maru_planner.collision.verified import plan_verified
+from maru_planner.collision import obstacle_geometry, self_collision_pairs
 from maru_planner.moveit_scene import PANDA_FINGERS_OPEN, iter_mbm_problems
 from maru_planner.paths import benchmarks_dir
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig
@@ -95,21 +93,20 @@ class Ours:
     name = "ours"
 
     def __init__(self, robot, resolution: float):
-        self.verify_resolution = 0.5 * resolution
-        self.fast = SphereCollisionChecker(robot)
-        self.exact = CollisionChecker(robot)
-        self.planner = MotionPlanner(robot, self.fast, PlannerConfig(resolution=resolution))
+        config = PlannerConfig(resolution=resolution, collision_model="spheres", verify_resolution=0.5 * resolution)
+        self.planner = MotionPlanner.from_scene(robot, None, config)
+        self.fast = self.planner.checker
 
     def solve(self, case: Case, budget: float, seed: int) -> dict:
         self.planner.set_scene(case.scene)
-        self.exact.set_scene(case.scene)
-        self.fast.reset_count()
+        self.fast.exact_pair_checks = 0
         req = MotionRequest(case.group, start=case.start, goal_joints=case.goal, planner_id="RRTConnect",
                             time_budget=budget, seed=seed, simplify=False)
-        out = plan_verified(self.planner, self.exact, req, resolution=self.verify_resolution)
-        return {"success": out.success, "time": out.total_time, "status": out.result.status.value,
-                "fallback": out.fallback_used, "verify_time": out.verify_time,
-                "plan_time": out.total_time - out.verify_time, "checks": out.result.stats.collision_checks,
+        res = self.planner.plan(req)
+        st = res.stats
+        return {"success": res.success, "time": st.total_time, "status": res.status.value,
+                "fallback": st.replans > 0, "verify_time": st.verify_time,
+                "plan_time": st.total_time - st.verify_time, "checks": st.collision_checks,
                 "exact_pair_checks": self.fast.exact_pair_checks}
 
 
