@@ -43,6 +43,7 @@ def rpy_matrix(roll: float, pitch: float, yaw: float) -> np.ndarray:
 
 
 def matrix_rpy(R: np.ndarray) -> tuple[float, float, float]:
+    """(roll, pitch, yaw) of a rotation matrix, the inverse of :func:`rpy_matrix` (gimbal lock: all in yaw)."""
     pitch = math.atan2(-R[2, 0], math.hypot(R[0, 0], R[1, 0]))
     if abs(math.cos(pitch)) < 1e-9:
         return 0.0, pitch, math.atan2(-R[0, 1], R[1, 1])

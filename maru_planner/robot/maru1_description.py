@@ -36,6 +36,8 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
+from maru_planner.scene import matrix_rpy
+
 # ---------------------------------------------------------------- Table 1 ----
 L_U = 0.284  # body origin -> upper body frame U, along z
 D_U = 0.04  # body origin -> U, along x
@@ -143,18 +145,6 @@ def collision_geometry(side_links: dict[str, list[str]]) -> list[tuple[str, str,
 
 
 # ------------------------------------------------------------------ URDF ----
-def rpy_from_matrix(R: np.ndarray) -> tuple[float, float, float]:
-    """URDF rpy (R = Rz(y) Ry(p) Rx(r)) of a rotation matrix."""
-    pitch = math.atan2(-R[2, 0], math.hypot(R[0, 0], R[1, 0]))
-    if abs(math.cos(pitch)) > 1e-9:
-        roll = math.atan2(R[2, 1], R[2, 2])
-        yaw = math.atan2(R[1, 0], R[0, 0])
-    else:  # gimbal lock: put everything in yaw
-        roll = 0.0
-        yaw = math.atan2(-R[0, 1], R[1, 1])
-    return roll, pitch, yaw
-
-
 def _num(x: float) -> str:
     x = 0.0 if abs(x) < 1e-15 else float(x)
     return repr(x)
@@ -162,7 +152,7 @@ def _num(x: float) -> str:
 
 def _origin(T: np.ndarray) -> str:
     xyz = " ".join(_num(v) for v in T[:3, 3])
-    rpy = " ".join(_num(v) for v in rpy_from_matrix(T[:3, :3]))
+    rpy = " ".join(_num(v) for v in matrix_rpy(T[:3, :3]))
     return f'<origin xyz="{xyz}" rpy="{rpy}"/>'
 
 
