@@ -14,14 +14,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from maru_planner.reactive.description import BODY_RADIUS, HALF_AXLE, WHEEL_RADIUS
+
 
 @dataclass(frozen=True)
 class DiffDriveParams:
-    """Geometry and limits of a two-wheel differential-drive base (SI units)."""
+    """Geometry and limits of a two-wheel differential-drive base (SI units); defaults: urdf/mobile_manipulator."""
 
-    wheel_radius: float = 0.075
-    half_axle: float = 0.25
-    body_radius: float = 0.30
+    wheel_radius: float = WHEEL_RADIUS
+    half_axle: float = HALF_AXLE
+    body_radius: float = BODY_RADIUS
     max_linear: float = 0.5
     max_angular: float = 1.0
 
