@@ -6,10 +6,7 @@ import math
 
 import numpy as np
 
-
-def wrap(angle: float) -> float:
-    """Angle in [−π, π)."""
-    return (angle + math.pi) % (2 * math.pi) - math.pi
+from maru_planner.base.common import wrap_angle
 
 
 class RectangleChecker:
@@ -48,7 +45,7 @@ class RectangleChecker:
         """Checks the straight/rotating motion through ``poses`` (n, 3), interpolated finely."""
         for a, b in zip(poses[:-1], poses[1:]):
             dist = math.hypot(b[0] - a[0], b[1] - a[1])
-            turn = wrap(b[2] - a[2])
+            turn = wrap_angle(b[2] - a[2])
             n = max(1, int(math.ceil(max(dist / max_step, abs(turn) / max_turn))))
             for t in np.linspace(0.0, 1.0, n + 1)[1:]:
                 if self.collides(a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), a[2] + t * turn):

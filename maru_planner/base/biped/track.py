@@ -29,9 +29,10 @@ import numpy as np
 from scipy.spatial import Voronoi, cKDTree
 
 from maru_planner.base import result as res
-from maru_planner.base.biped.geometry import RectangleChecker, wrap
+from maru_planner.base.biped.geometry import RectangleChecker
 from maru_planner.base.biped.mapping import BipedMap2D
 from maru_planner.base.biped.world import BipedRobot
+from maru_planner.base.common import wrap_angle
 
 
 @dataclass
@@ -261,9 +262,9 @@ class TrackFollowingPlanner:
                     if np.linalg.norm(b - a) > 1e-9]
         if not headings:
             headings = [start[2]]
-        turns = [(0, wrap(headings[0] - start[2]))]
-        turns += [(i + 1, wrap(headings[i + 1] - headings[i])) for i in range(len(headings) - 1)]
-        turns.append((len(track) - 1, wrap(goal[2] - headings[-1])))
+        turns = [(0, wrap_angle(headings[0] - start[2]))]
+        turns += [(i + 1, wrap_angle(headings[i + 1] - headings[i])) for i in range(len(headings) - 1)]
+        turns.append((len(track) - 1, wrap_angle(goal[2] - headings[-1])))
         for index, phi in turns:
             if abs(phi) < 1e-9:
                 continue
@@ -289,15 +290,15 @@ def _poses(track: np.ndarray, start, goal) -> np.ndarray:
         if np.linalg.norm(b - a) <= 1e-9:
             continue
         new = math.atan2(b[1] - a[1], b[0] - a[0])
-        if abs(wrap(new - heading)) > 1e-9:
+        if abs(wrap_angle(new - heading)) > 1e-9:
             poses.append((a[0], a[1], new))
         poses.append((b[0], b[1], new))
         heading = new
-    if abs(wrap(goal[2] - heading)) > 1e-9 or len(poses) == 1:
+    if abs(wrap_angle(goal[2] - heading)) > 1e-9 or len(poses) == 1:
         poses.append((goal[0], goal[1], goal[2]))
     out = np.asarray(poses, dtype=float)
     out[:, 2] = np.unwrap(out[:, 2])
-    out[:, 2] = [wrap(t) for t in out[:, 2]]
+    out[:, 2] = [wrap_angle(t) for t in out[:, 2]]
     return out
 
 

@@ -34,10 +34,11 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
 from maru_planner.base import result as res
-from maru_planner.base.biped.geometry import RectangleChecker, wrap
+from maru_planner.base.biped.geometry import RectangleChecker
 from maru_planner.base.biped.mapping import BipedMap2D
 from maru_planner.base.biped.track import _check_pose
 from maru_planner.base.biped.world import BipedRobot
+from maru_planner.base.common import wrap_angle
 
 
 @dataclass
@@ -122,7 +123,7 @@ class VirtualWallPlanner:
         ox, oy = self._pivot(pose, pivot)
         c, s = math.cos(angle), math.sin(angle)
         dx, dy = pose[0] - ox, pose[1] - oy
-        return ox + c * dx - s * dy, oy + s * dx + c * dy, wrap(pose[2] + angle)
+        return ox + c * dx - s * dy, oy + s * dx + c * dy, wrap_angle(pose[2] + angle)
 
     def rotation_limits(self, pose, checker: RectangleChecker, pivot: float | None = None) -> tuple[float, float]:
         """(θ1 clockwise, θ2 counter-clockwise) free rotation about O, to ``angle_step``."""
@@ -285,7 +286,7 @@ class VirtualWallPlanner:
         heading = self._reference_heading(field, m, pose)
         if heading is None or distance < self.params.lookahead / 2:
             heading = math.atan2(goal[1] - pose[1], goal[0] - pose[0])
-        return wrap(heading - pose[2])
+        return wrap_angle(heading - pose[2])
 
     def _damping(self, trace, xi, prev_xi, damping) -> int:
         """Eq. 12: count consecutive oscillating steps (c) while the turn keeps changing sign."""
