@@ -26,6 +26,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
+from movingai import load_map, load_scenarios  # noqa: E402
 from paper003_maps import HOUSE_GOAL, HOUSE_RADIUS, HOUSE_START, far_free_pair, rooms_map  # noqa: E402
 
 from maru_planner.base.astar import astar_2d  # noqa: E402
@@ -119,18 +120,9 @@ def generated(results: list, sizes: list[int], python_limit: int) -> None:
 
 
 def read_movingai(path: Path):
-    lines = path.read_text().replace("\r", "").split("\n")
-    h = int(lines[1].split()[1])
-    w = int(lines[2].split()[1])
-    rows = lines[4 : 4 + h]
-    occ = np.array([[ch not in ".GS" for ch in row[:w]] for row in rows], dtype=bool)
-    scen = []
-    for line in (path.parent / (path.name + ".scen")).read_text().replace("\r", "").split("\n")[1:]:
-        parts = line.split("\t")
-        if len(parts) >= 9:
-            sx, sy, gx, gy = (int(v) for v in parts[4:8])
-            scen.append(((sy, sx), (gy, gx), float(parts[8])))
-    return occ, scen
+    """(blocked grid, [(start cell, goal cell, optimal length), ...]) of a MovingAI map and its .scen."""
+    scen = load_scenarios(path.parent / (path.name + ".scen"))
+    return load_map(path), [(q["start"], q["goal"], q["optimal"]) for q in scen]
 
 
 def movingai(results: list, maps: list[str], per_map: int) -> None:
