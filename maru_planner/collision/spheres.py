@@ -13,8 +13,8 @@ Same protocol as the exact :class:`~maru_planner.collision.checker.CollisionChec
 
 "Verified on the exact model" (see ``docs/fast_collision.md``): planning runs on the spheres; the
 planner's final path is re-checked with the exact checker by :func:`verify_path` at a finer
-resolution; a path that fails is not returned as valid (see :func:`plan_verified` in the bench and
-the MotionPlanner integration notes in the doc).
+resolution; a path that fails is re-planned finer and never returned as valid. ``MotionPlanner.plan``
+does this for any planner on a sphere checker (``PlannerConfig.collision_model="spheres"``).
 """
 
 from __future__ import annotations
