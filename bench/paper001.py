@@ -9,23 +9,27 @@ from __future__ import annotations
 
 import csv
 import math
+from functools import cache
 from pathlib import Path
 
 import numpy as np
 
+from maru_planner.paths import benchmarks_dir
 from maru_planner.reactive import ElasticStripController
 from maru_planner.reactive.kinematics import wrap_angle
 from maru_planner.sim import LaserSpec, RobotSpec, Simulator, World
 from maru_planner.sim.runner import strip_params_for
 
 REPO = Path(__file__).resolve().parent.parent
-BARN_DIR = REPO.parent / "shared" / "benchmarks" / "barn"
+BARN_DIR = benchmarks_dir() / "barn"
 CELL = 0.15
 JACKAL_FOOTPRINT = [[0.21, 0.165], [-0.21, 0.165], [-0.21, -0.165], [0.21, -0.165]]
 
 
 # ---------------------------------------------------------------- BARN worlds
+@cache
 def barn_optimal_times() -> dict[int, float]:
+    """Optimal traversal time per BARN world (worlds.csv, read once)."""
     with open(BARN_DIR / "worlds.csv") as f:
         return {int(row["world"]): float(row["optimal_time_s"]) for row in csv.DictReader(f)}
 
