@@ -54,7 +54,7 @@ class Recorder:
         # Deep queues: a loaded test process may fall behind for a while without losing a message.
         # The trajectory reader is latched like the node's publisher, so a late match loses no plan.
         volatile = QoSProfile(depth=1000)
-        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        latched = QoSProfile(depth=1000, durability=DurabilityPolicy.TRANSIENT_LOCAL)
         for topic, msgtype in TOPICS.items():
             qos = latched if topic.endswith("/planned_trajectory") else volatile
             node.create_subscription(
@@ -135,8 +135,9 @@ def session_bag(node_process, rclpy_session, tmp_path_factory):
             assert response.error.code == PlanningError.SUCCESS, response.error.message
             responses.append(response)
         # markers: the greeting, one per plan (sent after its answer), one for the scene change
-        assert spinning.wait_for(lambda: recorder.count(f"{NODE}/planned_trajectory") >= PLANS, timeout=60.0)
-        assert spinning.wait_for(lambda: recorder.count(f"{NODE}/markers") >= PLANS + 2, timeout=60.0)
+        for topic, expected in ((f"{NODE}/planned_trajectory", PLANS), (f"{NODE}/markers", PLANS + 2)):
+            arrived = spinning.wait_for(lambda t=topic, n=expected: recorder.count(t) >= n, timeout=60.0)
+            assert arrived, f"{topic}: {recorder.count(topic)} messages, expected {expected}"
     finally:
         stop.set()
         thread.join(timeout=2.0)

@@ -592,7 +592,7 @@ def test_trajectory_and_markers_are_published(client, tester):
     node = tester.node
     # Latched like the node's publisher: even if the node matches this reader only after publishing
     # the plan, the reader still gets it. An older plan may come first; the wait below picks ours.
-    latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    latched = QoSProfile(depth=10, durability=DurabilityPolicy.TRANSIENT_LOCAL)
     node.create_subscription(JointTrajectory, f"{NODE}/planned_trajectory", trajectories.append, latched)
     node.create_subscription(MarkerArray, f"{NODE}/markers", markers.append, 10)
     assert tester.wait_for(lambda: node.count_publishers(f"{NODE}/markers") > 0, timeout=60.0)
