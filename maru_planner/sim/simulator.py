@@ -159,22 +159,26 @@ class Simulator:
 
         A sub-step that would overlap an obstacle is not taken (bumper stop).
         """
+        return self._step(v, w, dt)[0]
+
+    def _step(self, v: float, w: float, dt: float) -> tuple[bool, float | None]:
+        """:meth:`step`, plus the clearance at the end when the last sub-step was taken (else None)."""
         robot = self.world.robot
         v, w = clamp_twist(float(v), float(w), robot.max_linear, robot.max_angular)
         n = max(1, int(math.ceil(max(abs(v) * dt / 0.02, abs(w) * dt / 0.05))))
         h = dt / n
-        hit = False
+        hit, clearance = False, None
         for _ in range(n):
             pose = integrate_unicycle(self.robot_pose, v, w, h)
             self.time += h
-            if self.clearance(pose) < 0.0:
-                hit = True
+            clearance = self.clearance(pose)
+            if clearance < 0.0:
+                hit, clearance = True, None  # the robot stays; the clock (and the movers) moved on
                 continue
             self.robot_pose = pose
-        if hit or self.clearance() < 0.0:
+        if hit:
             self.collided = True
-            return True
-        return False
+        return hit, clearance
 
     def goal_distance(self) -> float:
         g = self.world.robot.goal
@@ -203,10 +207,10 @@ class Simulator:
                 strips.append((self.time, self.robot_pose, np.asarray(out.strip).copy(),
                                np.asarray(out.obstacle_points).copy()))
             before = self.robot_pose
-            hit = self.step(out.v, out.w, dt)
+            hit, clearance = self._step(out.v, out.w, dt)
             length += math.hypot(self.robot_pose[0] - before[0], self.robot_pose[1] - before[1])
             traj.append(self.robot_pose)
-            min_clear = min(min_clear, self.clearance())
+            min_clear = min(min_clear, self.clearance() if clearance is None else clearance)
             if hit and not in_contact:
                 collisions += 1
             in_contact = hit
