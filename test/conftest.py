@@ -97,7 +97,9 @@ class SpinningNode:
         return predicate()
 
     def destroy(self):
-        self.executor.shutdown(timeout_sec=2.0)
+        # The spin thread must be out of its wait set before the node's handles go, or it dies on them.
+        self.executor.shutdown(timeout_sec=30.0)
+        self._thread.join(timeout=30.0)
         self.node.destroy_node()
 
 

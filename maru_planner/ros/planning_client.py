@@ -146,7 +146,8 @@ class PlanningClient:
 
     def close(self) -> None:
         if self._owns_node:
-            self._executor.shutdown(timeout_sec=2.0)
+            self._executor.shutdown(timeout_sec=10.0)
+            self._thread.join(timeout=10.0)  # out of the wait set before the node's handles go
             self.node.destroy_node()
 
     def __enter__(self):
