@@ -141,8 +141,10 @@ def main(argv=None) -> int:
     client = None
     try:
         client = PlanningClient(node_name="maru_demo_client")
-        if not client.plan_client.wait_for_service(timeout_sec=60.0):
-            print(f"[demo] plan_motion did not come up; node log:\n{log_path.read_text()}", file=sys.stderr)
+        try:
+            client.wait_until_ready(timeout=90.0)
+        except TimeoutError:
+            print(f"[demo] planning_node did not answer; its log:\n{log_path.read_text()}", file=sys.stderr)
             return 1
         rows = run_planners(client, problem, joint_names, args.planners, args.time, args.seed)
         table = format_table(rows)

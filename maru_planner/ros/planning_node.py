@@ -458,8 +458,8 @@ class BackgroundPlanningNode:
 
     def stop(self) -> None:
         self.executor.shutdown(timeout_sec=5.0)
+        self._thread.join(timeout=5.0)  # before destroying: a pending publish task must not hit a dead node
         self.node.destroy_node()
-        self._thread.join(timeout=5.0)
 
     def __enter__(self) -> BackgroundPlanningNode:
         return self
