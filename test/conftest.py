@@ -67,10 +67,12 @@ class SpinningNode:
 
     def __init__(self, name: str):
         import rclpy
-        from rclpy.executors import MultiThreadedExecutor
+        from rclpy.executors import SingleThreadedExecutor
 
         self.node = rclpy.create_node(name)
-        self.executor = MultiThreadedExecutor(num_threads=4)
+        # Single-threaded: test callbacks only store messages and resolve futures, and rclpy's
+        # MultiThreadedExecutor spins hot (holding the GIL) while a ready callback waits for a worker.
+        self.executor = SingleThreadedExecutor()
         self.executor.add_node(self.node)
         self._thread = threading.Thread(target=self.executor.spin, daemon=True)
         self._thread.start()
