@@ -47,19 +47,23 @@ BROADPHASES = {
     "naive": pin.BroadPhaseManager_NaiveCollisionManager,
     "aabb_tree": pin.BroadPhaseManager_DynamicAABBTreeCollisionManager,
 }
-_BISECTION_CACHE: dict[int, np.ndarray] = {}
+_BISECTION_CACHE: dict[tuple[int, bool], np.ndarray] = {}
 
 
-def bisection_order(n: int) -> np.ndarray:
-    """Indices 0..n-1: last, first, then midpoints of ever finer halves (cached per n)."""
-    order = _BISECTION_CACHE.get(n)
+def bisection_order(n: int, include_first: bool = True) -> np.ndarray:
+    """Indices 0..n-1: last, first, then midpoints of ever finer halves (cached per n).
+
+    ``include_first=False`` is for edge states that exclude the (already valid) edge start:
+    index 0 is then one step from it and is not moved to the front.
+    """
+    key = (n, include_first)
+    order = _BISECTION_CACHE.get(key)
     if order is None:
-        seen, out = set(), []
-        for k in (n - 1, 0):
-            if 0 <= k < n and k not in seen:
-                seen.add(k)
-                out.append(k)
-        segments = [(0, n - 1)]
+        out = [n - 1] if n > 0 else []
+        if include_first and n > 1:
+            out.append(0)
+        seen = set(out)
+        segments = [(0 if include_first else -1, n - 1)]
         while segments:
             nxt = []
             for a, b in segments:
@@ -71,7 +75,9 @@ def bisection_order(n: int) -> np.ndarray:
                     out.append(m)
                 nxt += [(a, m), (m, b)]
             segments = nxt
-        order = _BISECTION_CACHE[n] = np.array(out, dtype=int)
+        order = np.array(out, dtype=int)
+        if len(_BISECTION_CACHE) < 4096:
+            _BISECTION_CACHE[key] = order
     return order
 
 

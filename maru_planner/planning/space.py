@@ -22,6 +22,8 @@ import math
 import numpy as np
 from ompl import base as ob
 
+from maru_planner.collision.checker import bisection_order
+
 
 class GroupSpace:
     """A planning group's joints as an OMPL ``RealVectorStateSpace`` bounded by the joint limits.
@@ -77,32 +79,6 @@ def edge_states(qa: np.ndarray, qb: np.ndarray, resolution: float) -> np.ndarray
     return qa + t * (qb - qa)
 
 
-_BISECTION_ORDERS: dict[int, np.ndarray] = {}
-
-
-def bisection_order(n: int) -> np.ndarray:
-    """Permutation of range(n): the last index, then interior points coarse to fine."""
-    order = _BISECTION_ORDERS.get(n)
-    if order is not None:
-        return order
-    seen = [n - 1]
-    queue = [(-1, n - 1)]  # open intervals (lo, hi) between already listed indices (-1 = the edge start)
-    while queue:
-        nxt = []
-        for lo, hi in queue:
-            if hi - lo < 2:
-                continue
-            mid = (lo + hi) // 2
-            seen.append(mid)
-            nxt.append((lo, mid))
-            nxt.append((mid, hi))
-        queue = nxt
-    order = np.array(seen, dtype=int)
-    if len(_BISECTION_ORDERS) < 4096:
-        _BISECTION_ORDERS[n] = order
-    return order
-
-
 class EdgeChecker:
     """Numpy-side validity of states, edges and paths of one group against a checker."""
 
@@ -121,7 +97,7 @@ class EdgeChecker:
         """Index of the first colliding state along qa → qb (-1 if the edge is free)."""
         self.edges_checked += 1
         states = edge_states(qa, qb, self.resolution)
-        order = bisection_order(len(states))
+        order = bisection_order(len(states), include_first=False)
         k = int(self.checker.first_invalid(self.gs.full(states[order])))
         return int(order[k]) if k >= 0 else -1
 
