@@ -75,40 +75,17 @@ class PlanningClient:
         return call_service(client, request, timeout)
 
     def plan(
-        self,
-        goal_joints: dict[str, float] | None = None,
-        *,
-        goal_poses: dict | None = None,
-        start: dict[str, float] | None = None,
-        group: str = "",
-        planner_id: str = "",
-        time_budget: float = 5.0,
-        seed: int = -1,
-        attempts: int = 1,
-        velocity_scaling: float = 1.0,
-        acceleration_scaling: float = 1.0,
-        frame_id: str = "base_link",
-        timeout: float | None = None,
+        self, goal_joints: dict[str, float] | None = None, *, timeout: float | None = None, **request_fields
     ) -> PlanMotion.Response:
         """Plan to ``goal_joints`` ({joint: rad}) or ``goal_poses`` ({link: 4x4 or Pose}).
 
-        ``start`` None = the node uses the latest /joint_states. Returns the response;
+        ``request_fields`` are :func:`plan_request`'s keywords (``start`` None = the node uses the
+        latest /joint_states, ``group``, ``planner_id``, ``time_budget`` (default 5 s), ``seed``, ...).
+        ``timeout`` defaults to the time budget + 30 s. Returns the response;
         check ``response.error.code == PlanningError.SUCCESS``.
         """
-        request = plan_request(
-            goal_joints,
-            goal_poses=goal_poses,
-            start=start,
-            group=group,
-            planner_id=planner_id,
-            time_budget=time_budget,
-            seed=seed,
-            attempts=attempts,
-            velocity_scaling=velocity_scaling,
-            acceleration_scaling=acceleration_scaling,
-            frame_id=frame_id,
-        )
-        return self.call(self.plan_client, request, timeout or time_budget + 30.0)
+        request = plan_request(goal_joints, **request_fields)
+        return self.call(self.plan_client, request, timeout or request.allowed_planning_time + 30.0)
 
     def compute_ik(
         self,
