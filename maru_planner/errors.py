@@ -28,6 +28,12 @@ class InvalidRequest(MaruError, ValueError):
     source = "validation"
 
 
+class InvalidParameter(InvalidRequest):
+    """A node parameter has the wrong type, is out of range or cannot change at run time."""
+
+    source = "parameters"
+
+
 class InvalidGroup(InvalidRequest):
     """The planning group does not exist."""
 
