@@ -96,3 +96,7 @@ class PlanningFailed(MaruError):
 
 class PlanningTimedOut(PlanningFailed):
     """The time budget ran out."""
+
+
+class PlanningCancelled(PlanningFailed):
+    """The caller cancelled the request (e.g. an action goal's cancel) before it finished."""
