@@ -100,3 +100,35 @@ class PlanningTimedOut(PlanningFailed):
 
 class PlanningCancelled(PlanningFailed):
     """The caller cancelled the request (e.g. an action goal's cancel) before it finished."""
+
+
+class StartOutsideMap(InvalidRequest):
+    """The start pose lies outside the map."""
+
+
+class GoalOutsideMap(InvalidRequest):
+    """The goal pose lies outside the map."""
+
+
+class StartOccupied(StartInCollision):
+    """The robot at the start pose covers an obstacle of the map."""
+
+
+class GoalOccupied(GoalInCollision):
+    """The robot at the goal pose covers an obstacle of the map."""
+
+
+class InvalidMap(InvalidRequest):
+    """A map file or map message is malformed; the message names the file or field."""
+
+
+class TooLarge(InvalidRequest):
+    """A map, world or search exceeds a size or memory limit (refused before allocating)."""
+
+
+class NoPath(PlanningFailed):
+    """The search finished without finding a path."""
+
+
+class NoPathProven(NoPath):
+    """No path exists, decided without a search (e.g. the start is enclosed)."""
