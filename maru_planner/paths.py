@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import sys
 from pathlib import Path
 
 PACKAGE_NAME = "maru_planner"
@@ -17,7 +18,7 @@ def share_dir() -> Path:
     repo_root = Path(__file__).resolve().parent.parent
     if (repo_root / "config").is_dir() and (repo_root / "package.xml").is_file():
         return repo_root
-    for prefix in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep) + [os.sys.prefix]:
+    for prefix in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep) + [sys.prefix]:
         candidate = Path(prefix) / "share" / PACKAGE_NAME
         if (candidate / "config").is_dir():
             return candidate
@@ -25,10 +26,12 @@ def share_dir() -> Path:
 
 
 def config_path(*parts: str) -> Path:
+    """A file under the share directory's ``config/``."""
     return share_dir().joinpath("config", *parts)
 
 
 def urdf_path(*parts: str) -> Path:
+    """A file under the share directory's ``urdf/``."""
     return share_dir().joinpath("urdf", *parts)
 
 

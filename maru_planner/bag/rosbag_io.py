@@ -18,19 +18,25 @@ from dataclasses import dataclass, field
 from functools import cache
 from pathlib import Path
 
+from rosbags.interfaces import Connection
 from rosbags.rosbag2 import Reader, StoragePlugin, Writer
 from rosbags.rosbag2.errors import ReaderError, WriterError
 from rosbags.typesys import Stores, get_typestore
+from rosbags.typesys.store import Typestore
+
+from maru_planner.errors import MaruError
 
 STORAGE_PLUGINS = {"sqlite3": StoragePlugin.SQLITE3, "mcap": StoragePlugin.MCAP}
 
 
-class BagError(ValueError):
+class BagError(MaruError, ValueError):
     """A bag cannot be written or read as asked (names the bag and what is wrong)."""
+
+    source = "bag"
 
 
 @cache
-def typestore():
+def typestore() -> Typestore:
     """The ROS 2 Jazzy message typestore shared by writers and readers."""
     return get_typestore(Stores.ROS2_JAZZY)
 
@@ -49,18 +55,21 @@ class BagMessage:
     timestamp_ns: int
     rawdata: bytes
 
-    def decode(self):
+    def decode(self) -> object:
         """The message as a ``rosbags`` typestore dataclass (fields as in the .msg file)."""
         return typestore().deserialize_cdr(self.rawdata, self.msgtype)
 
 
 @dataclass
 class BagSummary:
-    """What a bag holds: per topic its type and message count, and the time span."""
+    """What a bag holds: per topic its type and message count, and the time span.
+
+    A topic's type is None where its connections carry different types.
+    """
 
     path: Path
     storage: str
-    topics: dict[str, str] = field(default_factory=dict)
+    topics: dict[str, str | None] = field(default_factory=dict)
     counts: dict[str, int] = field(default_factory=dict)
     start_ns: int = 0
     end_ns: int = 0
@@ -78,7 +87,7 @@ class BagWriter:
     ...     bag.write("/scan", stamp_ns, cdr_bytes)
     """
 
-    def __init__(self, path: str | Path, storage: str = "sqlite3"):
+    def __init__(self, path: str | Path, storage: str = "sqlite3") -> None:
         if storage not in STORAGE_PLUGINS:
             raise BagError(f"unknown bag storage {storage!r}; use one of {sorted(STORAGE_PLUGINS)}")
         self.path = Path(path)
@@ -87,7 +96,7 @@ class BagWriter:
             self._writer = Writer(self.path, version=Writer.VERSION_LATEST, storage_plugin=STORAGE_PLUGINS[storage])
         except WriterError as exc:
             raise BagError(f"cannot create bag {self.path}: {exc}") from exc
-        self._connections: dict[str, object] = {}
+        self._connections: dict[str, Connection] = {}
         self._msgtypes: dict[str, str] = {}
         self._open = False
 
@@ -104,7 +113,7 @@ class BagWriter:
     def __enter__(self) -> BagWriter:
         return self.open()
 
-    def __exit__(self, exc_type, exc, tb) -> None:
+    def __exit__(self, *exc_info: object) -> None:
         self.close()
 
     def add_topic(self, topic: str, msgtype: str) -> None:
@@ -119,12 +128,13 @@ class BagWriter:
         self._connections[topic] = self._writer.add_connection(topic, msgtype, typestore=typestore())
         self._msgtypes[topic] = msgtype
 
-    def write(self, topic: str, timestamp_ns: int, message) -> None:
+    def write(self, topic: str, timestamp_ns: int, message: object) -> None:
         """Append one message: CDR ``bytes`` or a typestore message of the topic's type."""
         if topic not in self._connections:
             raise BagError(f"topic {topic} was not declared with add_topic()")
         if timestamp_ns < 0:
             raise BagError(f"negative timestamp {timestamp_ns} on {topic}")
+        data: bytes | memoryview
         if isinstance(message, bytes | bytearray | memoryview):
             data = bytes(message)
         else:
