@@ -122,6 +122,7 @@ def test_work_per_update_does_not_grow_with_run_length(params):
     """Count work (via x point distances, strip size), not time: update 10 and update 1000 cost the same."""
     ctrl = ElasticStripController(params)
     ctrl.set_path(np.array([[0.0, 0.0], [1000.0, 0.0]]))
+    reference_size = len(ctrl.strip.reference)
     scan = wall_scan(3.0, 1.5)
     work = []
     x = 0.0
@@ -134,7 +135,7 @@ def test_work_per_update_does_not_grow_with_run_length(params):
     bound = params.num_vias * scan.ranges.size * params.iterations
     assert 0 < work[1]["pair_evaluations"] <= bound
     assert work[1]["vias"] <= params.num_vias
-    assert ctrl.strip.reference.shape[0] == ctrl.strip.reference.shape[0]  # reference fixed at set_path
+    assert len(ctrl.strip.reference) == reference_size, "the reference is fixed at set_path"
 
 
 def test_arm_update_moves_arm_away_from_close_obstacle():
@@ -199,3 +200,54 @@ def test_from_dict_converts_lists_and_validates_windows():
         StripParams(beam_window=(50, 10))
     with pytest.raises(ValueError, match="is_sort_rule"):
         StripParams(is_sort_rule="any")
+
+
+def test_parameters_are_checked_against_their_declared_ranges():
+    from maru_planner.errors import InvalidRequest
+
+    with pytest.raises(InvalidRequest, match="k_r"):
+        StripParams(k_r=-1.0)
+    with pytest.raises(InvalidRequest, match="num_vias"):
+        StripParams(num_vias=2)
+    with pytest.raises(InvalidRequest, match="num_vias"):
+        StripParams(num_vias=3.5)
+    with pytest.raises(InvalidRequest, match="suppress_tangential"):
+        StripParams(suppress_tangential="yes")
+    with pytest.raises(InvalidRequest, match="laser_pose"):
+        StripParams(laser_pose=(0.0, 0.0))
+    assert StripParams(num_vias=10.0, k_r=1).num_vias == 10 and isinstance(StripParams(k_r=1).k_r, float)
+
+
+def test_set_params_applies_from_the_next_update_and_keeps_the_goal(params):
+    import dataclasses
+
+    ctrl = ElasticStripController(params)
+    ctrl.set_path(np.array([[0.0, 0.0], [3.0, 0.0], [3.0, 3.0]]))
+    free = lms200(np.full(361, np.inf))
+    assert ctrl.update((0.0, 0.0, 0.0), free).v == pytest.approx(params.max_linear)
+    ctrl.set_params(dataclasses.replace(params, max_linear=0.2, num_vias=5, via_spacing=0.5))
+    out = ctrl.update((0.1, 0.0, 0.0), free)
+    assert out.v == pytest.approx(0.2)
+    assert len(out.strip) == 5 and np.all(np.hypot(*np.diff(out.strip, axis=0).T) <= 0.5 + 1e-9)
+    assert ctrl.goal == pytest.approx([3.0, 3.0, 0.0]), "the goal and the rest of the path stay"
+    assert ctrl.strip.remaining_path()[-1] == pytest.approx([3.0, 3.0])
+    ctrl.set_params(dataclasses.replace(params, arm_enabled=True, arm_max_joint_step=0.01))
+    assert ctrl.arm is not None and ctrl.arm.max_joint_step == 0.01
+    assert ctrl.update((0.2, 0.0, 0.0), free).arm_joint_steps is not None
+    ctrl.set_params(params)
+    assert ctrl.arm is None and ctrl.update((0.3, 0.0, 0.0), free).arm_joint_steps is None
+
+
+def test_paths_too_long_for_the_strip_are_refused_before_allocating(params):
+    from maru_planner.errors import InvalidRequest
+    from maru_planner.reactive.strip import MAX_REFERENCE_POINTS
+
+    ctrl = ElasticStripController(params)
+    with pytest.raises(InvalidRequest, match="m long"):
+        ctrl.set_path(np.array([[0.0, 0.0], [1e300, 0.0]]))
+    too_far = params.via_spacing * MAX_REFERENCE_POINTS * 1.01
+    ctrl.set_goal((too_far, 0.0))
+    with pytest.raises(InvalidRequest, match="vias"):
+        ctrl.update((0.0, 0.0, 0.0), lms200(np.full(361, np.inf)))
+    ctrl.set_goal((2.0, 0.0))
+    assert ctrl.update((0.0, 0.0, 0.0), lms200(np.full(361, np.inf))).v > 0.0

@@ -63,6 +63,11 @@ def test_obstacle_check_reports_first_beam_in_index_order():
         (dict(range_max=0.01), "range limits"),
         (dict(ranges=np.zeros(0)), "empty"),
         (dict(angle_max=math.pi / 2, ranges=np.ones(100)), "100 ranges"),
+        (dict(ranges=np.full(361, np.nan)), "all NaN"),
+        (dict(range_min=5.0, range_max=1.0), "range limits"),
+        (dict(angle_min=1e300), "beyond"),
+        (dict(angle_increment=1e-300, angle_max=1e-3), "ranges but"),
+        (dict(ranges=np.ones(200_001), angle_increment=1e-5), "at most"),
     ],
 )
 def test_malformed_scans_raise_scan_error(kwargs, match):

@@ -43,13 +43,18 @@ class ArmReactive:
         self._frames = [self.model.getFrameId(n) for n in arm_link_names("left") + arm_link_names("right")]
         self.lower = self.model.lowerPositionLimit[self._q_index]
         self.upper = self.model.upperPositionLimit[self._q_index]
-        self.k_c, self.k_r, self.d0 = k_c, k_r, d0
-        self.alpha, self.max_joint_step, self.strip = alpha, max_joint_step, strip
+        self.configure(k_c=k_c, k_r=k_r, d0=d0, alpha=alpha, max_joint_step=max_joint_step, strip=strip)
         self.q_nominal = np.array(NOMINAL["left"] + NOMINAL["right"])
         self.q = self.q_nominal.copy()
         self._p_nominal = self.control_points(self.q_nominal)
         reach = np.max(np.linalg.norm(self._p_nominal[:, :2], axis=1))
         self.reach = float(reach + 0.7)  # generous bound on how far an arm point can get from the base centre
+
+    def configure(self, *, k_c: float, k_r: float, d0: float, alpha: float, max_joint_step: float,
+                  strip: str) -> None:
+        """Gains, margin, step size and strip kind of the arm update (the joint state is kept)."""
+        self.k_c, self.k_r, self.d0 = k_c, k_r, d0
+        self.alpha, self.max_joint_step, self.strip = alpha, max_joint_step, strip
 
     def _full_q(self, q_arm: np.ndarray) -> np.ndarray:
         q = pin.neutral(self.model)
@@ -60,12 +65,6 @@ class ArmReactive:
         """Control points P_1..P_7 of both arms (14, 3) in the base frame."""
         pin.framesForwardKinematics(self.model, self.data, self._full_q(q_arm))
         return np.array([self.data.oMf[f].translation for f in self._frames])
-
-    def set_state(self, q_arm) -> None:
-        q_arm = np.asarray(q_arm, dtype=float)
-        if q_arm.shape != (14,) or not np.all(np.isfinite(q_arm)):
-            raise ValueError(f"arm state must be 14 finite values, got shape {q_arm.shape}")
-        self.q = np.clip(q_arm, self.lower, self.upper)
 
     def step(self, points_base: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """One update from obstacle points in the base frame (m, 2); returns (joint steps (14,), forces (14, 3))."""

@@ -2,12 +2,16 @@
 
 from __future__ import annotations
 
+import functools
 import math
 import time
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 
 import numpy as np
 
+from maru_planner.errors import InvalidRequest
+from maru_planner.params import ParamSpec, dataclass_params, param
+from maru_planner.reactive.arm import ArmReactive
 from maru_planner.reactive.forces import external_forces
 from maru_planner.reactive.kinematics import clamp_twist, wrap_angle
 from maru_planner.reactive.scan import LaserScanData, obstacle_check, scan_to_points, to_world
@@ -17,62 +21,66 @@ from maru_planner.reactive.vias import ViaTarget
 
 @dataclass
 class StripParams:
-    """Parameters of the reactive layer. Defaults: the paper's gains and the Silvermate base."""
+    """Parameters of the reactive layer. Defaults: the paper's gains and the Silvermate base.
 
-    k_r: float = 0.5  # repulsion gain (paper)
-    k_c: float = 0.3  # contraction gain (paper)
-    d_safe: float = 0.45  # safety margin added to the robot radius: d_0 = d_safe + d_r
-    robot_radius: float = 0.30  # d_r
-    num_vias: int = 20
-    via_spacing: float = 0.30  # m between vias on the reference path
-    strip: str = "modified"  # "modified" (eq. 41-42) or "plain" (eq. 39)
-    head_on_ratio: float = 0.25  # modified only: see forces.modified_external_forces
-    suppress_tangential: bool = True  # drop the along-strip part of external forces on vias (elastic bands)
-    iterations: int = 2  # force steps per update
-    max_via_step: float = 0.2  # m, per iteration
-    max_linear: float = 0.5
-    max_angular: float = 1.0
-    k_angular: float = 2.0  # w = k_angular * heading error
-    lookahead: float = 0.6  # m along the strip to the base target
-    target_margin: float = 0.05  # m: the straight drive to the target must clear scan points by d_r + this
-    beam_window: tuple[int, int] | None = (31, 331)  # obstacle_check window: the paper's central 150 deg
-    force_beam_window: tuple[int, int] | None = None  # beams used for the forces (None = every valid beam)
-    avoidance_range: float = 1.5  # obstacle_check threshold (AVOIDANCE_RANGE)
-    force_range: float = 8.0  # scan points farther than this are ignored by the forces
-    is_sort_radius: float = 0.5  # IsSort, m per axis
-    is_sort_rule: str = "either_axis"  # paper's code; or "both_axes"
-    use_via_events: bool = True  # paper's inserted avoidance via (SortPosition / IsSort)
-    via_reach: float = 0.35  # m: an inserted via counts as reached
-    goal_tolerance: float = 0.25  # m
-    slow_radius: float = 0.8  # m: linear speed ramps down inside this distance of the goal
-    stop_distance: float = 0.0  # m: stop if an obstacle point is this close in front (0 = off)
-    laser_pose: tuple[float, float, float] = (0.22, 0.0, 0.0)  # laser in base_link: x, y, yaw
-    arm_enabled: bool = True
-    arm_d_safe: float = 0.10
-    arm_link_radius: float = 0.055
-    arm_alpha: float = 1.0
-    arm_max_joint_step: float = 0.05
+    Each field is a declared parameter (:func:`maru_planner.params.param`): reactive_node makes
+    it a ROS parameter with this description and range, and every value is checked on creation.
+    """
+
+    k_r: float = param(0.5, "repulsion gain (paper)", lower=1e-3, upper=100.0)
+    k_c: float = param(0.3, "contraction gain (paper)", lower=1e-3, upper=10.0)
+    d_safe: float = param(0.45, "m, safety margin added to the robot radius: d_0 = d_safe + robot_radius",
+                          lower=0.0, upper=5.0)
+    robot_radius: float = param(0.30, "m, d_r: the base's radius", lower=0.01, upper=5.0)
+    num_vias: int = param(20, "via points in the strip", lower=3, upper=1000)
+    via_spacing: float = param(0.30, "m between vias on the reference path", lower=0.05, upper=5.0)
+    strip: str = param("modified", "modified (eq. 41-42) or plain (eq. 39) external force",
+                       choices=("modified", "plain"))
+    head_on_ratio: float = param(0.25, "modified strip: head-on rule threshold, 0 = off (see forces.py)",
+                                 lower=0.0, upper=10.0)
+    suppress_tangential: bool = param(True, "drop the along-strip part of external forces on vias (elastic bands)")
+    iterations: int = param(2, "force steps per update", lower=1, upper=100)
+    max_via_step: float = param(0.2, "m a via moves at most per iteration", lower=1e-3, upper=5.0)
+    max_linear: float = param(0.5, "m/s, linear speed limit", lower=1e-3, upper=10.0)
+    max_angular: float = param(1.0, "rad/s, turn rate limit", lower=1e-3, upper=10.0)
+    k_angular: float = param(2.0, "turn rate per rad of heading error", lower=1e-3, upper=100.0)
+    lookahead: float = param(0.6, "m along the strip to the base target", lower=0.01, upper=20.0)
+    target_margin: float = param(0.05, "m: the drive to the target must clear scan points by robot_radius + this",
+                                 lower=0.0, upper=2.0)
+    beam_window: tuple[int, int] | None = param(
+        (31, 331), "beams [lo, hi) of obstacle_check (the paper's central 150 deg of a 361-beam LMS200)")
+    avoidance_range: float = param(1.5, "m, obstacle_check threshold (AVOIDANCE_RANGE)", lower=0.01, upper=100.0)
+    force_range: float = param(8.0, "m: scan points farther than this exert no force", lower=0.01, upper=1000.0)
+    is_sort_radius: float = param(0.5, "m per axis, IsSort filter of inserted vias", lower=0.0, upper=10.0)
+    is_sort_rule: str = param("either_axis", "IsSort rule: the paper's code (either_axis) or both_axes",
+                              choices=("either_axis", "both_axes"))
+    use_via_events: bool = param(True, "insert the paper's avoidance via (SortPosition / IsSort)")
+    via_reach: float = param(0.35, "m: an inserted via counts as reached", lower=0.0, upper=10.0)
+    goal_tolerance: float = param(0.25, "m: the goal counts as reached", lower=0.01, upper=10.0)
+    slow_radius: float = param(0.8, "m: linear speed ramps down inside this distance of the goal (0 = off)",
+                               lower=0.0, upper=100.0)
+    stop_distance: float = param(0.0, "m: stop if a scan point is this close in front (0 = off)",
+                                 lower=0.0, upper=10.0)
+    laser_pose: tuple[float, float, float] = param((0.22, 0.0, 0.0), "laser in base_link: x (m), y (m), yaw (rad)")
+    arm_enabled: bool = param(True, "run the arm update (eq. 46-49)")
+    arm_d_safe: float = param(0.10, "m, the arms' safety margin", lower=0.0, upper=2.0)
+    arm_link_radius: float = param(0.055, "m, arm link radius", lower=0.0, upper=1.0)
+    arm_alpha: float = param(1.0, "joint step per unit torque", lower=0.0, upper=100.0)
+    arm_max_joint_step: float = param(0.05, "rad per update and joint", lower=1e-4, upper=1.0)
 
     def __post_init__(self):
-        if self.strip not in ("modified", "plain"):
-            raise ValueError(f"strip must be 'modified' or 'plain', got {self.strip!r}")
-        if self.is_sort_rule not in ("either_axis", "both_axes"):
-            raise ValueError(f"is_sort_rule must be 'either_axis' or 'both_axes', got {self.is_sort_rule!r}")
-        if self.num_vias < 3:
-            raise ValueError(f"num_vias must be >= 3, got {self.num_vias}")
-        for name in ("k_r", "k_c", "robot_radius", "via_spacing", "max_linear", "max_angular", "lookahead",
-                     "avoidance_range", "goal_tolerance"):
-            value = getattr(self, name)
-            if not math.isfinite(value) or value <= 0:
-                raise ValueError(f"StripParams.{name} must be positive, got {value!r}")
-        for name in ("beam_window", "force_beam_window"):
-            window = getattr(self, name)
-            if window is not None:
-                lo, hi = window
-                if lo < 0 or hi <= lo:
-                    raise ValueError(f"{name} must be (lo, hi) with 0 <= lo < hi, got {window}")
-                setattr(self, name, (int(lo), int(hi)))
-        self.laser_pose = tuple(float(v) for v in self.laser_pose)
+        for name, spec in _strip_specs().items():
+            if name not in ("beam_window", "laser_pose"):
+                setattr(self, name, spec.check(getattr(self, name)))
+        if self.beam_window is not None:
+            window = tuple(self.beam_window)
+            if len(window) != 2 or not all(float(v).is_integer() for v in window) or not 0 <= window[0] < window[1]:
+                raise InvalidRequest(f"beam_window must be [lo, hi] with 0 <= lo < hi, got {list(window)}")
+            self.beam_window = (int(window[0]), int(window[1]))
+        pose = tuple(float(v) for v in self.laser_pose)
+        if len(pose) != 3 or not all(math.isfinite(v) and abs(v) <= 10.0 for v in pose):
+            raise InvalidRequest(f"laser_pose must be [x, y, yaw] with finite values within 10, got {list(pose)}")
+        self.laser_pose = pose
 
     @property
     def d0(self) -> float:
@@ -80,15 +88,16 @@ class StripParams:
 
     @classmethod
     def from_dict(cls, values: dict) -> StripParams:
-        known = {f.name for f in fields(cls)}
-        unknown = sorted(set(values) - known)
+        """StripParams from a mapping such as a parsed params file (lists for the tuple fields)."""
+        unknown = sorted(set(values) - set(_strip_specs()))
         if unknown:
-            raise ValueError(f"unknown StripParams field(s): {', '.join(unknown)}")
-        values = dict(values)
-        for key in ("beam_window", "force_beam_window", "laser_pose"):
-            if values.get(key) is not None:
-                values[key] = tuple(values[key])
+            raise InvalidRequest(f"unknown StripParams field(s): {', '.join(unknown)}")
         return cls(**values)
+
+
+@functools.cache
+def _strip_specs() -> dict[str, ParamSpec]:
+    return dataclass_params(StripParams)
 
 
 @dataclass
@@ -116,29 +125,42 @@ class ElasticStripController:
     def __init__(self, params: StripParams | None = None):
         self.params = params or StripParams()
         p = self.params
-        self.strip = ElasticStrip(p.num_vias, p.via_spacing, p.k_c, p.k_r, p.d0, p.strip, p.iterations,
-                                  p.max_via_step, p.head_on_ratio, p.suppress_tangential,
-                                  min_gap=2.0 * p.robot_radius)
+        self.strip = _make_strip(p)
         self.via = ViaTarget(reach=p.via_reach, blocked_radius=p.robot_radius)
-        self.arm = None
-        if p.arm_enabled:
-            from maru_planner.reactive.arm import ArmReactive
-
-            self.arm = ArmReactive(k_c=p.k_c, k_r=p.k_r, d0=p.arm_d_safe + p.arm_link_radius, alpha=p.arm_alpha,
-                                   max_joint_step=p.arm_max_joint_step, strip=p.strip)
+        self.arm = _make_arm(p) if p.arm_enabled else None
         self.goal: np.ndarray | None = None
         self._needs_start = True
-        self.updates = 0
         self._pairs_seen = 0
         self._blocked = False
-        self.last_work: dict = {}
+
+    def set_params(self, params: StripParams) -> None:
+        """Apply new parameters from the next update on, keeping the goal, the strip's shape and the arm state.
+
+        The strip is rebuilt with the new gains and spacing on what is left of its path (the
+        deformed vias, then the rest of the reference path); the arm keeps its joint positions
+        (a newly enabled arm starts at its nominal posture).
+        """
+        remaining = None if self._needs_start or self.goal is None else self.strip.remaining_path()
+        self.params = params
+        self.strip = _make_strip(params)
+        if remaining is not None:
+            self.strip.set_path(remaining)
+        self._pairs_seen = 0
+        self.via.reach, self.via.blocked_radius = params.via_reach, params.robot_radius
+        if not params.arm_enabled:
+            self.arm = None
+        elif self.arm is None:
+            self.arm = _make_arm(params)
+        else:
+            self.arm.configure(k_c=params.k_c, k_r=params.k_r, d0=params.arm_d_safe + params.arm_link_radius,
+                               alpha=params.arm_alpha, max_joint_step=params.arm_max_joint_step, strip=params.strip)
 
     # -- inputs -------------------------------------------------------------------------------
     def set_goal(self, goal) -> None:
         """Goal (x, y[, theta]). Without a path the initial path is the straight line to it."""
         goal = np.asarray(goal, dtype=float).reshape(-1)
         if goal.size not in (2, 3) or not np.all(np.isfinite(goal)):
-            raise ValueError(f"goal must be 2 or 3 finite numbers, got {goal}")
+            raise InvalidRequest(f"goal must be 2 or 3 finite numbers, got {goal}")
         self.goal = np.array([goal[0], goal[1], goal[2] if goal.size == 3 else 0.0])
         self._needs_start = True
         self.via.clear()
@@ -151,10 +173,6 @@ class ElasticStripController:
         self.goal = np.array([last[0], last[1], last[2] if path.shape[1] == 3 else 0.0])
         self._needs_start = False
         self.via.clear()
-
-    def set_arm_state(self, q) -> None:
-        if self.arm is not None:
-            self.arm.set_state(q)
 
     @property
     def has_goal(self) -> bool:
@@ -169,14 +187,14 @@ class ElasticStripController:
             raise RuntimeError("ElasticStripController has no goal; call set_goal or set_path first")
         pose = np.asarray(pose, dtype=float).reshape(-1)
         if pose.size != 3 or not np.all(np.isfinite(pose)):
-            raise ValueError(f"pose must be 3 finite numbers (x, y, theta), got {pose}")
+            raise InvalidRequest(f"pose must be 3 finite numbers (x, y, theta), got {pose}")
         scan.validate()
         if self._needs_start:
             self.strip.set_path(np.vstack([pose[:2], self.goal[:2]]))
             self._needs_start = False
         position = pose[:2]
 
-        points_robot = scan_to_points(scan, p.laser_pose, p.force_beam_window, max_range=p.force_range)
+        points_robot = scan_to_points(scan, p.laser_pose, None, max_range=p.force_range)
         points_world = to_world(points_robot, pose)
 
         self.strip.anchor(position)
@@ -194,17 +212,16 @@ class ElasticStripController:
         if self.arm is not None:
             arm_steps, _ = self.arm.step(points_robot)
             arm_q = self.arm.q.copy()
-        self.updates += 1
         pairs_before = self._pairs_seen
         self._pairs_seen = self.strip.pair_evaluations
-        self.last_work = {"beams": int(scan.ranges.size), "points": int(len(points_world)),
-                          "vias": int(len(strip)), "force_evaluations": self.strip.iterations,
-                          "pair_evaluations": self.strip.pair_evaluations - pairs_before}
+        work = {"beams": int(scan.ranges.size), "points": int(len(points_world)), "vias": int(len(strip)),
+                "force_evaluations": self.strip.iterations,
+                "pair_evaluations": self.strip.pair_evaluations - pairs_before}
         return ControlOutput(
             v=v, w=w, strip=strip, target=(float(target[0]), float(target[1])), reached_goal=reached,
             obstacle_points=points_world, arm_joint_steps=arm_steps, arm_joint_positions=arm_q,
             update_time=time.perf_counter() - t0, obstacle_event=event, via_active=self.via.active,
-            robot_force=(float(robot_force[0]), float(robot_force[1])), work=dict(self.last_work),
+            robot_force=(float(robot_force[0]), float(robot_force[1])), work=work,
         )
 
     def _choose_target(self, position, strip, points_world, event: bool, dist_goal: float) -> np.ndarray:
@@ -276,3 +293,13 @@ class ElasticStripController:
                 v = 0.0
         v, w = clamp_twist(v, w, p.max_linear, p.max_angular)
         return float(v), float(w), False
+
+
+def _make_strip(p: StripParams) -> ElasticStrip:
+    return ElasticStrip(p.num_vias, p.via_spacing, p.k_c, p.k_r, p.d0, p.strip, p.iterations, p.max_via_step,
+                        p.head_on_ratio, p.suppress_tangential, min_gap=2.0 * p.robot_radius)
+
+
+def _make_arm(p: StripParams) -> ArmReactive:
+    return ArmReactive(k_c=p.k_c, k_r=p.k_r, d0=p.arm_d_safe + p.arm_link_radius, alpha=p.arm_alpha,
+                       max_joint_step=p.arm_max_joint_step, strip=p.strip)

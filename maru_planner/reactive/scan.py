@@ -2,7 +2,9 @@
 
 REP 117: a beam reading ``+inf`` means nothing within range, ``-inf`` too
 close, NaN an invalid reading; readings outside ``[range_min, range_max]``
-are not measurements. None of them becomes an obstacle point.
+are not measurements. None of them becomes an obstacle point. A scan whose
+readings are *all* NaN says nothing about the world (not even "free") and is
+rejected, as are scans beyond the size and angle limits below.
 """
 
 from __future__ import annotations
@@ -13,6 +15,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from maru_planner.errors import InvalidRequest
+
+MAX_SCAN_BEAMS = 100_000  # ranges in one scan (real 2-D lasers have a few thousand)
+MAX_SCAN_ANGLE = 2.0 * math.pi  # |angle_min|, |angle_max|, |angle_increment| (rad)
 
 
 class ScanError(InvalidRequest):
@@ -48,11 +53,16 @@ class LaserScanData:
             raise ScanError("LaserScan.angle_increment is 0")
         if self.range_min < 0.0 or self.range_max <= self.range_min:
             raise ScanError(f"LaserScan range limits invalid: range_min={self.range_min}, range_max={self.range_max}")
-        if self.ranges.size == 0:
-            raise ScanError("LaserScan.ranges is empty")
+        check_scan_size(self.ranges.size)
+        if np.all(np.isnan(self.ranges)):
+            raise ScanError(f"LaserScan.ranges are all NaN ({self.ranges.size} invalid readings)")
+        if self.angle_max is not None and not math.isfinite(float(self.angle_max)):
+            raise ScanError(f"LaserScan.angle_max is not finite ({self.angle_max})")
+        for name in ("angle_min", "angle_max", "angle_increment"):
+            value = getattr(self, name)
+            if value is not None and abs(float(value)) > MAX_SCAN_ANGLE:
+                raise ScanError(f"LaserScan.{name} = {float(value):.4g} rad is beyond +-2 pi")
         if self.angle_max is not None:
-            if not math.isfinite(float(self.angle_max)):
-                raise ScanError(f"LaserScan.angle_max is not finite ({self.angle_max})")
             expected = int(round((self.angle_max - self.angle_min) / self.angle_increment)) + 1
             if abs(expected - self.ranges.size) > 1:
                 raise ScanError(
@@ -66,6 +76,14 @@ class LaserScanData:
         if self._angles is None or self._angles.size != self.ranges.size:
             self._angles = self.angle_min + self.angle_increment * np.arange(self.ranges.size)
         return self._angles
+
+
+def check_scan_size(beams: int) -> None:
+    """ScanError unless a scan of ``beams`` ranges is within 1..MAX_SCAN_BEAMS (checked before converting them)."""
+    if beams == 0:
+        raise ScanError("LaserScan.ranges is empty")
+    if beams > MAX_SCAN_BEAMS:
+        raise ScanError(f"LaserScan has {beams} ranges (at most {MAX_SCAN_BEAMS})")
 
 
 def beam_mask(scan: LaserScanData, beam_window: tuple[int, int] | None = None) -> np.ndarray:

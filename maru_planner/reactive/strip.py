@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from maru_planner.errors import InvalidRequest
 from maru_planner.reactive.forces import (
     external_forces,
     internal_forces,
@@ -12,9 +13,14 @@ from maru_planner.reactive.forces import (
     unit_tangents,
 )
 
+MAX_REFERENCE_POINTS = 1_000_000  # resampled path points (16 MB): 300 km at the default via spacing
+
 
 def resample_path(path: np.ndarray, spacing: float) -> np.ndarray:
-    """Points every ``spacing`` metres along the polyline ``path`` (n, 2), both ends kept."""
+    """Points every ``spacing`` metres along the polyline ``path`` (n, 2), both ends kept.
+
+    InvalidRequest when that takes more than MAX_REFERENCE_POINTS points (checked before allocating).
+    """
     path = np.asarray(path, dtype=float)[:, :2]
     if len(path) == 1:
         return path.copy()
@@ -22,6 +28,10 @@ def resample_path(path: np.ndarray, spacing: float) -> np.ndarray:
     s = np.concatenate([[0.0], np.cumsum(seg)])
     if s[-1] < 1e-9:
         return path[:1].copy()
+    if not s[-1] / spacing <= MAX_REFERENCE_POINTS:
+        raise InvalidRequest(
+            f"path is {s[-1]:.4g} m long: more than {MAX_REFERENCE_POINTS} vias at {spacing:g} m spacing"
+        )
     count = max(int(np.ceil(s[-1] / spacing)), 1)
     targets = np.linspace(0.0, s[-1], count + 1)
     return np.stack([np.interp(targets, s, path[:, 0]), np.interp(targets, s, path[:, 1])], axis=1)
@@ -57,17 +67,15 @@ class ElasticStrip:
         self._vias = np.zeros((num_vias, 2))
         self._ref_index = np.zeros(num_vias, dtype=int)
         self._count = 0
-        self.shifts = 0
-        self.force_evaluations = 0
         self.pair_evaluations = 0  # via x obstacle-point distances computed, the dominant work
 
     def set_path(self, path: np.ndarray, start=None) -> None:
         """New reference path (n >= 1, columns x, y[, theta]); the strip restarts on it."""
         path = np.asarray(path, dtype=float)
         if path.ndim != 2 or path.shape[0] < 1 or path.shape[1] not in (2, 3):
-            raise ValueError(f"path must have shape (n, 2) or (n, 3), got {path.shape}")
+            raise InvalidRequest(f"path must have shape (n, 2) or (n, 3), got {path.shape}")
         if not np.all(np.isfinite(path)):
-            raise ValueError("path contains NaN or inf")
+            raise InvalidRequest("path contains NaN or inf")
         pts = path[:, :2]
         if start is not None:
             pts = np.vstack([np.asarray(start, dtype=float)[:2], pts])
@@ -85,13 +93,10 @@ class ElasticStrip:
     def reference(self) -> np.ndarray:
         return self._ref
 
-    @property
-    def goal(self) -> np.ndarray:
-        return self._ref[-1]
-
-    def planned_point(self, index: int) -> np.ndarray:
-        """Undeformed reference point of via ``index``."""
-        return self._ref[self._ref_index[min(index, self._count - 1)]]
+    def remaining_path(self) -> np.ndarray:
+        """The current vias followed by the reference points not yet in the strip (m, 2)."""
+        k = self._count
+        return np.vstack([self._vias[:k], self._ref[self._ref_index[k - 1] + 1 :]])
 
     def _last_is_goal(self) -> bool:
         return self._ref_index[self._count - 1] == len(self._ref) - 1
@@ -106,7 +111,6 @@ class ElasticStrip:
             self._ref_index[k - 1] = nxt
         else:
             self._count -= 1
-        self.shifts += 1
 
     def anchor(self, position) -> None:
         """Via 0 := robot; drop vias the robot has reached or passed (at most num_vias per call)."""
@@ -148,7 +152,6 @@ class ElasticStrip:
                 if self.suppress_tangential:
                     ext = remove_tangential(ext, tangents)
                 forces += ext
-            self.force_evaluations += 1
             self.pair_evaluations += k * len(points)
             forces[0] = 0.0
             if not movable_last:

@@ -1,9 +1,11 @@
 """ROS messages <-> the reactive core's plain types (poses as (x, y, θ), numpy arrays, LaserScanData).
 
 Both directions are here: the node reads LaserScan / Odometry / Path /
-PoseStamped and writes Twist / Path / JointTrajectory / MarkerArray; the bag
-recorder and the closed-loop test write LaserScan / Odometry / Path /
-PoseStamped from the simulator. Nothing here holds state.
+PoseStamped (each checked against the core's limits: a bad message raises
+ScanError or InputError naming the field, sizes before any conversion) and
+writes Twist / Path / JointTrajectory / MarkerArray; the bag recorder and the
+closed-loop test write LaserScan / Odometry / Path / PoseStamped from the
+simulator. Nothing here holds state.
 """
 
 from __future__ import annotations
@@ -13,7 +15,7 @@ import math
 
 import numpy as np
 from builtin_interfaces.msg import Duration, Time
-from geometry_msgs.msg import Point, PoseStamped, Quaternion, Twist, TwistStamped
+from geometry_msgs.msg import Point, Pose, PoseStamped, Quaternion, Twist, TwistStamped
 from nav_msgs.msg import Odometry, Path
 from rclpy.serialization import deserialize_message
 from sensor_msgs.msg import LaserScan
@@ -22,6 +24,8 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 from visualization_msgs.msg import Marker, MarkerArray
 
 from maru_planner.reactive import LaserScanData, ScanError
+from maru_planner.reactive.inputs import Pose2D, check_path_size, planar_pose, yaw_from_quaternion
+from maru_planner.reactive.scan import check_scan_size
 
 NS_PER_S = 1_000_000_000
 
@@ -44,10 +48,6 @@ def s_to_stamp(seconds: float) -> Time:
     return ns_to_stamp(round(seconds * NS_PER_S))
 
 
-def yaw_from_quaternion(q: Quaternion) -> float:
-    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
-
-
 def quaternion_from_yaw(yaw: float) -> Quaternion:
     return Quaternion(x=0.0, y=0.0, z=math.sin(yaw / 2.0), w=math.cos(yaw / 2.0))
 
@@ -60,6 +60,7 @@ def scan_from_msg(msg: LaserScan, stamp: float | None = None) -> LaserScanData:
     angle_max; the intensities (unused, but a sign of a broken driver) are checked here.
     """
     n = len(msg.ranges)
+    check_scan_size(n)
     if len(msg.intensities) not in (0, n):
         raise ScanError(f"LaserScan has {len(msg.intensities)} intensities for {n} ranges")
     return LaserScanData(
@@ -91,12 +92,15 @@ def scan_msg(scan: LaserScanData, frame_id: str, scan_time: float = 0.0) -> Lase
 
 
 # ---------------------------------------------------------------- poses, odometry, paths
-Pose2D = tuple[float, float, float]
+def planar_pose_from_msg(pose: Pose, what: str) -> Pose2D:
+    """geometry_msgs/Pose -> (x, y, yaw); InputError naming ``what`` for NaN/inf, far or non-unit values."""
+    q = pose.orientation
+    yaw = yaw_from_quaternion(q.x, q.y, q.z, q.w, f"{what}.orientation")
+    return planar_pose(pose.position.x, pose.position.y, yaw, f"{what}.position")
 
 
 def pose_from_odom(msg: Odometry) -> Pose2D:
-    p = msg.pose.pose
-    return float(p.position.x), float(p.position.y), yaw_from_quaternion(p.orientation)
+    return planar_pose_from_msg(msg.pose.pose, "odom.pose.pose")
 
 
 def odom_msg(pose: Pose2D, v: float, w: float, stamp_s: float, odom_frame: str, base_frame: str) -> Odometry:
@@ -112,9 +116,8 @@ def odom_msg(pose: Pose2D, v: float, w: float, stamp_s: float, odom_frame: str, 
     return msg
 
 
-def pose_from_pose_stamped(msg: PoseStamped) -> Pose2D:
-    p = msg.pose
-    return float(p.position.x), float(p.position.y), yaw_from_quaternion(p.orientation)
+def pose_from_pose_stamped(msg: PoseStamped, what: str = "goal_pose.pose") -> Pose2D:
+    return planar_pose_from_msg(msg.pose, what)
 
 
 def pose_stamped_msg(pose: Pose2D, frame_id: str, stamp_s: float) -> PoseStamped:
@@ -128,7 +131,9 @@ def pose_stamped_msg(pose: Pose2D, frame_id: str, stamp_s: float) -> PoseStamped
 
 def path_points_from_msg(msg: Path) -> np.ndarray:
     """nav_msgs/Path -> (n, 3) array of x, y, θ."""
-    return np.array([pose_from_pose_stamped(p) for p in msg.poses], dtype=float).reshape(-1, 3)
+    check_path_size(len(msg.poses), "plan")
+    poses = [planar_pose_from_msg(p.pose, f"plan.poses[{i}].pose") for i, p in enumerate(msg.poses)]
+    return np.array(poses, dtype=float).reshape(-1, 3)
 
 
 def path_msg(points: np.ndarray, frame_id: str, stamp_s: float) -> Path:
