@@ -33,6 +33,7 @@ test: setup
 
 lint: setup
 	@$(VENV)/bin/ruff check maru_planner bench test scripts launch
+	@$(VENV)/bin/mypy
 
 bench-deps: setup
 	@$(PY) -m pip install --progress-bar off -q -r bench/requirements.txt
