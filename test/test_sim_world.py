@@ -118,6 +118,10 @@ def test_movers_follow_waypoints_at_speed():
         ({"robot": {**ROBOT, "laser": {"fov": 90}}}, "laser"),
         ({"robot": ROBOT, "colour": "red"}, "unknown field"),
         ({"robot": ROBOT, "map": "missing.yaml"}, "cannot read"),
+        ({"robot": ROBOT, "obstacles": 5}, "obstacles: expected a list"),
+        ({"robot": {**ROBOT, "laser": {"range_min": 5.0, "range_max": 1.0}}}, "range_min < range_max"),
+        ({"robot": {**ROBOT, "laser": {"rate": 1e6}}}, "robot.laser.rate"),
+        ({"robot": ROBOT, "movers": [{"waypoints": [[0, 0], [1, 0]], "start_time": "soon"}]}, "start_time"),
         ([1, 2], "mapping"),
     ],
 )

@@ -34,7 +34,6 @@ class ViaTarget:
         self.reach = reach
         self.blocked_radius = blocked_radius
         self.point: np.ndarray | None = None
-        self.inserted = 0
         self.filtered = 0
 
     def clear(self) -> None:
@@ -48,7 +47,6 @@ class ViaTarget:
         """Insert ``candidate`` if IsSort accepts it against ``current`` (the target in use)."""
         if is_sort(candidate, current, radius, rule):
             self.point = np.asarray(candidate, dtype=float)[:2].copy()
-            self.inserted += 1
             return True
         self.filtered += 1
         return False

@@ -32,9 +32,15 @@ from pathlib import Path
 
 import numpy as np
 import yaml
+from scipy.ndimage import distance_transform_edt
 
-from maru_planner.errors import InvalidScene
+from maru_planner.base.grid import OccupancyGrid
+from maru_planner.errors import InvalidScene, MaruError
+from maru_planner.reactive.scan import MAX_SCAN_BEAMS
 from maru_planner.sim.geometry import box_polygon, polygon_segments
+
+MAX_LASER_RATE = 200.0  # Hz: simulated steps per second
+MAX_SIM_TIME = 3600.0  # s of simulated time in one run
 
 
 class WorldError(InvalidScene):
@@ -54,12 +60,10 @@ class OccupancyMap:
     @classmethod
     def from_yaml(cls, path: str | Path) -> OccupancyMap:
         """Read a map_server map with the base planners' reader; unknown cells are free here."""
-        from maru_planner.base.grid import OccupancyGrid
-
         path = Path(path)
         try:
             grid = OccupancyGrid.from_yaml(path, unknown_is_occupied=False)
-        except (OSError, ValueError, yaml.YAMLError) as exc:
+        except (OSError, ValueError, yaml.YAMLError, MaruError) as exc:
             raise WorldError(f"map {path}: cannot read ({exc})") from exc
         return cls(grid.occupied, grid.resolution, grid.origin[:2])
 
@@ -77,8 +81,6 @@ class OccupancyMap:
 
     def distance_field(self) -> np.ndarray:
         """Metres from each cell centre to the nearest occupied cell's edge (0 inside occupied cells)."""
-        from scipy.ndimage import distance_transform_edt
-
         if not np.any(self.occupied):
             return np.full(self.occupied.shape, np.inf)
         d = distance_transform_edt(~self.occupied) * self.resolution
@@ -194,12 +196,14 @@ class World:
         if "robot" not in data:
             raise WorldError("world: missing field 'robot' (with start and goal)")
         circles, polygons = [], []
-        for i, entry in enumerate(data.get("obstacles") or []):
+        for i, entry in enumerate(_entries(data, "obstacles")):
             kind, shape = _parse_obstacle(entry, f"obstacles[{i}]")
             (circles if kind == "circle" else polygons).append(shape)
-        movers = [_parse_mover(m, f"movers[{i}]") for i, m in enumerate(data.get("movers") or [])]
+        movers = [_parse_mover(m, f"movers[{i}]") for i, m in enumerate(_entries(data, "movers"))]
         occupancy = None
         if data.get("map"):
+            if not isinstance(data["map"], str):
+                raise WorldError(f"map: expected a file name, got {data['map']!r:.40}")
             map_path = Path(data["map"])
             if not map_path.is_absolute() and base_dir is not None:
                 map_path = base_dir / map_path
@@ -211,7 +215,7 @@ class World:
         return cls(robot=_parse_robot(data["robot"]), circles=np.array(circles).reshape(-1, 3), polygons=polygons,
                    movers=movers, occupancy=occupancy, path=path,
                    goal_tolerance=_positive(data.get("goal_tolerance", 0.3), "goal_tolerance"),
-                   max_time=_positive(data.get("max_time", 60.0), "max_time"),
+                   max_time=_positive(data.get("max_time", 60.0), "max_time", upper=MAX_SIM_TIME),
                    name=str(data.get("name", name)), bounds=bounds)
 
     def circles_at(self, t: float, time_offset: float = 0.0) -> np.ndarray:
@@ -220,6 +224,13 @@ class World:
             return self.circles
         moving = np.array([[*m.position(t, time_offset), m.radius] for m in self.movers])
         return np.vstack([self.circles, moving])
+
+
+def _entries(data: dict, key: str) -> list:
+    entries = data.get(key) or []
+    if not isinstance(entries, list):
+        raise WorldError(f"{key}: expected a list, got {entries!r:.40}")
+    return entries
 
 
 def _array(value, what: str, size: int | None = None, cols: tuple | None = None) -> np.ndarray:
@@ -236,13 +247,20 @@ def _array(value, what: str, size: int | None = None, cols: tuple | None = None)
     return arr
 
 
-def _positive(value, what: str) -> float:
+def _number(value, what: str) -> float:
     try:
         v = float(value)
-    except (TypeError, ValueError) as exc:
-        raise WorldError(f"{what}: expected a number, got {value!r}") from exc
-    if not math.isfinite(v) or v <= 0:
-        raise WorldError(f"{what}: must be > 0, got {value!r}")
+    except (TypeError, ValueError):
+        raise WorldError(f"{what}: expected a number, got {value!r:.40}") from None
+    if not math.isfinite(v):
+        raise WorldError(f"{what}: must be finite, got {value!r:.40}")
+    return v
+
+
+def _positive(value, what: str, upper: float = math.inf) -> float:
+    v = _number(value, what)
+    if v <= 0 or v > upper:
+        raise WorldError(f"{what}: must be > 0{f' and <= {upper:g}' if math.isfinite(upper) else ''}, got {value!r}")
     return v
 
 
@@ -261,7 +279,7 @@ def _parse_obstacle(entry, what: str):
         size = _array(entry["size"], f"{what}.size", size=2)
         if np.any(size <= 0):
             raise WorldError(f"{what}.size: must be > 0, got {entry['size']!r}")
-        yaw = float(entry.get("yaw", 0.0))
+        yaw = _number(entry.get("yaw", 0.0), f"{what}.yaw")
         return "polygon", box_polygon(_array(entry["center"], f"{what}.center", size=2), size, yaw)
     if kind == "polygon":
         pts = _array(entry.get("points"), f"{what}.points", cols=(2,))
@@ -282,7 +300,7 @@ def _parse_mover(entry, what: str) -> Mover:
         raise WorldError(f"{what}.mode: must be stop, loop or pingpong, got {mode!r}")
     return Mover(radius=_positive(entry.get("radius", 0.25), f"{what}.radius"),
                  speed=_positive(entry.get("speed", 1.2), f"{what}.speed"), waypoints=pts,
-                 start_time=float(entry.get("start_time", 0.0)), mode=mode)
+                 start_time=_number(entry.get("start_time", 0.0), f"{what}.start_time"), mode=mode)
 
 
 def _parse_robot(entry) -> RobotSpec:
@@ -305,10 +323,25 @@ def _parse_robot(entry) -> RobotSpec:
     unknown = set(laser_entry) - valid
     if unknown:
         raise WorldError(f"robot.laser: unknown field(s) {sorted(unknown)}")
-    laser = LaserSpec(**{k: float(v) for k, v in laser_entry.items()})
-    for key in ("fov_deg", "resolution_deg", "range_max", "rate"):
-        _positive(getattr(laser, key), f"robot.laser.{key}")
+    laser = _parse_laser(laser_entry)
     return RobotSpec(start=start, goal=goal, radius=_positive(entry.get("radius", 0.30), "robot.radius"),
                      footprint=footprint,
                      max_linear=_positive(entry.get("max_linear", 0.5), "robot.max_linear"),
                      max_angular=_positive(entry.get("max_angular", 1.0), "robot.max_angular"), laser=laser)
+
+
+def _parse_laser(entry: dict) -> LaserSpec:
+    laser = LaserSpec(**{k: _number(v, f"robot.laser.{k}") for k, v in entry.items()})
+    _positive(laser.fov_deg, "robot.laser.fov_deg", upper=360.0)
+    _positive(laser.resolution_deg, "robot.laser.resolution_deg")
+    _positive(laser.rate, "robot.laser.rate", upper=MAX_LASER_RATE)
+    if laser.range_min < 0.0 or laser.range_max <= laser.range_min:
+        raise WorldError(
+            f"robot.laser: need 0 <= range_min < range_max, got range_min {laser.range_min:g}, "
+            f"range_max {laser.range_max:g}"
+        )
+    if laser.noise < 0.0:
+        raise WorldError(f"robot.laser.noise: must be >= 0, got {laser.noise:g}")
+    if laser.beams > MAX_SCAN_BEAMS:
+        raise WorldError(f"robot.laser: {laser.beams} beams (fov_deg / resolution_deg) is over {MAX_SCAN_BEAMS}")
+    return laser
