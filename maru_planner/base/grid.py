@@ -1,7 +1,7 @@
 """Occupancy grid for mobile-base planning (ROS map_server YAML + PGM, inflation).
 
-Conventions (relied on by ``astar.py``, ``se2.py``, ``mspp.py`` and helper-8's
-``tunnel.py`` / ``biped/``):
+Conventions (relied on by ``astar.py``, ``se2.py``, ``mspp.py``, ``tunnel.py``
+and ``biped/``):
 
 - ``grid.occupied``: bool array, shape ``(height, width)``; **row = y index,
   col = x index**, row 0 is the cell at the map origin (the bottom row of the

@@ -1,4 +1,4 @@
-"""The paper's two reference problems (SPEC.md, Paper 000 "Experiments") by name.
+"""Paper 000's two reference problems (its "Experiments"; see docs/planning.md) by name.
 
 13-DOF values are in the order (waist, right arm 1–6, left arm 1–6) = the ``upper_body`` group
 order of the Maru-1 SRDF; the 6-DOF problem is the right arm with the rest at neutral.

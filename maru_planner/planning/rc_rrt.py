@@ -1,6 +1,6 @@
 """RC-RRT: Cheng & LaValle's resolution-complete RRT (ICRA 2002) as an ``ompl.base.Planner``.
 
-Faithful to the paper's ingredients (SPEC.md, Paper 000):
+Faithful to the paper's ingredients (table in docs/planning.md):
 
 * **Discrete inputs.** Each node has ``m = 2·dim`` extension inputs: move one joint by ±``step``.
   All nodes therefore lie on the lattice ``start + step·Z^dim`` clipped to the joint limits, a
