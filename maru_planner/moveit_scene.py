@@ -4,8 +4,8 @@ MoveIt conventions honoured here:
 - ``world.collision_objects[*]``: ``id``, ``primitives`` (``type`` + ``dimensions``) and
   ``primitive_poses`` (``position``, ``orientation`` as a quaternion **x y z w**), optionally an object
   ``pose`` that the primitive poses are relative to (MoveIt >= 2); ``operation`` REMOVE is skipped.
-- Primitive dimensions: box ``[x, y, z]`` (full sides), sphere ``[radius]``, cylinder **``[height,
-  radius]``** (along local z, centred).
+- Primitive types and dimensions come from the shape table (``maru_planner/shapes.py``): box
+  ``[x, y, z]`` (full sides), sphere ``[radius]``, cylinder **``[height, radius]``** (along local z, centred).
 - The robot's root is placed by ``robot_state.multi_dof_joint_state`` (``virtual_joint``); obstacles are
   expressed in the robot's root frame (identity in MotionBenchMaker's problems).
 - Requests: ``start_state.joint_state`` (``name``, ``position``) and the goal as the first
@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 import yaml
 
+from maru_planner import shapes
 from maru_planner.errors import InvalidRequest, InvalidScene
 from maru_planner.scene import Obstacle, Scene
 
@@ -111,19 +112,11 @@ def _load_yaml(source: str | Path | Mapping, kind: str) -> dict:
 
 
 def primitive_obstacle(name: str, primitive: Mapping, pose: np.ndarray) -> Obstacle:
-    """One ``shape_msgs/SolidPrimitive`` as an :class:`Obstacle`."""
-    kind = str(primitive.get("type", "")).lower()
-    dims = np.asarray(primitive.get("dimensions", []), dtype=float).reshape(-1)
-    expected = {"box": 3, "sphere": 1, "cylinder": 2}
-    if kind not in expected:
-        raise InvalidScene(f"collision object '{name}': unsupported primitive type {kind!r} (box, sphere, cylinder)")
-    if dims.size < expected[kind]:
-        raise InvalidScene(f"collision object '{name}': {kind} needs {expected[kind]} dimensions, got {dims.tolist()}")
-    if kind == "box":
-        return Obstacle(name, "box", size=tuple(dims[:3]), pose=pose)
-    if kind == "sphere":
-        return Obstacle(name, "sphere", radius=float(dims[0]), pose=pose)
-    return Obstacle(name, "cylinder", length=float(dims[0]), radius=float(dims[1]), pose=pose)
+    """One ``shape_msgs/SolidPrimitive`` as an :class:`Obstacle` (shape looked up by primitive type)."""
+    where = f"collision object '{name}'"
+    spec = shapes.by_primitive_type(str(primitive.get("type", "")), where)
+    dimensions = spec.from_primitive_values(where, primitive.get("dimensions") or [])
+    return Obstacle(name, spec.name, pose=pose, **dimensions)
 
 
 def robot_root_pose(data: Mapping) -> np.ndarray:

@@ -1,4 +1,4 @@
-"""Scene: named obstacles (box, sphere, cylinder, mesh) in the robot's root frame.
+"""Scene: named obstacles (any shape of :data:`maru_planner.shapes.SHAPES`) in the robot's root frame.
 
 YAML schema (what benchmarks and external checks write)::
 
@@ -9,25 +9,26 @@ YAML schema (what benchmarks and external checks write)::
       - {name: post, type: cylinder, radius: r, length: l, pose: {xyz: [...], rpy: [...]}}
       - {name: part, type: mesh, path: part.stl, scale: [1, 1, 1], pose: {...}}
 
-Box sizes are full side lengths; cylinders are along their local z, centred.
-A relative mesh path is resolved against the YAML file's directory.
+Box sizes are full side lengths; cylinders are along their local z, centred. Each obstacle's
+fields are its shape's dimensions (``maru_planner/shapes.py``); a relative file path (a mesh) is
+resolved against the YAML file's directory.
 Every change bumps ``scene.version`` so planners can cache on it.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
-from collections import OrderedDict
-from dataclasses import dataclass, field
+from collections import Counter, OrderedDict
 from pathlib import Path
 from typing import Any
 
+import coal
 import numpy as np
 import yaml
 
 from maru_planner.errors import InvalidScene
-
-OBSTACLE_TYPES = ("box", "sphere", "cylinder", "mesh")
+from maru_planner.shapes import KernelPrimitive, ShapeSpec, numbers, posed, shape, validate
 
 
 def rpy_matrix(roll: float, pitch: float, yaw: float) -> np.ndarray:
@@ -50,27 +51,6 @@ def matrix_rpy(R: np.ndarray) -> tuple[float, float, float]:
     return math.atan2(R[2, 1], R[2, 2]), pitch, math.atan2(R[1, 0], R[0, 0])
 
 
-def _numbers(where: str, field_name: str, value: Any, count: int) -> np.ndarray:
-    try:
-        arr = np.asarray(value, dtype=float).reshape(-1)
-    except (TypeError, ValueError):
-        raise InvalidScene(f"{where}: field '{field_name}' must be {count} numbers, got {value!r}") from None
-    if arr.size != count:
-        raise InvalidScene(f"{where}: field '{field_name}' must have {count} numbers, got {arr.size}")
-    if not np.all(np.isfinite(arr)):
-        raise InvalidScene(f"{where}: field '{field_name}' contains NaN or inf: {value!r}")
-    return arr
-
-
-def _positive(where: str, field_name: str, value: Any) -> float:
-    if value is None:
-        raise InvalidScene(f"{where}: missing field '{field_name}'")
-    (x,) = _numbers(where, field_name, value, 1)
-    if x <= 0:
-        raise InvalidScene(f"{where}: field '{field_name}' must be > 0, got {x}")
-    return float(x)
-
-
 def pose_matrix(pose: Any, where: str = "pose") -> np.ndarray:
     """A 4x4 from a 4x4, {xyz, rpy}, (x, y, z) or (x, y, z, roll, pitch, yaw)."""
     if pose is None:
@@ -80,8 +60,8 @@ def pose_matrix(pose: Any, where: str = "pose") -> np.ndarray:
         if unknown:
             raise InvalidScene(f"{where}: unknown pose field(s) {sorted(unknown)} (use xyz, rpy)")
         T = np.eye(4)
-        T[:3, 3] = _numbers(where, "pose.xyz", pose.get("xyz", [0, 0, 0]), 3)
-        T[:3, :3] = rpy_matrix(*_numbers(where, "pose.rpy", pose.get("rpy", [0, 0, 0]), 3))
+        T[:3, 3] = numbers(where, "pose.xyz", pose.get("xyz", [0, 0, 0]), 3)
+        T[:3, :3] = rpy_matrix(*numbers(where, "pose.rpy", pose.get("rpy", [0, 0, 0]), 3))
         return T
     arr = np.asarray(pose, dtype=float)
     if arr.shape == (4, 4):
@@ -94,92 +74,76 @@ def pose_matrix(pose: Any, where: str = "pose") -> np.ndarray:
     flat = arr.reshape(-1)
     if flat.size == 3:
         T = np.eye(4)
-        T[:3, 3] = _numbers(where, "pose", flat, 3)
+        T[:3, 3] = numbers(where, "pose", flat, 3)
         return T
     if flat.size == 6:
-        vals = _numbers(where, "pose", flat, 6)
+        vals = numbers(where, "pose", flat, 6)
         T = np.eye(4)
         T[:3, 3], T[:3, :3] = vals[:3], rpy_matrix(*vals[3:])
         return T
     raise InvalidScene(f"{where}: pose must be a 4x4, {{xyz, rpy}}, xyz or xyz+rpy, got shape {arr.shape}")
 
 
-@dataclass
 class Obstacle:
-    """One named obstacle; validated on creation (raises InvalidScene)."""
+    """One named obstacle of a registered shape (:mod:`maru_planner.shapes`); validated on creation.
 
-    name: str
-    type: str
-    size: tuple[float, float, float] | None = None  # box: full side lengths
-    radius: float | None = None  # sphere, cylinder
-    length: float | None = None  # cylinder (along local z)
-    pose: np.ndarray = field(default_factory=lambda: np.eye(4))
-    path: str | None = None  # mesh file
-    scale: tuple[float, float, float] = (1.0, 1.0, 1.0)  # mesh
+    ``Obstacle("desk", "box", size=(1, 2, 0.1), pose=[0.5, 0, 0])``: the keyword fields are the shape's
+    dimensions and are readable as attributes (``desk.size``); bad values raise InvalidScene.
+    """
 
-    def __post_init__(self):
-        if not isinstance(self.name, str) or not self.name:
-            raise InvalidScene(f"obstacle {self.name!r}: field 'name' must be a non-empty string")
-        where = f"obstacle '{self.name}'"
-        if self.type not in OBSTACLE_TYPES:
-            raise InvalidScene(f"{where}: field 'type' must be one of {OBSTACLE_TYPES}, got {self.type!r}")
-        self.pose = pose_matrix(self.pose, where)
-        if self.type == "box":
-            if self.size is None:
-                raise InvalidScene(f"{where}: missing field 'size'")
-            size = _numbers(where, "size", self.size, 3)
-            if np.any(size <= 0):
-                raise InvalidScene(f"{where}: field 'size' must be > 0, got {size.tolist()}")
-            self.size = tuple(float(v) for v in size)
-        elif self.type in ("sphere", "cylinder"):
-            self.radius = _positive(where, "radius", self.radius)
-            if self.type == "cylinder":
-                self.length = _positive(where, "length", self.length)
-        else:
-            if not self.path:
-                raise InvalidScene(f"{where}: missing field 'path'")
-            scale = _numbers(where, "scale", self.scale, 3)
-            if np.any(scale <= 0):
-                raise InvalidScene(f"{where}: field 'scale' must be > 0")
-            self.scale = tuple(float(v) for v in scale)
+    def __init__(self, name: str, type: str, pose: Any = None, **dimensions: Any):
+        if not isinstance(name, str) or not name:
+            raise InvalidScene(f"obstacle {name!r}: field 'name' must be a non-empty string")
+        where = f"obstacle '{name}'"
+        self.name = name
+        self.spec: ShapeSpec = shape(type, where)
+        self.type: str = type
+        self.pose = pose_matrix(pose, where)
+        self.dimensions = validate(self.spec, where, dimensions)
+
+    def __getattr__(self, field_name: str) -> Any:
+        dimensions = self.__dict__.get("dimensions", {})
+        if field_name in dimensions:
+            return dimensions[field_name]
+        raise AttributeError(f"{type(self).__name__} '{self.__dict__.get('name')}' has no field {field_name!r}")
+
+    def geometry(self) -> coal.CollisionGeometry:
+        """The exact coal shape, in the obstacle's frame."""
+        return self.spec.geometry(self.dimensions)
+
+    def kernel_primitive(self) -> KernelPrimitive:
+        """The sphere checker's primitive (the shape itself, or a box that bounds it), in the scene frame."""
+        return self.spec.kernel_primitive(self.dimensions, self.pose)
+
+    def faces(self) -> list[np.ndarray]:
+        """Polygons of the obstacle's surface in the scene frame (for pictures)."""
+        return posed(self.spec.faces(self.dimensions), self.pose)
 
     @classmethod
     def from_dict(cls, d: dict, base_dir: Path | None = None) -> Obstacle:
         if not isinstance(d, dict):
             raise InvalidScene(f"obstacle entry must be a mapping, got {d!r}")
         name = d.get("name")
-        allowed = {"name", "type", "size", "radius", "length", "pose", "path", "scale"}
-        unknown = set(d) - allowed
-        if unknown:
-            raise InvalidScene(f"obstacle {name!r}: unknown field(s) {sorted(unknown)}")
         if "type" not in d:
             raise InvalidScene(f"obstacle {name!r}: missing field 'type'")
-        path = d.get("path")
-        if path is not None and base_dir is not None and not Path(path).is_absolute():
-            path = str(base_dir / path)
-        return cls(
-            name=name,
-            type=d["type"],
-            size=d.get("size"),
-            radius=d.get("radius"),
-            length=d.get("length"),
-            pose=d.get("pose"),
-            path=path,
-            scale=d.get("scale", (1.0, 1.0, 1.0)),
-        )
+        spec = shape(d["type"], f"obstacle {name!r}")
+        dimensions = {k: v for k, v in d.items() if k not in ("name", "type", "pose")}
+        for dim in spec.dimensions:
+            value = dimensions.get(dim.name)
+            if dim.is_path and isinstance(value, str) and base_dir is not None and not Path(value).is_absolute():
+                dimensions[dim.name] = str(base_dir / value)
+        return cls(name, d["type"], pose=d.get("pose"), **dimensions)
 
     def to_dict(self) -> dict:
         d: dict[str, Any] = {"name": self.name, "type": self.type}
-        if self.type == "box":
-            d["size"] = list(self.size)
-        if self.type in ("sphere", "cylinder"):
-            d["radius"] = self.radius
-        if self.type == "cylinder":
-            d["length"] = self.length
-        if self.type == "mesh":
-            d["path"], d["scale"] = self.path, list(self.scale)
+        for key, value in self.dimensions.items():
+            d[key] = list(value) if isinstance(value, tuple) else value
         d["pose"] = {"xyz": self.pose[:3, 3].tolist(), "rpy": list(matrix_rpy(self.pose[:3, :3]))}
         return d
+
+    def __repr__(self) -> str:
+        fields = ", ".join(f"{k}={v!r}" for k, v in self.dimensions.items())
+        return f"Obstacle({self.name!r}, {self.type!r}, {fields}, xyz={self.pose[:3, 3].tolist()})"
 
 
 def _is_file(text: str) -> bool:
@@ -224,7 +188,8 @@ class Scene:
 
     def _get(self, name: str) -> Obstacle:
         if name not in self.obstacles:
-            raise InvalidScene(f"obstacle '{name}': not in the scene (have {list(self.obstacles)})")
+            have = list(itertools.islice(self.obstacles, 10)) + (["..."] if len(self.obstacles) > 10 else [])
+            raise InvalidScene(f"obstacle '{name}': not in the scene (have {have})")
         return self.obstacles[name]
 
     def __len__(self) -> int:
@@ -247,8 +212,7 @@ class Scene:
         if not isinstance(entries, list):
             raise InvalidScene("scene: field 'obstacles' must be a list")
         obstacles = [Obstacle.from_dict(e, base_dir) for e in entries]
-        names = [o.name for o in obstacles]
-        dupes = sorted({n for n in names if names.count(n) > 1})
+        dupes = sorted(name for name, count in Counter(o.name for o in obstacles).items() if count > 1)
         if dupes:
             raise InvalidScene(f"scene: duplicate obstacle name(s) {dupes}")
         return cls(obstacles, frame=str(d.get("frame", "base_link")))

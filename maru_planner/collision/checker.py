@@ -31,15 +31,8 @@ from maru_planner.scene import Obstacle, Scene
 
 
 def obstacle_geometry(obstacle: Obstacle) -> coal.CollisionGeometry:
-    """The coal shape of an obstacle (cylinders along local z, centred)."""
-    if obstacle.type == "box":
-        return coal.Box(*obstacle.size)
-    if obstacle.type == "sphere":
-        return coal.Sphere(obstacle.radius)
-    if obstacle.type == "cylinder":
-        return coal.Cylinder(obstacle.radius, obstacle.length)
-    loader = coal.MeshLoader()
-    return loader.load(obstacle.path, np.asarray(obstacle.scale, dtype=float))
+    """The coal shape of an obstacle, from its shape's table entry (``maru_planner/shapes.py``)."""
+    return obstacle.geometry()
 
 
 BROADPHASES = {
@@ -177,6 +170,12 @@ class CollisionChecker:
         """Number of geometry pairs checked per configuration."""
         self._sync()
         return len(self._pair_names)
+
+    @property
+    def geometry_model(self) -> pin.GeometryModel:
+        """Robot + scene geometry, its ``collisionPairs`` the checked pairs (current scene; do not modify)."""
+        self._sync()
+        return self._geom_model
 
     # ------------------------------------------------------------- checks --
     def is_valid(self, q: np.ndarray) -> bool:

@@ -82,12 +82,13 @@ def classify_state(
     q, parent, kind, axis, prot, ppos, idx_q,
     s_joint, s_center, s_radius, s_inner, g_start, g_joint, g_center, g_radius, self_pairs, padding,
     c_start, c_joint, c_center, c_radius, g_clusters,
-    box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r,
+    box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact,
     rot, pos, world, gworld, cworld, amb,
 ):  # fmt: skip
     """VALID, COLLIDING or AMBIGUOUS for one configuration, and the number of ambiguous pairs.
 
-    COLLIDING: an *inner* ball (contained in the link) is within ``padding`` of an obstacle or of an
+    COLLIDING: an *inner* ball (contained in the link) is within ``padding`` of an obstacle (whose primitive
+    is ``exact``, not just a bound) or of an
     inner ball of a self-collision pair, so the exact model collides too. VALID: no *outer* (covering)
     sphere is. Otherwise the (kind, a, b) pairs whose outer spheres touch are written to ``amb``
     (kind 0: group a vs obstacle b; kind 1: group a vs group b) for the exact model to decide.
@@ -115,7 +116,7 @@ def classify_state(
                 for s in range(c_start[c], c_start[c + 1]):
                     d = point_obstacle_distance(world[s], k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h,
                                                 cyl_r)
-                    if d < s_inner[s] + padding:
+                    if exact[k] and d < s_inner[s] + padding:
                         return COLLIDING, 0
                     if d < s_radius[s] + padding:
                         touched = True
@@ -166,9 +167,10 @@ def pack_robot(parent, kind, axis, prot, ppos, idx_q, s_joint, s_center, s_radiu
     return ints, floats
 
 
-def pack_scene(box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r):
-    """Scene primitives as one float64 array (counts first)."""
-    parts = [[len(box_c), len(sph_c), len(cyl_c)], box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r]
+def pack_scene(box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact):
+    """Scene primitives as one float64 array (counts first; ``exact`` as 0/1)."""
+    parts = [[len(box_c), len(sph_c), len(cyl_c)], box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r,
+             exact]
     return np.concatenate([np.ravel(np.asarray(p, dtype=np.float64)) for p in parts])
 
 
@@ -235,7 +237,9 @@ def unpack_scene(sf):
     o += 3 * nc
     cyl_h = sf[o : o + nc]
     cyl_r = sf[o + nc : o + 2 * nc]
-    return box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r
+    o += 2 * nc
+    exact = sf[o : o + nb + ns + nc] > 0.5
+    return box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact
 
 
 @njit(cache=True)
@@ -247,7 +251,7 @@ def scan_nb(Q, start, ri, rf, sf, amb, stop_at_ambiguous):
     """
     (parent, kind, axis, prot, ppos, idx_q, s_joint, s_center, s_radius, s_inner, g_start, g_joint, g_center,
      g_radius, self_pairs, padding, c_start, c_joint, c_center, c_radius, g_clusters) = unpack_robot(ri, rf)
-    box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r = unpack_scene(sf)
+    box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact = unpack_scene(sf)
     nj = parent.shape[0]
     rot = np.empty((nj, 3, 3))
     pos = np.empty((nj, 3))
@@ -259,7 +263,7 @@ def scan_nb(Q, start, ri, rf, sf, amb, stop_at_ambiguous):
             Q[i], parent, kind, axis, prot, ppos, idx_q,
             s_joint, s_center, s_radius, s_inner, g_start, g_joint, g_center, g_radius, self_pairs, padding,
             c_start, c_joint, c_center, c_radius, g_clusters,
-            box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, rot, pos, world, gworld, cworld, amb,
+            box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact, rot, pos, world, gworld, cworld, amb,
         )  # fmt: skip
         if status == COLLIDING:
             return i, COLLIDING, 0
@@ -271,7 +275,7 @@ def scan_nb(Q, start, ri, rf, sf, amb, stop_at_ambiguous):
 @njit(cache=True)
 def sphere_obstacle_distances_nb(world, sf):
     """Signed distance from every point of ``world`` (n, 3) to every obstacle of ``sf``: (n, n_obstacles)."""
-    box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r = unpack_scene(sf)
+    box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, _ = unpack_scene(sf)
     n_obs = box_c.shape[0] + sph_c.shape[0] + cyl_c.shape[0]
     out = np.empty((world.shape[0], n_obs))
     for s in range(world.shape[0]):

@@ -4,8 +4,9 @@ The robot's collision geometry is covered by spheres (:mod:`maru_planner.collisi
 every surface triangle of every link lies inside a sphere, so the spheres over-approximate the
 links); forward kinematics and all tests for a whole batch of configurations run in one numba call
 (:mod:`maru_planner.collision.sphere_kernels`), with a pure-numpy path that gives the same answers.
-The scene's boxes, spheres and cylinders are tested exactly; a mesh obstacle is replaced by its
-oriented bounding box (conservative).
+Each obstacle is tested as the kernel primitive its shape's table entry gives (``maru_planner/shapes.py``):
+boxes, spheres and cylinders exactly; a mesh by its oriented bounding box, whose touches the exact
+model decides.
 
 Same protocol as the exact :class:`~maru_planner.collision.checker.CollisionChecker`: ``is_valid``,
 ``are_valid``, ``first_invalid``, ``colliding_pairs``, ``clearance``, ``check_count``,
@@ -21,11 +22,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import coal
 import numpy as np
 
 from maru_planner.collision.batch_fk import KinematicTree, batch_joint_poses, joint_poses_nb, sphere_centers_nb
-from maru_planner.collision.checker import obstacle_geometry, self_collision_pairs
+from maru_planner.collision.checker import self_collision_pairs
 from maru_planner.collision.sphere_model import SphereFitOptions, SphereModel, load_or_fit
+from maru_planner.scene import Obstacle, Scene
+from maru_planner.shapes import KERNEL_KINDS, KernelPrimitive
 
 try:  # numba is a dependency; without it (or with use_numba=False) the numpy path is used
     from maru_planner.collision import sphere_kernels as _kernels
@@ -39,7 +43,12 @@ DEFAULT_PADDING = 0.0  # m added to every robot sphere; the spheres already cove
 
 @dataclass(frozen=True)
 class ScenePrimitives:
-    """A scene's obstacles as arrays per kind; ``names`` in kernel order (boxes, spheres, cylinders)."""
+    """A scene's obstacles as arrays per kernel kind; ``names`` in kernel order (boxes, spheres, cylinders).
+
+    Each obstacle's kernel primitive comes from its shape's table entry (:mod:`maru_planner.shapes`);
+    ``exact[k]`` is False where the primitive only bounds the obstacle (a mesh's box): touching it
+    never decides a collision by itself.
+    """
 
     box_center: np.ndarray  # (nb, 3)
     box_rot: np.ndarray  # (nb, 3, 3) world-from-box
@@ -50,56 +59,43 @@ class ScenePrimitives:
     cyl_axis: np.ndarray  # (nc, 3) unit
     cyl_half: np.ndarray  # (nc,)
     cyl_radius: np.ndarray  # (nc,)
+    exact: np.ndarray  # (n,) bool, kernel order
     names: tuple[str, ...]
-    obstacles: tuple = ()  # the Obstacle objects, in the same order as ``names``
+    obstacles: tuple[Obstacle, ...] = ()  # in the same order as ``names``
 
     def as_tuple(self) -> tuple:
         return (
             self.box_center, self.box_rot, self.box_half, self.sphere_center, self.sphere_radius,
-            self.cyl_center, self.cyl_axis, self.cyl_half, self.cyl_radius,
+            self.cyl_center, self.cyl_axis, self.cyl_half, self.cyl_radius, self.exact,
         )  # fmt: skip
 
     @classmethod
-    def from_scene(cls, scene) -> ScenePrimitives:
+    def from_scene(cls, scene: Scene | None) -> ScenePrimitives:
         """Convert a :class:`~maru_planner.scene.Scene` (``None`` = empty)."""
-        boxes, spheres, cylinders = [], [], []
-        for name, ob in (scene.obstacles.items() if scene is not None else []):
-            pose = np.asarray(ob.pose, dtype=float)
-            if ob.type == "box":
-                boxes.append((name, pose[:3, 3], pose[:3, :3], 0.5 * np.asarray(ob.size, dtype=float)))
-            elif ob.type == "sphere":
-                spheres.append((name, pose[:3, 3], float(ob.radius)))
-            elif ob.type == "cylinder":
-                cylinders.append((name, pose[:3, 3], pose[:3, 2], 0.5 * float(ob.length), float(ob.radius)))
-            elif ob.type == "mesh":
-                center, half = mesh_bounding_box(ob.path, ob.scale)
-                boxes.append((name, pose[:3, :3] @ center + pose[:3, 3], pose[:3, :3], half))
-            else:
-                raise ValueError(f"obstacle '{name}': unsupported type {ob.type!r}")
-        names = [b[0] for b in boxes] + [s[0] for s in spheres] + [c[0] for c in cylinders]
+        by_kind: dict[str, list[tuple[Obstacle, KernelPrimitive]]] = {kind: [] for kind in KERNEL_KINDS}
+        for obstacle in scene.obstacles.values() if scene is not None else ():
+            primitive = obstacle.kernel_primitive()
+            by_kind[primitive.kind].append((obstacle, primitive))
+        boxes, spheres, cylinders = (by_kind[kind] for kind in KERNEL_KINDS)
+        ordered = boxes + spheres + cylinders
         return cls(
-            box_center=np.array([b[1] for b in boxes], dtype=float).reshape(-1, 3),
-            box_rot=np.array([b[2] for b in boxes], dtype=float).reshape(-1, 3, 3),
-            box_half=np.array([b[3] for b in boxes], dtype=float).reshape(-1, 3),
-            sphere_center=np.array([s[1] for s in spheres], dtype=float).reshape(-1, 3),
-            sphere_radius=np.array([s[2] for s in spheres], dtype=float).reshape(-1),
-            cyl_center=np.array([c[1] for c in cylinders], dtype=float).reshape(-1, 3),
-            cyl_axis=np.array([c[2] for c in cylinders], dtype=float).reshape(-1, 3),
-            cyl_half=np.array([c[3] for c in cylinders], dtype=float).reshape(-1),
-            cyl_radius=np.array([c[4] for c in cylinders], dtype=float).reshape(-1),
-            names=tuple(names),
-            obstacles=tuple(scene.obstacles[n] for n in names),
+            box_center=_stack([p.center for _, p in boxes], (3,)),
+            box_rot=_stack([p.rotation for _, p in boxes], (3, 3)),
+            box_half=_stack([p.half_extents for _, p in boxes], (3,)),
+            sphere_center=_stack([p.center for _, p in spheres], (3,)),
+            sphere_radius=_stack([p.half_extents[0] for _, p in spheres], ()),
+            cyl_center=_stack([p.center for _, p in cylinders], (3,)),
+            cyl_axis=_stack([p.rotation[:, 2] for _, p in cylinders], (3,)),
+            cyl_half=_stack([p.half_extents[2] for _, p in cylinders], ()),
+            cyl_radius=_stack([p.half_extents[0] for _, p in cylinders], ()),
+            exact=np.array([p.exact for _, p in ordered], dtype=bool),
+            names=tuple(o.name for o, _ in ordered),
+            obstacles=tuple(o for o, _ in ordered),
         )
 
 
-def mesh_bounding_box(path: str, scale) -> tuple[np.ndarray, np.ndarray]:
-    """Centre and half extents (in the mesh frame) of a mesh file's scaled vertices."""
-    import coal
-
-    mesh = coal.MeshLoader().load(str(path), np.asarray(scale, dtype=float))
-    vertices = np.asarray(mesh.vertices(), dtype=float)
-    lo, hi = vertices.min(axis=0), vertices.max(axis=0)
-    return 0.5 * (lo + hi), 0.5 * (hi - lo)
+def _stack(values: list, shape: tuple[int, ...]) -> np.ndarray:
+    return np.array(values, dtype=float).reshape(-1, *shape)
 
 
 def self_collision_groups(robot) -> np.ndarray:
@@ -266,13 +262,11 @@ class SphereCollisionChecker:
 
     def _exact_hit(self, q: np.ndarray, pairs: np.ndarray) -> bool:
         """Whether coal finds any of the (kind, a, b) pairs in collision (within ``padding``) at ``q``."""
-        import coal
-
         if self._request is None:
             self._request = coal.CollisionRequest()
             self._request.security_margin = self.padding
             self._request.enable_contact = False
-            self._obstacle_shapes = [(obstacle_geometry(ob), _coal_tf(ob.pose[:3, :3], ob.pose[:3, 3]))
+            self._obstacle_shapes = [(ob.geometry(), _coal_tf(ob.pose[:3, :3], ob.pose[:3, 3]))
                                      for ob in self.primitives.obstacles]
         rot, pos = self._joint_poses(q)
         for kind, a, b in pairs:
@@ -334,7 +328,7 @@ class SphereCollisionChecker:
         dist = self._obstacle_distances_np(world)
         dist[sm.joint == 0] = np.inf  # fixed to the world: never tested against the scene
         env_outer = dist - sm.radius[:, None] - pad
-        env_inner = dist - sm.inner[:, None] - pad
+        env_inner = np.where(self.primitives.exact, dist, np.inf) - sm.inner[:, None] - pad
         a, b = self._sphere_pairs[:, 0], self._sphere_pairs[:, 1]
         d = np.linalg.norm(world[a] - world[b], axis=-1)
         return env_outer, env_inner, d - sm.radius[a] - sm.radius[b] - pad, d - sm.inner[a] - sm.inner[b] - pad
@@ -375,8 +369,6 @@ class SphereCollisionChecker:
 
 
 def _coal_tf(rot: np.ndarray, pos: np.ndarray):
-    import coal
-
     return coal.Transform3s(np.ascontiguousarray(rot, dtype=float), np.ascontiguousarray(pos, dtype=float))
 
 

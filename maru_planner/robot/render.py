@@ -1,4 +1,4 @@
-"""Matplotlib 3D pictures of a robot's collision geometry and a scene (boxes, spheres, cylinders).
+"""Matplotlib 3D pictures of a robot's collision geometry and a scene (any shape of the shape table).
 
     python -m maru_planner.robot.render --out docs/maru1_scenes.png
 
@@ -12,17 +12,19 @@ import argparse
 from pathlib import Path
 
 import coal
-import numpy as np
-import pinocchio as pin
+import matplotlib
 
-from maru_planner.collision import CollisionChecker
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pinocchio as pin  # noqa: E402
+from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
-
-def _box_faces(half: np.ndarray, T: np.ndarray) -> list[np.ndarray]:
-    corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * half
-    world = corners @ T[:3, :3].T + T[:3, 3]
-    faces = [(0, 1, 3, 2), (4, 5, 7, 6), (0, 1, 5, 4), (2, 3, 7, 6), (0, 2, 6, 4), (1, 3, 7, 5)]
-    return [world[list(f)] for f in faces]
+from maru_planner.collision import CollisionChecker  # noqa: E402
+from maru_planner.paths import config_path  # noqa: E402
+from maru_planner.robot.model import RobotModel  # noqa: E402
+from maru_planner.scene import Scene  # noqa: E402
+from maru_planner.shapes import box_faces, posed  # noqa: E402
 
 
 def _surface(ax, X, Y, Z, T, color, alpha):
@@ -32,11 +34,9 @@ def _surface(ax, X, Y, Z, T, color, alpha):
 
 def draw_geometry(ax, geometry: coal.CollisionGeometry, T: np.ndarray, color, alpha=0.6) -> None:
     """Draw one coal shape at pose T (4x4); meshes are drawn as their bounding box."""
-    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
-
     u, v = np.meshgrid(np.linspace(0, 2 * np.pi, 16), np.linspace(0, np.pi, 9))
     if isinstance(geometry, coal.Box):
-        faces = _box_faces(np.asarray(geometry.halfSide), T)
+        faces = posed(box_faces(np.asarray(geometry.halfSide)), T)
         ax.add_collection3d(Poly3DCollection(faces, facecolor=color, alpha=alpha, edgecolor="k", linewidth=0.2))
     elif isinstance(geometry, coal.Sphere):
         r = geometry.radius
@@ -51,26 +51,23 @@ def draw_geometry(ax, geometry: coal.CollisionGeometry, T: np.ndarray, color, al
         center = (np.asarray(box.min_) + np.asarray(box.max_)) / 2
         Tc = T.copy()
         Tc[:3, 3] = T[:3, :3] @ center + T[:3, 3]
-        faces = _box_faces((np.asarray(box.max_) - np.asarray(box.min_)) / 2, Tc)
+        faces = posed(box_faces((np.asarray(box.max_) - np.asarray(box.min_)) / 2), Tc)
         ax.add_collection3d(Poly3DCollection(faces, facecolor=color, alpha=alpha * 0.5, edgecolor="k"))
 
 
 def draw_configuration(
-    ax, checker: CollisionChecker, q: np.ndarray, color, *, highlight=(), alpha=0.6, draw_scene=True
+    ax, robot: RobotModel, scene: Scene | None, q: np.ndarray, color, *, highlight=(), alpha=0.6
 ) -> None:
-    """Draw the robot at q (links named in ``highlight`` in red) and, optionally, the scene."""
-    checker._sync()
-    gm, gd = checker._geom_model, checker._geom_data
-    pin.updateGeometryPlacements(checker.robot.model, checker._data, gm, gd, q)
-    n_robot = checker.robot.collision_model.ngeoms
-    for k, obj in enumerate(gm.geometryObjects):
-        T = gd.oMg[k].homogeneous
-        if k < n_robot:
-            link = checker.robot.model.frames[obj.parentFrame].name
-            draw_geometry(ax, obj.geometry, T, "tab:red" if link in highlight else color, alpha)
-        elif draw_scene:
-            name = obj.name.split("/", 1)[-1]
-            draw_geometry(ax, obj.geometry, T, "tab:red" if name in highlight else "burlywood", 0.2)
+    """Draw the robot's links at q (links named in ``highlight`` in red) and the scene's obstacles (if given)."""
+    data, geom_data = robot.model.createData(), pin.GeometryData(robot.collision_model)
+    pin.updateGeometryPlacements(robot.model, data, robot.collision_model, geom_data, np.asarray(q, dtype=float))
+    for k, obj in enumerate(robot.collision_model.geometryObjects):
+        link = robot.model.frames[obj.parentFrame].name
+        draw_geometry(ax, obj.geometry, geom_data.oMg[k].homogeneous, "tab:red" if link in highlight else color, alpha)
+    for obstacle in scene.obstacles.values() if scene is not None else ():
+        facecolor = "tab:red" if obstacle.name in highlight else "burlywood"
+        ax.add_collection3d(Poly3DCollection(obstacle.faces(), facecolor=facecolor, alpha=0.2, edgecolor="k",
+                                             linewidth=0.2))
 
 
 def _frame_axes(ax, title, limits):
@@ -85,15 +82,6 @@ def _frame_axes(ax, title, limits):
 
 
 def render_paper_tasks(out: Path) -> Path:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from maru_planner.paths import config_path
-    from maru_planner.robot import RobotModel
-    from maru_planner.scene import Scene
-
     robot = RobotModel.maru1()
     down = [-1.57, 1.57, 1.57, 0, -1.57, -1.57]
     s6, g6 = np.array([0, 0, 1.57, 1.57, 0, -1.57, -1.57, *down]), np.array([0, *down, *down])
@@ -106,16 +94,16 @@ def render_paper_tasks(out: Path) -> Path:
     limits = ((-0.4, 0.9), (-0.8, 0.8), (-0.5, 0.6))
     fig = plt.figure(figsize=(15, 5))
     for i, (title, scene_file, start, goal) in enumerate(tasks):
-        checker = CollisionChecker(robot, Scene.from_yaml(config_path("scenes", scene_file)))
+        scene = Scene.from_yaml(config_path("scenes", scene_file))
         ax = fig.add_subplot(1, 3, i + 1, projection="3d")
-        draw_configuration(ax, checker, start, "tab:blue")
-        draw_configuration(ax, checker, goal, "tab:green", draw_scene=False)
+        draw_configuration(ax, robot, scene, start, "tab:blue")
+        draw_configuration(ax, robot, None, goal, "tab:green")
         _frame_axes(ax, title, limits)
-    checker = CollisionChecker(robot, Scene.from_yaml(config_path("scenes", "maru13_desk_box.yaml")))
+    scene = Scene.from_yaml(config_path("scenes", "maru13_desk_box.yaml"))
     middle = (s13 + g13) / 2
-    hits = {name for pair in checker.colliding_pairs(middle) for name in pair}
+    hits = {name for pair in CollisionChecker(robot, scene).colliding_pairs(middle) for name in pair}
     ax = fig.add_subplot(1, 3, 3, projection="3d")
-    draw_configuration(ax, checker, middle, "tab:gray", highlight=hits)
+    draw_configuration(ax, robot, scene, middle, "tab:gray", highlight=hits)
     _frame_axes(ax, "13-DOF: straight line's midpoint (collisions red)", limits)
     fig.suptitle("Maru-1 upper body (base_link = waist, z up) and the paper-000 scenes")
     fig.tight_layout()

@@ -7,6 +7,7 @@ from geometry_msgs.msg import Point
 from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
+from maru_planner import shapes
 from maru_planner.ros import planning_conversions as conv
 
 OBSTACLE_COLOR = ColorRGBA(r=0.8, g=0.5, b=0.2, a=0.6)
@@ -16,38 +17,27 @@ HAND_PATH_WIDTH = 0.01
 
 
 def scene_markers(scene_dict: dict, frame_id: str, stamp) -> MarkerArray:
-    """A DELETEALL followed by one marker per primitive obstacle (namespace ``scene``)."""
+    """A DELETEALL followed by one marker per obstacle (namespace ``scene``), shaped by the shape table."""
     markers = MarkerArray()
     clear = Marker(action=Marker.DELETEALL)
     clear.header.frame_id = frame_id
     markers.markers.append(clear)
     for index, obstacle in enumerate(scene_dict.get("obstacles", [])):
-        marker = _obstacle_marker(obstacle, frame_id, stamp, index)
-        if marker is not None:
-            markers.markers.append(marker)
+        markers.markers.append(_obstacle_marker(obstacle, frame_id, stamp, index))
     return markers
 
 
-def _obstacle_marker(obstacle: dict, frame_id: str, stamp, index: int) -> Marker | None:
+def _obstacle_marker(obstacle: dict, frame_id: str, stamp, index: int) -> Marker:
     msg = conv.obstacle_to_msg(obstacle, frame_id)
-    kind = obstacle["type"]
+    spec = shapes.shape(obstacle["type"], f"obstacle '{obstacle['name']}'")
+    look = spec.marker(obstacle)
     marker = Marker(ns="scene", id=index, action=Marker.ADD, color=OBSTACLE_COLOR, text=obstacle["name"])
     marker.header.frame_id = frame_id
     marker.header.stamp = stamp
     marker.pose = msg.pose
-    if kind == "sphere":
-        marker.type = Marker.SPHERE
-        d = 2.0 * float(obstacle["radius"])
-        marker.scale.x = marker.scale.y = marker.scale.z = d
-    elif kind == "cylinder":
-        marker.type = Marker.CYLINDER
-        d = 2.0 * float(obstacle["radius"])
-        marker.scale.x, marker.scale.y, marker.scale.z = d, d, float(obstacle["length"])
-    elif kind == "box":
-        marker.type = Marker.CUBE
-        marker.scale.x, marker.scale.y, marker.scale.z = (float(v) for v in obstacle["size"])
-    else:
-        return None
+    marker.type = getattr(Marker, look.type)
+    marker.scale.x, marker.scale.y, marker.scale.z = (float(v) for v in look.scale)
+    marker.mesh_resource = look.mesh_resource
     return marker
 
 

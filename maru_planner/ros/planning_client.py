@@ -110,7 +110,10 @@ class PlanningClient:
         return self.call(self.apply_client, ApplyScene.Request(clear=clear, obstacles=list(obstacles)), timeout)
 
     def add_obstacle(self, name: str, shape: str, dimensions, pose, frame_id: str = "base_link", **kwargs):
-        """Add (or replace) a ``box`` [x, y, z], ``sphere`` [r] or ``cylinder`` [height, r] at ``pose`` (4x4)."""
+        """Add (or replace) a shape of the table at ``pose`` (4x4), its ``SolidPrimitive`` dimensions as listed
+
+        (box [x, y, z], sphere [r], cylinder [height, r]).
+        """
         return self.apply_scene([obstacle_msg(name, shape, dimensions, pose, frame_id)], **kwargs)
 
     def remove_obstacle(self, name: str, **kwargs):
@@ -203,14 +206,10 @@ def plan_request(
 
 
 def obstacle_msg(name: str, shape: str, dimensions, pose, frame_id: str = "base_link") -> SceneObstacle:
-    """``SceneObstacle`` ADD of a primitive (``pose`` a 4x4 matrix or a ``geometry_msgs/Pose``)."""
-    from shape_msgs.msg import SolidPrimitive
-
-    types = {"box": SolidPrimitive.BOX, "sphere": SolidPrimitive.SPHERE, "cylinder": SolidPrimitive.CYLINDER}
+    """``SceneObstacle`` ADD of a primitive shape (``pose`` a 4x4 matrix or a ``geometry_msgs/Pose``)."""
     msg = SceneObstacle(name=name, operation=SceneObstacle.ADD)
     msg.header.frame_id = frame_id
-    msg.shape.type = types.get(shape, 0)
-    msg.shape.dimensions = [float(v) for v in dimensions]
+    msg.shape = conv.primitive_msg(shape, dimensions, f"obstacle '{name}'")
     msg.pose = _pose(pose)
     return msg
 

@@ -17,7 +17,7 @@ from geometry_msgs.msg import Pose
 from shape_msgs.msg import SolidPrimitive
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
-from maru_planner import errors
+from maru_planner import errors, shapes
 from maru_planner.scene import pose_matrix
 from maru_planner_interfaces.msg import PlannerStats, PlanningError, SceneObstacle
 
@@ -230,9 +230,6 @@ def pose_goals(poses, links, planning_frame: str) -> dict[str, np.ndarray]:
 
 # ---------------------------------------------------------------- scene obstacles
 
-SHAPE_NAMES = {SolidPrimitive.BOX: "box", SolidPrimitive.SPHERE: "sphere", SolidPrimitive.CYLINDER: "cylinder"}
-
-
 def obstacle_pose(pose: Pose, name: str) -> np.ndarray:
     """4x4 pose of obstacle ``name``; a NaN or zero-quaternion pose raises ``InvalidScene``."""
     try:
@@ -241,49 +238,47 @@ def obstacle_pose(pose: Pose, name: str) -> np.ndarray:
         raise errors.InvalidScene(str(exc)) from None
 
 
+def primitive_shape(type_code: int, where: str) -> shapes.ShapeSpec:
+    """The shape table entry sent as ``SolidPrimitive`` type ``type_code``."""
+    names = {getattr(SolidPrimitive, spec.primitive_type): spec for spec in shapes.SHAPES.values()
+             if spec.primitive_type}
+    if type_code not in names:
+        known = ", ".join(f"{spec.primitive_type} ({code})" for code, spec in names.items())
+        raise errors.InvalidScene(f"{where}: shape type {type_code} is not one of {known}")
+    return names[type_code]
+
+
 def primitive_to_obstacle(name: str, shape: SolidPrimitive, pose: Pose) -> dict:
     """Scene obstacle dict (``Scene.from_dict`` schema) of a named ``SolidPrimitive`` at ``pose``."""
     if not name:
         raise errors.InvalidScene("obstacle has an empty name")
-    kind = SHAPE_NAMES.get(shape.type)
-    if kind is None:
-        raise errors.InvalidScene(
-            f"obstacle '{name}': shape type {shape.type} is not BOX (1), SPHERE (2) or CYLINDER (3)"
-        )
-    dims = [float(v) for v in shape.dimensions]
-    expected = {"box": 3, "sphere": 1, "cylinder": 2}[kind]
-    if len(dims) != expected:
-        raise errors.InvalidScene(f"obstacle '{name}': a {kind} needs {expected} dimensions, got {len(dims)}")
-    if not all(math.isfinite(v) and v > 0 for v in dims):
-        raise errors.InvalidScene(f"obstacle '{name}': {kind} dimensions must be finite and > 0, got {dims}")
-    obstacle: dict = {"name": name, "type": kind, "pose": obstacle_pose(pose, name).tolist()}
-    if kind == "box":
-        obstacle["size"] = dims
-    elif kind == "sphere":
-        obstacle["radius"] = dims[0]
-    else:
-        obstacle["length"], obstacle["radius"] = dims
-    return obstacle
+    where = f"obstacle '{name}'"
+    spec = primitive_shape(shape.type, where)
+    dimensions = spec.from_primitive_values(where, shape.dimensions)
+    fields = {k: list(v) if isinstance(v, tuple) else v for k, v in dimensions.items()}
+    return {"name": name, "type": spec.name, **fields, "pose": obstacle_pose(pose, name).tolist()}
+
+
+def primitive_msg(shape_name: str, dimensions, where: str = "obstacle") -> SolidPrimitive:
+    """``SolidPrimitive`` of a shape of the table given by name, with its dimensions as listed."""
+    spec = shapes.shape(shape_name, where)
+    if spec.primitive_type is None:
+        raise errors.InvalidScene(f"{where}: a {spec.name} has no SolidPrimitive form")
+    return SolidPrimitive(type=getattr(SolidPrimitive, spec.primitive_type), dimensions=[float(v) for v in dimensions])
 
 
 def obstacle_to_msg(obstacle: dict, frame_id: str) -> SceneObstacle:
     """``SceneObstacle`` (operation ADD) of a scene obstacle dict.
 
-    A mesh has no ``SolidPrimitive``: its shape type is left 0 (the scene YAML carries it).
+    A shape without a ``SolidPrimitive`` form (a mesh) keeps shape type 0 (the scene YAML carries it).
     """
     msg = SceneObstacle(name=obstacle["name"], operation=SceneObstacle.ADD)
     msg.header.frame_id = frame_id
-    kind = obstacle["type"]
-    if kind == "sphere":
-        msg.shape.type = SolidPrimitive.SPHERE
-        msg.shape.dimensions = [float(obstacle["radius"])]
-    elif kind == "cylinder":
-        msg.shape.type = SolidPrimitive.CYLINDER
-        msg.shape.dimensions = [float(obstacle["length"]), float(obstacle["radius"])]
-    elif kind == "box":
-        msg.shape.type = SolidPrimitive.BOX
-        msg.shape.dimensions = [float(v) for v in obstacle["size"]]
-    msg.pose = matrix_to_pose(pose_matrix(obstacle.get("pose"), f"obstacle '{obstacle['name']}'"))
+    where = f"obstacle '{obstacle['name']}'"
+    spec = shapes.shape(obstacle["type"], where)
+    if spec.primitive_type is not None:
+        msg.shape = primitive_msg(spec.name, spec.primitive_values(obstacle), where)
+    msg.pose = matrix_to_pose(pose_matrix(obstacle.get("pose"), where))
     return msg
 
 

@@ -1,4 +1,4 @@
-"""Pictures of planned arm motions: hand traces over the scene's obstacles, from two views."""
+"""Pictures of planned arm motions: hand traces over the scene's obstacles (any shape), from two views."""
 
 from __future__ import annotations
 
@@ -14,15 +14,6 @@ from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
 VIEWS = (("front-left", 22, -140), ("top", 80, -90))
 TRACE_COLORS = ("tab:red", "tab:blue", "tab:green", "tab:purple")
-
-
-def box_faces(size, pose) -> list[np.ndarray]:
-    """The six faces (4 corners each, world frame) of a box of full ``size`` at ``pose`` (4x4)."""
-    hx, hy, hz = np.asarray(size, float) / 2
-    corners = np.array([[sx * hx, sy * hy, sz * hz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
-    world = corners @ np.asarray(pose)[:3, :3].T + np.asarray(pose)[:3, 3]
-    idx = [(0, 1, 3, 2), (4, 5, 7, 6), (0, 1, 5, 4), (2, 3, 7, 6), (0, 2, 6, 4), (1, 3, 7, 5)]
-    return [world[list(f)] for f in idx]
 
 
 def joint_positions(robot, q: np.ndarray) -> np.ndarray:
@@ -75,13 +66,10 @@ def plot_plan(robot, scene, result, out_path, title: str = "", base_q=None) -> P
         limits = _equal_axes(
             ax, np.vstack([*traces.values(), joint_positions(robot, q_start), joint_positions(robot, q_goal)])
         )
-        for obstacle in getattr(scene, "obstacles", {}).values() if scene is not None else []:
-            if obstacle.type == "box":
-                size, pose = _clip_box(obstacle.size, obstacle.pose, limits)
-                if size is not None:
-                    ax.add_collection3d(
-                        Poly3DCollection(box_faces(size, pose), alpha=0.18, facecolor="tan", edgecolor="k")
-                    )
+        for obstacle in scene.obstacles.values() if scene is not None else ():
+            faces = clip_faces(obstacle.faces(), limits)
+            if faces:
+                ax.add_collection3d(Poly3DCollection(faces, alpha=0.18, facecolor="tan", edgecolor="k"))
         _draw_stick(ax, robot, q_start, "0.55", "start")
         _draw_stick(ax, robot, q_goal, "0.15", "goal")
         for c, (frame, pts) in enumerate(traces.items()):
@@ -127,16 +115,13 @@ def _equal_axes(ax, pts: np.ndarray) -> np.ndarray:
     return np.array([centre - half, centre + half])
 
 
-def _clip_box(size, pose, limits):
-    """An axis-aligned box cut to the plot limits (3-D axes do not clip); rotated boxes are kept whole."""
-    pose = np.asarray(pose, float)
-    if not np.allclose(pose[:3, :3], np.eye(3)):
-        return size, pose
-    half = np.asarray(size, float) / 2
-    lo = np.maximum(pose[:3, 3] - half, limits[0])
-    hi = np.minimum(pose[:3, 3] + half, limits[1])
-    if np.any(hi <= lo):
-        return None, None
-    clipped = np.eye(4)
-    clipped[:3, 3] = (lo + hi) / 2
-    return tuple(hi - lo), clipped
+def clip_faces(faces: list[np.ndarray], limits: np.ndarray) -> list[np.ndarray]:
+    """Polygons with their corners clamped into the plot limits (3-D axes do not clip); [] if all outside.
+
+    Exact for axis-aligned boxes (a table larger than the view is cut to it); other shapes only lose
+    what sticks out of the view.
+    """
+    corners = np.concatenate(faces)
+    if np.any(corners.max(axis=0) < limits[0]) or np.any(corners.min(axis=0) > limits[1]):
+        return []
+    return [np.clip(f, limits[0], limits[1]) for f in faces]
