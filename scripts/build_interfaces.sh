@@ -10,7 +10,7 @@ stamp=$venv/.maru_interfaces.stamp
 py=$venv/bin/python3
 unset _ROS_WHEELS_BOOTSTRAP_COMPLETE
 
-hash=$(cd "$src" && cat CMakeLists.txt package.xml msg/*.msg srv/*.srv | sha256sum | cut -d' ' -f1)
+hash=$(cd "$src" && cat CMakeLists.txt package.xml msg/*.msg srv/*.srv action/*.action | sha256sum | cut -d' ' -f1)
 if [ -f "$stamp" ] && [ "$(cat "$stamp")" = "$hash" ] \
    && "$py" -c "import maru_planner_interfaces.srv" 2>/dev/null; then
   echo "maru_planner_interfaces: up to date"

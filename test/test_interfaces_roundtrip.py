@@ -44,3 +44,16 @@ def test_planning_error_constants_follow_moveit():
     }
     assert all(code < 0 for code in failures.values())
     assert len(set(failures.values())) == len(failures)
+
+
+@pytest.mark.parametrize("name", ["PlanMotion", "PlanBasePath"])
+def test_action_goal_and_result_mirror_the_service(name):
+    """The actions are the services plus feedback: a field added to one must be added to the other."""
+    import importlib
+
+    srv = getattr(importlib.import_module("maru_planner_interfaces.srv"), name)
+    action = getattr(importlib.import_module("maru_planner_interfaces.action"), name)
+    assert action.Goal.get_fields_and_field_types() == srv.Request.get_fields_and_field_types()
+    assert action.Result.get_fields_and_field_types() == srv.Response.get_fields_and_field_types()
+    feedback = action.Feedback.get_fields_and_field_types()
+    assert feedback["stage"] == "string" and feedback["elapsed"] == "double"
