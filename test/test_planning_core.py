@@ -10,7 +10,7 @@ from ompl import geometric as og
 from planning_toys import BoxWorldChecker, ToyRobot, maze_checker
 
 from maru_planner import errors
-from maru_planner.planning import PLANNER_IDS, MotionPlanner, MotionRequest, PlannerConfig, PlanStatus, postprocess
+from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig, PlanStatus, planner_ids, postprocess
 from maru_planner.planning.space import BatchedMotionValidator, EdgeChecker, GroupSpace, edge_states
 from maru_planner.planning.types import status_of_error
 
@@ -110,7 +110,7 @@ def test_smoothness_is_zero_for_a_straight_line_and_positive_for_a_corner():
 
 
 # --- facade: every planner -------------------------------------------------------------------
-@pytest.mark.parametrize("planner_id", [p for p in PLANNER_IDS if p != "RRT"])
+@pytest.mark.parametrize("planner_id", [p for p in planner_ids() if p != "RRT"])
 def test_every_planner_solves_the_maze(planner_id):
     mp = planner_for()
     res = mp.plan(request(planner_id=planner_id))

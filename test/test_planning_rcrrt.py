@@ -8,6 +8,7 @@ from ompl import base as ob
 from ompl import geometric as og
 from planning_toys import BoxWorldChecker, closed_maze_checker, maze_checker
 
+from maru_planner.errors import InvalidRequest
 from maru_planner.planning.motion_planner import seeded_ompl
 from maru_planner.planning.rc_rrt import RCRRT
 from maru_planner.planning.space import BatchedMotionValidator, EdgeChecker, GroupSpace, make_validity_fn
@@ -38,8 +39,7 @@ def make_rcrrt(checker, step=0.05, seed=1, goal=GOAL, start=START, resolution=0.
         si.setMotionValidator(BatchedMotionValidator(si, edges))
         ss.setStartAndGoalStates(gs.to_state(start), gs.to_state(goal))
         planner = RCRRT(si, edges)
-        planner.set_param("step", step)
-        planner.set_param("seed", seed)
+        planner.params().set_params({"step": step, "seed": seed})
         ss.setPlanner(planner)
     return ss, planner, gs, edges
 
@@ -78,6 +78,7 @@ def test_exhausts_lattice_when_no_path_exists():
     solve(ss, seconds=20.0)
     assert not ss.haveExactSolutionPath()
     assert planner.exhausted
+    assert f"all {planner.count} lattice nodes: no path exists at step 0.05 rad" in planner.failure_proof()
     assert not planner.active[: planner.count].any()
     assert (planner.untried[: planner.count] == 0).all()
 
@@ -175,6 +176,7 @@ def test_same_seed_same_path_and_planner_data():
         planner.getPlannerData(data)
         assert data.numVertices() == planner.count
         assert data.numEdges() == planner.count - 1
+        assert planner.graph_size() == (data.numVertices(), data.numEdges())
         assert data.numStartVertices() == 1 and data.numGoalVertices() == 1
     assert np.array_equal(paths[0], paths[1])
 
@@ -183,18 +185,22 @@ def test_honours_the_termination_condition():
     ss, planner, gs, edges = make_rcrrt(closed_maze_checker(), step=0.005, seed=12)
     status = ss.solve(ob.timedPlannerTerminationCondition(0.2))
     assert not ss.haveExactSolutionPath()
-    assert not planner.exhausted
+    assert not planner.exhausted and planner.failure_proof() is None
     assert status.getStatus() == ob.PlannerStatus.TIMEOUT
 
 
 def test_named_parameters():
     ss, planner, gs, edges = make_rcrrt(maze_checker())
-    assert set(planner.param_names()) == {"step", "goal_bias", "candidates", "goal_range", "seed"}
-    planner.set_param("goal_bias", 0.3)
-    assert planner.get_param("goal_bias") == 0.3
-    with pytest.raises(KeyError, match="no parameter"):
-        planner.set_param("bogus", 1)
-    with pytest.raises(ValueError, match="step"):
-        planner.set_param("step", 0.0)
-    with pytest.raises(ValueError, match="goal_bias"):
-        planner.set_param("goal_bias", 1.5)
+    params = planner.params()
+    assert set(params.param_names()) == {"step", "goal_bias", "candidates", "goal_range", "seed"}
+    params.set_param("goal_bias", 0.3)
+    assert params.get_param("goal_bias") == 0.3
+    with pytest.raises(InvalidRequest, match="no parameter"):
+        params.set_param("bogus", 1)
+    with pytest.raises(InvalidRequest, match="step"):
+        params.set_param("step", 0.0)
+    with pytest.raises(InvalidRequest, match="goal_bias"):
+        params.set_param("goal_bias", 1.5)
+    with pytest.raises(InvalidRequest, match="candidates"):
+        params.set_param("candidates", 2.5)
+    assert params.get_param("goal_bias") == 0.3 and params.get_param("step") == 0.05

@@ -7,8 +7,8 @@ import pytest
 
 from maru_planner.collision import CollisionChecker
 from maru_planner.collision.spheres import SphereCollisionChecker, verify_path
-from maru_planner.collision.verified import full_path, plan_verified
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig
+from maru_planner.planning.verified import full_path, plan_verified
 from maru_planner.robot import load_example_robot
 from maru_planner.scene import Obstacle, Scene
 

@@ -1,14 +1,15 @@
 """Arm motion planning on OMPL: state spaces from planning groups, batched edge checks, the planner
-registry (RRT, RRTConnect, PRM, GoalBiasedRRT and our RC-RRT), post-processing and the
-``MotionPlanner`` facade. No ROS here."""
+registry (:data:`PLANNERS`: RRT, RRTConnect, PRM, GoalBiasedRRT, our RC-RRT and whatever else is
+registered), post-processing and the ``MotionPlanner`` facade. No ROS here."""
 
 from maru_planner.planning.config import PlannerConfig
 from maru_planner.planning.motion_planner import MotionPlanner
-from maru_planner.planning.registry import PLANNER_IDS
+from maru_planner.planning.registry import PLANNERS, ArmPlannerSpec, get_spec, planner_ids, register
 from maru_planner.planning.types import MotionRequest, MotionResult, PlanStats, PlanStatus, Trajectory
 
 __all__ = [
-    "PLANNER_IDS",
+    "PLANNERS",
+    "ArmPlannerSpec",
     "MotionPlanner",
     "MotionRequest",
     "MotionResult",
@@ -16,4 +17,7 @@ __all__ = [
     "PlanStatus",
     "PlannerConfig",
     "Trajectory",
+    "get_spec",
+    "planner_ids",
+    "register",
 ]

@@ -13,6 +13,7 @@ from __future__ import annotations
 import sys
 from dataclasses import dataclass
 
+from maru_planner.collision import CollisionChecker
 from maru_planner.planning.config import COLLISION_MODELS
 
 
@@ -26,15 +27,19 @@ class Checkers:
 
 def make_checkers(robot, scene=None, model: str = "exact") -> Checkers:
     """Checkers for ``model`` ("exact" | "spheres") on ``scene`` (None = empty scene)."""
-    from maru_planner.collision import CollisionChecker
-
     if model == "exact":
         return Checkers(CollisionChecker(robot, scene), None)
     if model == "spheres":
+        # lazy: the sphere module loads numba, which exact-only callers never need
         from maru_planner.collision.spheres import SphereCollisionChecker
 
         return Checkers(SphereCollisionChecker(robot, scene), CollisionChecker(robot, scene))
     raise ValueError(f"collision model must be one of {', '.join(COLLISION_MODELS)}, got {model!r}")
+
+
+def default_exact_checker(robot, checker) -> CollisionChecker | None:
+    """The exact checker to verify ``checker``'s paths on: one on its scene for a sphere checker, else None."""
+    return CollisionChecker(robot, checker.scene) if is_sphere_checker(checker) else None
 
 
 def is_sphere_checker(checker) -> bool:

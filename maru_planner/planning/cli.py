@@ -26,7 +26,7 @@ import numpy as np
 from maru_planner import errors
 from maru_planner.planning.config import COLLISION_MODELS, PlannerConfig
 from maru_planner.planning.problems import PROBLEMS
-from maru_planner.planning.registry import PLANNER_IDS
+from maru_planner.planning.registry import planner_ids
 from maru_planner.planning.types import MotionRequest, MotionResult, PlanStatus, status_of_error
 
 
@@ -42,7 +42,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--group", default=None, help="planning group (e.g. upper_body, right_arm)")
     p.add_argument("--start", type=float, nargs="+", help="start values in the group's joint order")
     p.add_argument("--goal", type=float, nargs="+", help="goal values in the group's joint order")
-    p.add_argument("--planner", default="RRTConnect", help=f"one of {', '.join(PLANNER_IDS)}")
+    p.add_argument("--planner", default="RRTConnect", help=f"one of {', '.join(planner_ids())}")
     p.add_argument("--time", type=float, default=5.0, help="time budget in seconds (IK + search + post-processing)")
     p.add_argument("--seed", type=int, default=None, help="random seed (same seed, same path); default random")
     p.add_argument("--attempts", type=int, default=1)

@@ -25,9 +25,17 @@ from ompl import util as ou
 
 from maru_planner import errors
 from maru_planner.planning import postprocess
-from maru_planner.planning.checkers import collision_model_of, is_sphere_checker, make_checkers
+from maru_planner.planning.checkers import collision_model_of, default_exact_checker, make_checkers
 from maru_planner.planning.config import PlannerConfig
-from maru_planner.planning.registry import check_planner_id, make_planner, merged_params
+from maru_planner.planning.pose_goal import solve_pose_goal
+from maru_planner.planning.registry import (
+    ArmPlannerSpec,
+    ProvesFailure,
+    ReportsGraphSize,
+    get_spec,
+    make_planner,
+    merged_params,
+)
 from maru_planner.planning.roadmap import Roadmap
 from maru_planner.planning.space import BatchedMotionValidator, EdgeChecker, GroupSpace, make_validity_fn
 from maru_planner.planning.types import MotionRequest, MotionResult, PlanStats, PlanStatus, status_of_error
@@ -74,10 +82,8 @@ class MotionPlanner:
         self.robot = robot
         self.checker = checker
         self.config = config or PlannerConfig()
-        if exact_checker is None and is_sphere_checker(checker):
-            from maru_planner.collision import CollisionChecker
-
-            exact_checker = CollisionChecker(robot, checker.scene)
+        if exact_checker is None:
+            exact_checker = default_exact_checker(robot, checker)
         self.exact_checker = exact_checker  # None: the plan's own checker is the exact model
         self._lock = threading.RLock()
         self._scene_epoch = 0
@@ -98,7 +104,7 @@ class MotionPlanner:
 
     # --- scene ------------------------------------------------------------------------------
     def set_scene(self, scene) -> None:
-        """Give the checker(s) a new scene; cached PRM roadmaps are re-validated at their next query."""
+        """Give the checker(s) a new scene; cached roadmaps are re-validated at their next query."""
         with self._lock:
             self.checker.set_scene(scene)
             if self.exact_checker is not None:
@@ -136,6 +142,7 @@ class MotionPlanner:
 
     def _verify(self, request: MotionRequest, result: MotionResult, t0: float) -> MotionResult:
         """Re-check ``result``'s path on the exact model; re-plan at half the step while it fails (class doc)."""
+        # lazy: the sphere module loads numba, which exact-only callers never need
         from maru_planner.collision.spheres import verify_path
 
         resolution, verify_time, replans = self.config.resolution, 0.0, 0
@@ -167,16 +174,17 @@ class MotionPlanner:
         """The result's waypoints as full configurations (joints outside the group at their start values)."""
         indices = [self.robot.joint_names.index(n) for n in result.joint_names]
         start = self._start_state(request, indices)
-        out = np.repeat(start[None], len(result.path), axis=0)
-        out[:, indices] = np.asarray(result.path, dtype=float)
+        path = np.asarray(result.path, dtype=float)
+        out = np.repeat(start[None], len(path), axis=0)
+        out[:, indices] = path
         return out
 
     def _plan(self, req: MotionRequest, result: MotionResult, t0: float, resolution: float) -> None:
         stats = result.stats
         budget = _finite_time(req.time_budget, "time_budget")
         deadline = t0 + budget
-        planner_id = check_planner_id(req.planner_id or self.config.default_planner)
-        stats.planner_id = planner_id
+        spec = get_spec(req.planner_id or self.config.default_planner)
+        planner_id = stats.planner_id = spec.id
         attempts = int(req.attempts)
         if attempts < 1:
             raise errors.InvalidRequest(f"attempts must be >= 1, got {req.attempts}")
@@ -206,7 +214,7 @@ class MotionPlanner:
         start, goal = start_full[indices], goal_full[indices]
         checks0 = self.checker.check_count
         try:
-            raw = self._search(planner_id, gs, start, goal, seed, attempts, deadline, stats, resolution)
+            raw = self._search(spec, gs, start, goal, seed, attempts, deadline, stats, resolution)
             stats.raw_waypoints = len(raw)
             stats.raw_path_length = postprocess.path_length(raw)
             path = self._simplify(req, gs, raw, seed, deadline, stats, resolution)
@@ -298,9 +306,7 @@ class MotionPlanner:
     def _solve_pose_goal(self, req: MotionRequest, start_full, indices, deadline) -> np.ndarray:
         if req.goal_joints:
             raise errors.InvalidRequest("give either goal_joints or goal_poses, not both")
-        from maru_planner.planning.pose_goal import solve_pose_goal
-
-        return solve_pose_goal(self.robot, self.checker, req.group, req.goal_poses, start_full, indices, deadline)
+        return solve_pose_goal(self.robot, self.checker, req.group, req.goal_poses or {}, start_full, indices, deadline)
 
     def _check_free(self, q: np.ndarray, error_cls, what: str) -> None:
         if self.checker.is_valid(q):
@@ -310,40 +316,36 @@ class MotionPlanner:
         raise error_cls(f"{what} configuration is in collision: {named}", pairs=pairs)
 
     # --- search -----------------------------------------------------------------------------
-    def _search(self, planner_id, gs, start, goal, seed, attempts, deadline, stats, resolution) -> np.ndarray:
+    def _search(self, spec: ArmPlannerSpec, gs, start, goal, seed, attempts, deadline, stats, resolution) -> np.ndarray:
         if np.allclose(start, goal, atol=1e-12, rtol=0):
             stats.attempts_used = 0
             return np.vstack([start, goal])
         reserve = self.config.postprocess_reserve * max(0.0, deadline - time.monotonic())
         search_deadline = deadline - reserve
-        params = merged_params(planner_id, self.config.planner_params.get(planner_id))
+        params = merged_params(spec.id, self.config.planner_params.get(spec.id))
+        search = self._search_roadmap if spec.has("roadmap") else self._search_once
         failure = None
         for attempt in range(attempts):
-            seconds = search_deadline - time.monotonic()
-            if seconds <= 0:
+            if search_deadline <= time.monotonic():
                 break
             stats.attempts_used = attempt + 1
             t_solve = time.monotonic()
             build_before = stats.roadmap_build_time
-            if planner_id == "PRM":
-                path, failure = self._search_prm(gs, start, goal, params, search_deadline, stats, resolution)
-            else:
-                path, failure = self._search_tree(
-                    planner_id, gs, start, goal, params, seed + attempt, seconds, stats, resolution
-                )
-            # PRM: query time only; the roadmap build is reported apart (roadmap_build_time)
+            path, failure = search(spec, gs, start, goal, params, seed + attempt, search_deadline, stats, resolution)
+            # roadmap planners: query time only; the roadmap build is reported apart (roadmap_build_time)
             stats.solve_time += time.monotonic() - t_solve - (stats.roadmap_build_time - build_before)
             if path is not None:
                 return path
         if failure is None or time.monotonic() >= search_deadline:
             raise errors.PlanningTimedOut(
-                f"{planner_id} found no path within the time budget ({stats.attempts_used} attempt(s), "
+                f"{spec.id} found no path within the time budget ({stats.attempts_used} attempt(s), "
                 f"{stats.nodes} nodes)",
                 source="planner",
             )
         raise errors.PlanningFailed(failure, source="planner")
 
-    def _search_tree(self, planner_id, gs, start, goal, params, seed, seconds, stats, resolution):
+    def _search_once(self, spec, gs, start, goal, params, seed, search_deadline, stats, resolution):
+        """One solve of a fresh planner; (path | None, proven-failure message | None)."""
         edges = EdgeChecker(gs, self.checker, resolution)
         with seeded_ompl(seed):
             ss = og.SimpleSetup(gs.space)
@@ -352,75 +354,68 @@ class MotionPlanner:
             validator = BatchedMotionValidator(si, edges)
             si.setMotionValidator(validator)
             ss.setStartAndGoalStates(gs.to_state(start), gs.to_state(goal))
-            if planner_id == "RCRRT" and params.get("seed") is None:
-                params = dict(params, seed=seed)
-            planner = make_planner(planner_id, si, params, edge_checker=edges)
+            planner = make_planner(spec.id, si, params, edge_checker=edges)
             ss.setPlanner(planner)
-            ss.solve(ob.timedPlannerTerminationCondition(seconds))
-        stats.nodes, stats.edges = _tree_size(planner, si)
+            ss.solve(ob.timedPlannerTerminationCondition(max(0.0, search_deadline - time.monotonic())))
+        stats.nodes, stats.edges = _graph_size(planner, si)
         if ss.haveExactSolutionPath():
             return np.array([gs.to_array(s) for s in ss.getSolutionPath().getStates()]), None
-        if planner_id == "RCRRT" and planner.exhausted:
-            return None, (
-                f"RCRRT tried every input of all {planner.count} lattice nodes: no path exists at "
-                f"step {planner.get_param('step')} rad"
-            )
-        return None, None
+        return None, planner.failure_proof() if isinstance(planner, ProvesFailure) else None
 
     def _scene_key(self) -> tuple:
         """Changes whenever the scene does: a set_scene call or an edit that bumps ``scene.version``."""
         scene = getattr(self.checker, "scene", None) or self.scene
         return (self._scene_epoch, id(scene), getattr(scene, "version", None))
 
-    def _roadmap_for(self, gs: GroupSpace, params, resolution: float) -> Roadmap:
+    def _roadmap_for(self, spec: ArmPlannerSpec, gs: GroupSpace, params, resolution: float) -> Roadmap:
         outside = np.setdiff1d(np.arange(len(gs.base)), gs.indices)
-        key = (tuple(gs.indices), tuple(np.round(gs.base[outside], 9)), resolution, tuple(params.items()))
+        key = (spec.id, tuple(gs.indices), tuple(np.round(gs.base[outside], 9)), resolution, tuple(params.items()))
         roadmap = self._roadmaps.get(key)
         if roadmap is None:
-            roadmap = Roadmap(gs, self.checker, resolution, params["max_nearest_neighbors"])
+            roadmap = Roadmap(gs, self.checker, resolution, spec.id, params)
             roadmap.scene_epoch = self._scene_key()
             self._roadmaps = {key: roadmap}  # one roadmap at a time: bounded memory
         return roadmap
 
-    def _search_prm(self, gs, start, goal, params, search_deadline, stats, resolution):
+    def _search_roadmap(self, spec, gs, start, goal, params, seed, search_deadline, stats, resolution):
         """Query the cached roadmap; after a scene change, verify the answer and fall back to re-validation.
 
         A roadmap built before the last scene change is "stale": its answer is checked against the
         current scene in one batched call (cheap) and returned if free. Only when that check fails is
-        the whole roadmap re-validated, and rebuilt if any milestone or edge died.
+        the whole roadmap re-validated, and rebuilt if any milestone or edge died. ``seed`` seeds OMPL
+        while a roadmap is created and grown, so a fresh planner builds the same roadmap for the same seed.
         """
-        roadmap = self._roadmap_for(gs, params, resolution)
-        stale = roadmap.scene_epoch != self._scene_key()
-        path = self._query_roadmap(roadmap, start, goal, search_deadline, stats)
-        if path is None or not stale:
-            return path, None
-        t_check = time.monotonic()
-        path_ok = roadmap.edges.path_valid(path)
-        stats.validation_time += time.monotonic() - t_check
-        if path_ok:
-            return path, None
-        report = roadmap.revalidate()
-        self.last_revalidation = report
-        stats.validation_time += report.seconds
-        if report.still_valid:  # cannot happen with a deterministic checker; keep the roadmap if it does
-            roadmap.scene_epoch = self._scene_key()
-            return path, None
-        self._roadmaps.clear()
-        roadmap = self._roadmap_for(gs, params, resolution)
-        return self._query_roadmap(roadmap, start, goal, search_deadline, stats), None
+        with seeded_ompl(seed):
+            roadmap = self._roadmap_for(spec, gs, params, resolution)
+            stale = roadmap.scene_epoch != self._scene_key()
+            path = self._query_roadmap(roadmap, start, goal, search_deadline, stats)
+            if path is None or not stale:
+                return path, None
+            t_check = time.monotonic()
+            path_ok = roadmap.edges.path_valid(path)
+            stats.validation_time += time.monotonic() - t_check
+            if path_ok:
+                return path, None
+            report = roadmap.revalidate()
+            self.last_revalidation = report
+            stats.validation_time += report.seconds
+            if report.still_valid:  # cannot happen with a deterministic checker; keep the roadmap if it does
+                roadmap.scene_epoch = self._scene_key()
+                return path, None
+            self._roadmaps.clear()
+            roadmap = self._roadmap_for(spec, gs, params, resolution)
+            return self._query_roadmap(roadmap, start, goal, search_deadline, stats), None
 
     def _query_roadmap(self, roadmap: Roadmap, start, goal, search_deadline, stats):
         stats.roadmap_reused = roadmap.queries > 0
         if roadmap.milestones < self.config.prm_roadmap_nodes:
             before = roadmap.build_time
-            with OMPL_LOCK:
-                roadmap.build(self.config.prm_roadmap_nodes, search_deadline)
+            roadmap.build(self.config.prm_roadmap_nodes, search_deadline)
             stats.roadmap_build_time += roadmap.build_time - before
         seconds = search_deadline - time.monotonic()
         if seconds <= 0:
             return None
-        with OMPL_LOCK:
-            _mode, path = roadmap.query(start, goal, seconds)
+        _mode, path = roadmap.query(start, goal, seconds)
         stats.nodes, stats.edges = roadmap.milestones, roadmap.edge_count
         return path
 
@@ -442,9 +437,10 @@ def _set_error(result: MotionResult, exc: errors.MaruError) -> None:
     result.error = exc
 
 
-def _tree_size(planner, si) -> tuple[int, int]:
-    if hasattr(planner, "count"):  # RCRRT: read its arrays, no PlannerData copy needed
-        return int(planner.count), max(0, int(planner.count) - 1)
+def _graph_size(planner, si) -> tuple[int, int]:
+    """(nodes, edges) the planner built: its own count if it reports one, else from a PlannerData copy."""
+    if isinstance(planner, ReportsGraphSize):
+        return planner.graph_size()
     data = ob.PlannerData(si)
     planner.getPlannerData(data)
     return int(data.numVertices()), int(data.numEdges())

@@ -32,64 +32,72 @@ nanobind trampoline cannot pass a ``PlannerData&`` from C++ to Python, so do not
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 from ompl import base as ob
 from ompl import geometric as og
 from ompl import util as ou
 
+from maru_planner.params import ParamSpec
 from maru_planner.planning.kdtree import GrowingKDTree
+from maru_planner.planning.planner_params import PlannerParams
 
-PARAM_DEFAULTS = {
-    "step": 0.3,
-    "goal_bias": 0.1,
-    "candidates": 8,
-    "goal_range": 1.5,
-    "seed": None,
+RCRRT_PARAMS: dict[str, ParamSpec] = {
+    spec.name: spec
+    for spec in (
+        ParamSpec("step", 0.3, "lattice step: each input moves one joint by +-step (rad)", lower=1e-6),
+        ParamSpec("goal_bias", 0.1, "probability of sampling the goal", lower=0.0, upper=1.0),
+        ParamSpec("candidates", 8, "nearest nodes with untried inputs visited per sample", lower=1),
+        ParamSpec("goal_range", 1.5, "L-inf distance (rad) within which the straight edge to the goal is tried",
+                  lower=0.0),  # fmt: skip
+        ParamSpec("seed", None, "seed of the sampler; unset: drawn from OMPL's seeded generator", lower=0,
+                  optional=True, type=int),  # fmt: skip
+    )
 }
 
 _SAMPLE_BATCH = 512
 
 
 class RCRRT(ob.Planner):
-    """Resolution-complete RRT (see module doc). Named parameters: see ``PARAM_DEFAULTS``."""
+    """Resolution-complete RRT (see module doc). Parameters (``params()``): see ``RCRRT_PARAMS``."""
 
     def __init__(self, si, edge_checker=None, name: str = "RCRRT"):
         super().__init__(si, name)
         self._si = si
         self._edges = edge_checker
-        self.param_values = dict(PARAM_DEFAULTS)
+        self._values = {name: spec.default for name, spec in RCRRT_PARAMS.items()}
+        self._params = PlannerParams(name)
+        for spec in RCRRT_PARAMS.values():
+            self._params.declare_param(spec, partial(self._values.__setitem__, spec.name),
+                                       partial(self._values.__getitem__, spec.name))  # fmt: skip
         self._seed_rng = ou.RNG()
         self.exhausted = False
-        self.iterations = 0
         self.collisions = 0
         self._reset_tree(si.getStateDimension())
 
-    # --- named parameters -------------------------------------------------------------------
-    @staticmethod
-    def param_names() -> list[str]:
-        return list(PARAM_DEFAULTS)
+    def params(self) -> PlannerParams:
+        """The declared parameters, as OMPL's ``Planner::params()`` (see :mod:`.planner_params`)."""
+        return self._params
 
-    def set_param(self, name: str, value) -> None:
-        if name not in PARAM_DEFAULTS:
-            raise KeyError(f"RCRRT has no parameter {name!r}; known: {', '.join(PARAM_DEFAULTS)}")
-        if name == "step" and not float(value) > 0:
-            raise ValueError(f"RCRRT step must be > 0, got {value}")
-        if name == "goal_bias" and not 0.0 <= float(value) <= 1.0:
-            raise ValueError(f"RCRRT goal_bias must be in [0, 1], got {value}")
-        if name == "candidates" and int(value) < 1:
-            raise ValueError(f"RCRRT candidates must be >= 1, got {value}")
-        self.param_values[name] = value
+    # --- hooks the MotionPlanner facade reads (maru_planner.planning.registry) ----------------
+    def graph_size(self) -> tuple[int, int]:
+        """(nodes, edges) of the tree, read from the planner's arrays (no PlannerData copy)."""
+        return int(self.count), max(0, int(self.count) - 1)
 
-    def get_param(self, name: str):
-        if name not in PARAM_DEFAULTS:
-            raise KeyError(f"RCRRT has no parameter {name!r}; known: {', '.join(PARAM_DEFAULTS)}")
-        return self.param_values[name]
+    def failure_proof(self) -> str | None:
+        """Why no path exists, when the last solve exhausted the lattice; else None."""
+        if not self.exhausted:
+            return None
+        return (
+            f"RCRRT tried every input of all {self.count} lattice nodes: no path exists at "
+            f"step {self._values['step']} rad"
+        )
 
     # --- OMPL planner interface ------------------------------------------------------------
     def clear(self):
         self._reset_tree(self.dim)
         self.exhausted = False
-        self.iterations = 0
         self.collisions = 0
 
     def solve(self, ptc):
@@ -135,7 +143,7 @@ class RCRRT(ob.Planner):
         self.sigma = np.zeros(capacity)
         self.active = np.zeros(capacity, dtype=bool)
         self.lattice: dict[int, int] = {}
-        self.keys: list[int | None] = []
+        self.keys: list[int] = []  # lattice code of each node; -1 for the goal node (off the lattice)
         self.count = 0
         self.goal_node = -1
         self.nn = GrowingKDTree(dim)
@@ -158,7 +166,7 @@ class RCRRT(ob.Planner):
         self.count += 1
         self.X[i] = x
         self.parent[i] = parent
-        self.keys.append(key)
+        self.keys.append(-1 if key is None else key)
         if key is None:  # the goal node: never extended
             self.expanded[i] = True
             self.untried[i] = 0
@@ -195,8 +203,7 @@ class RCRRT(ob.Planner):
         exp[0::2] |= x + step > self.upper + 1e-9
         exp[1::2] |= x - step < self.lower - 1e-9
         lattice, strides = self.lattice, self.strides
-        for u in np.flatnonzero(~exp):
-            u = int(u)
+        for u in map(int, np.flatnonzero(~exp)):
             j = lattice.get(key + strides[u >> 1] if u % 2 == 0 else key - strides[u >> 1])
             if j is not None:
                 exp[u] = True
@@ -220,7 +227,7 @@ class RCRRT(ob.Planner):
 
     # --- the search ------------------------------------------------------------------------
     def _search(self, start: np.ndarray, goal: np.ndarray, ptc):
-        p = self.param_values
+        p = self._values
         self._step = float(p["step"])
         goal_bias = float(p["goal_bias"])
         k = int(p["candidates"])
@@ -244,7 +251,6 @@ class RCRRT(ob.Planner):
                 cursor = 0
             target = goal if coins[cursor] < goal_bias else samples[cursor]
             cursor += 1
-            self.iterations += 1
             near = self._select(target, k, rng)
             if near < 0:
                 self.exhausted = True

@@ -7,6 +7,13 @@ is blocked does it re-validate the whole roadmap (:meth:`Roadmap.revalidate`: tw
 calls, all milestones then all edge states at the motion resolution, timed) and rebuild it if
 anything died (OMPL's PRM offers no way to delete milestones or edges from Python). New
 milestones and edges added after the change are always checked in the current scene.
+
+Growth is deterministic: OMPL's ``PRM.constructRoadmap`` switches between growing and expanding
+the roadmap every 0.2–0.4 s of wall time and ``PRM.solve`` grows it in a second thread, so the
+roadmap (and the path) would depend on timing. Here the roadmap grows in the calling thread,
+alternating the same two OMPL phases by milestone counts (two parts growing, one expanding, as
+OMPL's time ratio): with OMPL seeded, the same seed builds the same roadmap, and the same query on
+it gives the same path.
 """
 
 from __future__ import annotations
@@ -21,6 +28,7 @@ from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import connected_components, dijkstra
 from scipy.spatial import cKDTree
 
+from maru_planner.planning.registry import RoadmapPlanner, make_planner
 from maru_planner.planning.space import (
     BatchedMotionValidator,
     EdgeChecker,
@@ -28,6 +36,11 @@ from maru_planner.planning.space import (
     edge_states,
     make_validity_fn,
 )
+
+#: Milestones added per grow/expand round (grow 2·, expand 1·) and, at least, per growth step of a query.
+GROWTH_CHUNK = 30
+#: Termination-condition polls one phase may use per milestone it should add (bounds a phase that adds nothing).
+_POLLS_PER_MILESTONE = 50
 
 
 @dataclass
@@ -47,9 +60,11 @@ class RevalidationReport:
 
 
 class Roadmap:
-    """One group's PRM (OMPL ``PRM``) with its own SimpleSetup, kept between queries."""
+    """One group's roadmap (a "roadmap" planner of the registry, OMPL ``PRM`` by default), kept between queries."""
 
-    def __init__(self, group_space: GroupSpace, checker, resolution: float, max_nearest_neighbors: int = 3):
+    def __init__(
+        self, group_space: GroupSpace, checker, resolution: float, planner_id: str = "PRM", params: dict | None = None
+    ):
         self.gs = group_space
         self.edges = EdgeChecker(group_space, checker, resolution)
         self.ss = og.SimpleSetup(group_space.space)
@@ -57,10 +72,9 @@ class Roadmap:
         self.ss.setStateValidityChecker(make_validity_fn(self.edges))
         self._validator = BatchedMotionValidator(self.si, self.edges)
         self.si.setMotionValidator(self._validator)
-        self.planner = og.PRM(self.si)
-        self.planner.setMaxNearestNeighbors(int(max_nearest_neighbors))
+        self.planner: RoadmapPlanner = make_planner(planner_id, self.si, params, self.edges)  # type: ignore[assignment]
         self.ss.setPlanner(self.planner)
-        self.scene_epoch = -1
+        self.scene_epoch: tuple | None = None  # the MotionPlanner's scene key when the roadmap was built
         self.build_time = 0.0
         self.queries = 0
         self._graph_cache = None
@@ -77,37 +91,48 @@ class Roadmap:
         """Grow the roadmap until it has ``nodes`` milestones or ``deadline`` (monotonic) passes."""
         self.ss.setup()
         t0 = time.monotonic()
-
-        def done() -> bool:
-            return self.planner.milestoneCount() >= nodes or time.monotonic() >= deadline
-
-        if not done():
-            self.planner.constructRoadmap(ob.PlannerTerminationCondition(done))
+        while self.milestones < nodes and time.monotonic() < deadline:
+            self._grow_round(nodes, deadline)
         self.build_time += time.monotonic() - t0
         return self.build_time
+
+    def _grow_round(self, nodes: int, deadline: float) -> None:
+        """A grow phase (2·GROWTH_CHUNK milestones) then an expand phase (GROWTH_CHUNK), capped at ``nodes``."""
+        self._phase(self.planner.growRoadmapPtc, min(nodes, self.milestones + 2 * GROWTH_CHUNK), deadline)
+        self._phase(self.planner.expandRoadmapPtc, min(nodes, self.milestones + GROWTH_CHUNK), deadline)
+
+    def _phase(self, run, target: int, deadline: float) -> None:
+        """Run OMPL phase ``run`` until ``target`` milestones, its poll budget or ``deadline`` (the only clock)."""
+        polls = _POLLS_PER_MILESTONE * max(1, target - self.milestones)
+
+        def done() -> bool:
+            nonlocal polls
+            polls -= 1
+            return polls < 0 or self.planner.milestoneCount() >= target or time.monotonic() >= deadline
+
+        if not done():
+            run(ob.PlannerTerminationCondition(done))
 
     def query(self, start: np.ndarray, goal: np.ndarray, seconds: float):
         """Solve start→goal on the roadmap. Returns (mode, path | None).
 
-        First the query phase on the roadmap as it is (:meth:`query_graph`); if start and goal
-        cannot be attached to one connected component, OMPL's ``PRM.solve``, which grows the
-        roadmap until they are connected or time runs out.
+        First the query phase on the roadmap as it is (:meth:`query_graph`): mode "roadmap". If start
+        and goal cannot be attached to one connected component, the roadmap grows (a quarter of its
+        size, at least ``GROWTH_CHUNK`` milestones, per step) and is queried again until they can or
+        ``seconds`` run out: mode "grow".
         """
         self.queries += 1
         path = self.query_graph(start, goal)
         if path is not None:
             return "roadmap", path
-        return "grow", self._solve_ompl(start, goal, seconds)
-
-    def _solve_ompl(self, start: np.ndarray, goal: np.ndarray, seconds: float):
-        self.planner.clearQuery()
-        self.ss.getProblemDefinition().clearSolutionPaths()
-        self.ss.setStartAndGoalStates(self.gs.to_state(start), self.gs.to_state(goal))
-        self.ss.solve(ob.timedPlannerTerminationCondition(max(seconds, 1e-3)))
-        if not self.ss.haveExactSolutionPath():
-            return None
-        states = self.ss.getSolutionPath().getStates()
-        return np.array([self.gs.to_array(s) for s in states])
+        self.ss.setup()
+        deadline = time.monotonic() + seconds
+        while path is None and time.monotonic() < deadline:
+            target = self.milestones + max(GROWTH_CHUNK, self.milestones // 4)
+            while self.milestones < target and time.monotonic() < deadline:
+                self._grow_round(target, deadline)
+            path = self.query_graph(start, goal)
+        return "grow", path
 
     def _search_graph(self):
         """Vertices, k-d tree, sparse edge-length graph and components of the roadmap (cached per size)."""

@@ -88,21 +88,12 @@ class EdgeChecker:
         self.gs = group_space
         self.checker = checker
         self.resolution = float(resolution)
-        self.edges_checked = 0
-
-    def state_valid(self, q: np.ndarray) -> bool:
-        return bool(self.checker.is_valid(self.gs.full(q)))
-
-    def first_invalid(self, qa: np.ndarray, qb: np.ndarray) -> int:
-        """Index of the first colliding state along qa → qb (-1 if the edge is free)."""
-        self.edges_checked += 1
-        states = edge_states(qa, qb, self.resolution)
-        order = bisection_order(len(states), include_first=False)
-        k = int(self.checker.first_invalid(self.gs.full(states[order])))
-        return int(order[k]) if k >= 0 else -1
 
     def edge_valid(self, qa: np.ndarray, qb: np.ndarray) -> bool:
-        return self.first_invalid(qa, qb) < 0
+        """True if every state of qa → qb (qa excluded) is free; one checker call, in bisection order."""
+        states = edge_states(qa, qb, self.resolution)
+        order = bisection_order(len(states), include_first=False)
+        return int(self.checker.first_invalid(self.gs.full(states[order]))) < 0
 
     def path_valid(self, path: np.ndarray) -> bool:
         """All edges of ``path`` in one batched call (the start state is checked too)."""

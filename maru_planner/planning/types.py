@@ -5,10 +5,14 @@ from __future__ import annotations
 import enum
 import math
 from dataclasses import asdict, dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from maru_planner import errors
+
+if TYPE_CHECKING:  # the sphere module loads numba; results only carry its PathVerification
+    from maru_planner.collision.spheres import PathVerification
 
 
 class PlanStatus(enum.Enum):
@@ -146,7 +150,7 @@ class MotionResult:
     path: np.ndarray | None = None
     trajectory: Trajectory | None = None
     stats: PlanStats = field(default_factory=PlanStats)
-    verification: object | None = None  # PathVerification of the last exact re-check ("spheres" only)
+    verification: PathVerification | None = None  # the last exact re-check ("spheres" only)
 
     @property
     def success(self) -> bool:

@@ -16,13 +16,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from maru_planner.collision.spheres import PathVerification
+from maru_planner.planning.motion_planner import MotionPlanner
+from maru_planner.planning.types import MotionRequest, MotionResult
 
 
 @dataclass
 class VerifiedResult:
     """A planning result and how its verification on the exact model went."""
 
-    result: object  # maru_planner.planning.MotionResult
+    result: MotionResult
     verification: PathVerification | None  # None when there was no path to verify
     verify_time: float = 0.0
     fallback_used: bool = False  # at least one re-plan after a failed verification
@@ -33,21 +35,26 @@ class VerifiedResult:
         return bool(self.result.success and (self.verification is None or self.verification.valid))
 
 
-def full_path(robot, request, result) -> np.ndarray:
+def full_path(robot, request: MotionRequest, result: MotionResult) -> np.ndarray:
     """The result's waypoints as full robot configurations (other joints at their start values)."""
     q = np.asarray(robot.neutral(), dtype=float).copy()
     start = request.start or {}
     q[robot.joint_indices(list(start))] = [float(v) for v in start.values()]
     idx = robot.joint_indices(list(result.joint_names))
-    out = np.repeat(q[None], len(result.path), axis=0)
-    out[:, idx] = np.asarray(result.path, dtype=float)
+    path = np.asarray(result.path, dtype=float)
+    out = np.repeat(q[None], len(path), axis=0)
+    out[:, idx] = path
     return out
 
 
-def plan_verified(planner, exact_checker, request, resolution: float | None = None, max_refinements: int = 2):
+def plan_verified(
+    planner: MotionPlanner,
+    exact_checker,
+    request: MotionRequest,
+    resolution: float | None = None,
+    max_refinements: int = 2,
+) -> VerifiedResult:
     """``planner``'s plan of ``request``, verified on ``exact_checker`` every ``resolution`` rad."""
-    from maru_planner.planning import MotionPlanner
-
     t0 = time.monotonic()
     config = dataclasses.replace(planner.config, verify_resolution=resolution, max_refinements=max_refinements)
     result = MotionPlanner(planner.robot, planner.checker, config, exact_checker=exact_checker).plan(request)
