@@ -7,7 +7,8 @@ Time parameterisation: each segment between consecutive waypoints is a straight 
 traversed with a synchronised trapezoidal (or triangular) speed profile that starts and ends at
 rest, so every joint stays within ``velocity_limit × velocity_scaling`` and
 ``acceleration_limit × acceleration_scaling`` exactly. Stopping at waypoints costs time but is
-safe for any path; shortcutting first keeps the number of stops small.
+safe for any path; shortcutting first keeps the number of stops small. Blended, time-optimal and
+jerk-limited alternatives are in :mod:`maru_planner.planning.timing`.
 """
 
 from __future__ import annotations
@@ -127,22 +128,32 @@ def time_parameterize(
     velocity_scaling: float = 1.0,
     acceleration_scaling: float = 1.0,
     dt: float = 0.05,
+    max_points: int = 10_000,
 ) -> Trajectory:
-    """Rest-to-rest trapezoidal trajectory through ``path`` sampled every ``dt`` s (+ every waypoint)."""
+    """Rest-to-rest trapezoidal trajectory through ``path`` sampled every ``dt`` s (+ every waypoint).
+
+    The sample period grows past ``dt`` when the duration would need more than ``max_points``
+    points (every waypoint is still a sample, so a path with more segments than that gets one more
+    sample per segment).
+    """
     vmax = np.asarray(velocity_limits, float) * velocity_scaling
     amax = np.asarray(acceleration_limits, float) * acceleration_scaling
+    deltas = np.diff(path, axis=0)
+    profiles = [_segment_profile(delta, vmax, amax) for delta in deltas]
+    total = sum(profile[0] for profile in profiles)
+    period = max(dt, total / max(1, max_points - 1 - len(profiles)))
     times, pos, vel, acc = [np.zeros(1)], [path[:1]], [np.zeros((1, path.shape[1]))], [np.zeros((1, path.shape[1]))]
     t0 = 0.0
-    for k in range(len(path) - 1):
-        delta = path[k + 1] - path[k]
-        duration, sd, sdd, ta = _segment_profile(delta, vmax, amax)
+    for k, (delta, (duration, sd, sdd, ta)) in enumerate(zip(deltas, profiles, strict=True)):
         if duration <= 0.0:
             continue
-        n = max(1, math.ceil(duration / dt))
+        n = max(1, math.ceil(duration / period))
         t = np.linspace(0.0, duration, n + 1)[1:]
         s, v, a = _sample_segment(t, duration, sd, sdd, ta)
         times.append(t0 + t)
-        pos.append(path[k] + s[:, None] * delta)
+        positions = path[k] + s[:, None] * delta
+        positions[-1] = path[k + 1]  # exactly, not up to rounding
+        pos.append(positions)
         vel.append(v[:, None] * delta)
         acc.append(a[:, None] * delta)
         t0 += duration

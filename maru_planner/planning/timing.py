@@ -1,0 +1,582 @@
+"""Time parameterisation of a certified joint-space path: ``toppra`` | ``ruckig`` | ``trapezoid``.
+
+``trapezoid`` (:func:`postprocess.time_parameterize`) stops at every waypoint. The other two
+first replace each corner by a parabolic blend: a quadratic Bézier from ``P − l·u_in`` through
+control point ``P`` to ``P + l·u_out``, whose distance from the corner, ``l·|u_out − u_in| / 4``,
+is at most the requested deviation (and ``l`` at most half of either adjacent segment). The
+straight parts of the blended curve lie on the certified path; every blend is re-checked with
+``curve_free`` at a joint step of :data:`CERTIFY_STEP`. A blend that collides is retried with a
+quarter of its deviation, twice; then the motion stops at that corner (the path is split there).
+
+``toppra`` computes the time-optimal path velocity along the blended curve under
+``velocity × scaling`` and ``acceleration × scaling`` (TOPP-RA, constant path acceleration
+between grid points, which include every blend boundary). The result is then evaluated on a dense
+grid and, if toppra's discretisation let a limit be exceeded, uniformly slowed down until every
+limit holds at every sample it returns.
+
+``ruckig`` is jerk-limited: it passes through the blend boundaries with toppra's speed there
+and zero acceleration, one Ruckig trajectory per piece (straight pieces are phase-synchronised
+and therefore straight). Its curve over a blend is Ruckig's, not the parabola: it is re-checked
+and its deviation measured; a corner where it collides or deviates more than allowed is shrunk
+like a toppra blend, and the last resort is to stop at that corner (straight, rest-to-rest).
+
+Every trajectory is sampled with at most ``max_points`` points: the sample period grows past
+``dt`` when the duration would need more.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import ruckig
+import toppra.algorithm
+import toppra.constraint
+import toppra.interpolator
+
+from maru_planner import errors
+from maru_planner.planning import postprocess
+from maru_planner.planning.types import Trajectory
+
+METHODS = ("toppra", "ruckig", "trapezoid")
+DEFAULT_METHOD = "toppra"
+JERK_RAMP_TIME = 0.1  # s: default jerk limit = acceleration limit / this (full acceleration in 0.1 s)
+CERTIFY_STEP = 0.005  # rad: joint step of the collision re-check of blends
+BLEND_SHRINK = 4.0  # each retry of a colliding blend divides its deviation by this
+BLEND_RETRIES = 2  # retries before a corner becomes a stop
+MIN_BLEND_SPEED = 0.1  # |u_in + u_out| below this (a near reversal): stop instead of blending
+GRID_INTERVALS = 40  # toppra grid intervals along a section (plus ≥ BLEND_INTERVALS per blend)
+BLEND_INTERVALS = 4
+RATIO_TOL = 1e-9
+RUCKIG_DURATION = 100.0  # s: longer sections are computed sped up and played back slower (_RuckigPieces)
+
+CurveFree = Callable[[np.ndarray], bool]
+
+
+@dataclass(frozen=True)
+class Limits:
+    """Per-joint limits the trajectory must respect (already multiplied by the request's scaling)."""
+
+    velocity: np.ndarray
+    acceleration: np.ndarray
+    jerk: np.ndarray
+
+    @classmethod
+    def scaled(
+        cls,
+        velocity_limits: Sequence[float],
+        acceleration_limits: Sequence[float],
+        velocity_scaling: float = 1.0,
+        acceleration_scaling: float = 1.0,
+        jerk_scaling: float = 1.0,
+        jerk_limits: Sequence[float] | None = None,
+    ) -> Limits:
+        """Limits × scaling; jerk limits default to :func:`default_jerk_limits` of the acceleration limits."""
+        acc = np.asarray(acceleration_limits, float)
+        jerk = default_jerk_limits(acc) if jerk_limits is None else np.asarray(jerk_limits, float)
+        return cls(
+            np.asarray(velocity_limits, float) * velocity_scaling,
+            acc * acceleration_scaling,
+            jerk * jerk_scaling,
+        )
+
+
+def default_jerk_limits(acceleration_limits: Sequence[float]) -> np.ndarray:
+    """Jerk limits reaching the full acceleration in :data:`JERK_RAMP_TIME` (URDF has no jerk field)."""
+    return np.asarray(acceleration_limits, float) / JERK_RAMP_TIME
+
+
+@dataclass
+class TimingReport:
+    """How a trajectory was made: the method used, the corners blended or stopped, what the checks cost."""
+
+    method: str
+    blends: int = 0  # corners passed without stopping
+    stops: int = 0  # interior waypoints where the motion stops
+    max_deviation: float = 0.0  # largest distance (rad) of the blended curve from a corner it replaces
+    certify_checks: int = 0  # configurations re-checked for collision
+    certify_time: float = 0.0
+    fallbacks: list[str] = field(default_factory=list)
+
+
+# --- geometry: the blended curve ---------------------------------------------------------------
+class BlendedPath(toppra.interpolator.AbstractGeometricPath):
+    """A polyline whose corners are parabolic blends; C¹ in the path parameter ``s`` (see module doc).
+
+    Every piece is ``p(σ) = p0 + v0·σ + ½·dd·σ²`` for ``σ = s − s_start`` (lines: |v0| = 1, dd = 0).
+    ``half_lengths[k]`` is the blend size ``l`` at waypoint k (> 0 for every interior waypoint).
+    """
+
+    def __init__(self, waypoints: np.ndarray, half_lengths: np.ndarray):
+        starts, p0, v0, dd, blend_of = [], [], [], [], []
+        s = 0.0
+        units = _units(waypoints)
+        for k in range(len(waypoints) - 1):
+            a = waypoints[k] + half_lengths[k] * units[k]
+            straight = np.linalg.norm(waypoints[k + 1] - waypoints[k]) - half_lengths[k] - half_lengths[k + 1]
+            if straight > 1e-12:
+                starts.append(s), p0.append(a), v0.append(units[k]), dd.append(np.zeros_like(a)), blend_of.append(-1)
+                s += straight
+            if k + 1 < len(waypoints) - 1:
+                l_blend = half_lengths[k + 1]
+                starts.append(s), p0.append(waypoints[k + 1] - l_blend * units[k]), v0.append(units[k])
+                dd.append((units[k + 1] - units[k]) / (2.0 * l_blend)), blend_of.append(k + 1)
+                s += 2.0 * l_blend
+        self.starts = np.array(starts + [s])
+        self.p0, self.v0, self.dd = np.array(p0), np.array(v0), np.array(dd)
+        self.blend_of = np.array(blend_of)  # waypoint index of a blend piece, -1 for a line
+        self.end = waypoints[-1]
+
+    @property
+    def dof(self) -> int:
+        return self.p0.shape[1]
+
+    @property
+    def path_interval(self) -> np.ndarray:
+        return np.array([0.0, self.starts[-1]])
+
+    @property
+    def waypoints(self):
+        return self.starts, self.p0
+
+    def __call__(self, path_positions, order: int = 0) -> np.ndarray:
+        ss = np.atleast_1d(np.asarray(path_positions, float))
+        piece = np.clip(np.searchsorted(self.starts, ss, side="right") - 1, 0, len(self.p0) - 1)
+        out = self.at(ss, piece, order)
+        return out if np.ndim(path_positions) else out[0]
+
+    def at(self, ss: np.ndarray, piece: np.ndarray, order: int) -> np.ndarray:
+        """Derivative ``order`` (0–2) at path positions ``ss`` on the given pieces."""
+        sigma = (ss - self.starts[piece])[:, None]
+        if order == 0:
+            return self.p0[piece] + self.v0[piece] * sigma + 0.5 * self.dd[piece] * sigma**2
+        if order == 1:
+            return self.v0[piece] + self.dd[piece] * sigma
+        if order == 2:
+            return self.dd[piece].copy()
+        raise ValueError(f"order must be 0, 1 or 2, got {order}")
+
+    def blend_samples(self, piece: int, step: float) -> np.ndarray:
+        """Points along blend ``piece`` at most ``step`` apart (|p'| ≤ 1, so a path step bounds the joint step)."""
+        s0, s1 = self.starts[piece], self.starts[piece + 1]
+        ss = np.linspace(s0, s1, max(2, math.ceil((s1 - s0) / step) + 1))
+        return self.at(ss, np.full(len(ss), piece), 0)
+
+    def grid(self) -> tuple[np.ndarray, np.ndarray]:
+        """toppra grid points (every piece boundary included) and the piece of each grid interval."""
+        length = self.starts[-1]
+        points, pieces = [], []
+        for k in range(len(self.p0)):
+            s0, s1 = self.starts[k], self.starts[k + 1]
+            n = max(BLEND_INTERVALS if self.blend_of[k] >= 0 else 1, math.ceil(GRID_INTERVALS * (s1 - s0) / length))
+            points.append(np.linspace(s0, s1, n + 1)[:-1])
+            pieces.append(np.full(n, k))
+        return np.append(np.concatenate(points), length), np.concatenate(pieces)
+
+
+def _units(waypoints: np.ndarray) -> np.ndarray:
+    delta = np.diff(waypoints, axis=0)
+    return delta / np.linalg.norm(delta, axis=1)[:, None]
+
+
+def blend_half_length(waypoints: np.ndarray, k: int, deviation: float) -> float:
+    """Blend size ``l`` at interior waypoint k for a corner deviation ≤ ``deviation`` (0: stop there)."""
+    if deviation <= 0.0:
+        return 0.0
+    u_in, u_out = _units(waypoints[k - 1 : k + 2])
+    if np.linalg.norm(u_in + u_out) < MIN_BLEND_SPEED:
+        return 0.0
+    turn = np.linalg.norm(u_out - u_in)
+    before, after = np.linalg.norm(waypoints[k] - waypoints[k - 1]), np.linalg.norm(waypoints[k + 1] - waypoints[k])
+    # A blend may take all of a first or last segment, half of a segment it shares with another blend.
+    room = min(before if k == 1 else 0.5 * before, after if k == len(waypoints) - 2 else 0.5 * after)
+    return float(min(4.0 * deviation / turn, room))
+
+
+def corner_deviation(waypoints: np.ndarray, k: int, half_length: float) -> float:
+    """Distance of blend k's farthest point (its middle) from the corner it replaces."""
+    u_in, u_out = _units(waypoints[k - 1 : k + 2])
+    return 0.25 * half_length * float(np.linalg.norm(u_out - u_in))
+
+
+def deviation_from_path(points: np.ndarray, path: np.ndarray) -> np.ndarray:
+    """Euclidean distance of each of ``points`` from the polyline ``path`` (rad)."""
+    points, path = np.atleast_2d(points), np.atleast_2d(path)
+    if len(path) == 1:
+        return np.linalg.norm(points - path[0], axis=1)
+    a, seg = path[:-1], np.diff(path, axis=0)
+    length2 = np.maximum((seg * seg).sum(axis=1), 1e-300)
+    rel = points[:, None, :] - a[None]
+    t = np.clip((rel * seg[None]).sum(axis=2) / length2, 0.0, 1.0)
+    return np.linalg.norm(rel - t[..., None] * seg[None], axis=2).min(axis=1)
+
+
+# --- the parameterisation entry point ---------------------------------------------------------
+def parameterize(
+    path: np.ndarray,
+    joint_names: Sequence[str],
+    limits: Limits,
+    method: str = DEFAULT_METHOD,
+    *,
+    curve_free: CurveFree,
+    max_deviation: float = 0.1,
+    dt: float = 0.05,
+    max_points: int = 10_000,
+) -> tuple[Trajectory, TimingReport]:
+    """Trajectory through ``path`` (rows: group configurations) by ``method`` (module doc).
+
+    ``curve_free(Q)`` is True when every row of ``Q`` is collision-free; it re-checks blends.
+    ``max_deviation`` (rad) bounds the distance of the blended curve from each corner.
+    """
+    if method not in METHODS:
+        raise errors.InvalidRequest(f"time_parameterization must be one of {', '.join(METHODS)}, got {method!r}")
+    if not (math.isfinite(max_deviation) and max_deviation >= 0.0):
+        raise errors.InvalidRequest(f"blend deviation must be a finite number >= 0 rad, got {max_deviation}")
+    if max_points < 2:
+        raise errors.InvalidRequest(f"max_points must be >= 2, got {max_points}")
+    waypoints = _distinct(np.asarray(path, float))
+    if method == "trapezoid" or len(waypoints) < 2:
+        return _trapezoid(waypoints, joint_names, limits, dt, max_points), TimingReport("trapezoid")
+    try:
+        build = _toppra if method == "toppra" else _ruckig
+        sections, report = build(waypoints, limits, curve_free, max_deviation)
+    except _ParameterizationFailed as exc:
+        report = TimingReport("trapezoid", fallbacks=[f"{method}: {exc}"])
+        return _trapezoid(waypoints, joint_names, limits, dt, max_points), report
+    return _sample(sections, joint_names, waypoints[-1], dt, max_points), report
+
+
+def _distinct(path: np.ndarray) -> np.ndarray:
+    """``path`` without repeated or collinear interior waypoints (neither changes the curve)."""
+    if len(path) < 2:
+        return path
+    keep = np.concatenate([[True], np.linalg.norm(np.diff(path, axis=0), axis=1) > 1e-12])
+    path = path[keep]
+    return postprocess.drop_collinear(path) if len(path) > 2 else path
+
+
+def _trapezoid(waypoints, joint_names, limits: Limits, dt: float, max_points: int) -> Trajectory:
+    if len(waypoints) < 2:
+        waypoints = np.vstack([waypoints, waypoints])
+    return postprocess.time_parameterize(
+        waypoints, joint_names, limits.velocity, limits.acceleration, dt=dt, max_points=max_points
+    )
+
+
+class _ParameterizationFailed(Exception):
+    """toppra or Ruckig could not parameterise a section (numerical failure): fall back to trapezoids."""
+
+
+# --- blended corners, certified --------------------------------------------------------------
+def _certified_half_lengths(
+    waypoints: np.ndarray, max_deviation: float, curve_free: CurveFree, report: TimingReport
+) -> np.ndarray:
+    """Blend size per waypoint (0 at the ends and at stops), every blend re-checked (module doc)."""
+    half = np.zeros(len(waypoints))
+    t0 = time.monotonic()
+    for k in range(1, len(waypoints) - 1):
+        deviation = max_deviation
+        for attempt in range(BLEND_RETRIES + 1):
+            half[k] = blend_half_length(waypoints, k, deviation)
+            if half[k] == 0.0:
+                break
+            samples = _single_blend(waypoints, k, half[k]).blend_samples(1, CERTIFY_STEP)
+            report.certify_checks += len(samples)
+            if curve_free(samples):
+                break
+            report.fallbacks.append(f"blend at waypoint {k} collides at deviation {deviation:.3g} rad")
+            half[k] = 0.0
+            deviation /= BLEND_SHRINK if attempt < BLEND_RETRIES else 1.0
+    report.certify_time += time.monotonic() - t0
+    _count_corners(waypoints, half, report)
+    return half
+
+
+def _single_blend(waypoints: np.ndarray, k: int, half_length: float) -> BlendedPath:
+    """The corner k alone (pieces: line, blend, line) for checking it on its own."""
+    local = np.zeros(3)
+    local[1] = half_length
+    return BlendedPath(waypoints[k - 1 : k + 2], local)
+
+
+def _count_corners(waypoints: np.ndarray, half: np.ndarray, report: TimingReport) -> None:
+    interior = range(1, len(waypoints) - 1)
+    report.blends = sum(1 for k in interior if half[k] > 0)
+    report.stops = len(interior) - report.blends
+    report.max_deviation = max([corner_deviation(waypoints, k, half[k]) for k in interior if half[k] > 0] or [0.0])
+
+
+def _sections(waypoints: np.ndarray, half: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(waypoints, half lengths) of each stretch between stops."""
+    cuts = [0] + [k for k in range(1, len(waypoints) - 1) if half[k] == 0.0] + [len(waypoints) - 1]
+    out = []
+    for a, b in zip(cuts[:-1], cuts[1:], strict=True):
+        h = half[a : b + 1].copy()
+        h[0] = h[-1] = 0.0
+        out.append((waypoints[a : b + 1], h))
+    return out
+
+
+# --- toppra -----------------------------------------------------------------------------------
+@dataclass
+class _PathVelocity:
+    """A path-velocity profile: ṡ at grid points, constant s̈ between them."""
+
+    path: BlendedPath
+    grid: np.ndarray
+    pieces: np.ndarray  # piece of each grid interval
+    sd: np.ndarray
+
+    @property
+    def sdd(self) -> np.ndarray:
+        return (self.sd[1:] ** 2 - self.sd[:-1] ** 2) / (2.0 * np.diff(self.grid))
+
+    @property
+    def times(self) -> np.ndarray:
+        return np.concatenate([[0.0], np.cumsum(2.0 * np.diff(self.grid) / (self.sd[1:] + self.sd[:-1]))])
+
+    @property
+    def duration(self) -> float:
+        return float(self.times[-1])
+
+    def state(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Joint positions, velocities and accelerations at times ``t``."""
+        times, sdd = self.times, self.sdd
+        k = np.clip(np.searchsorted(times, t, side="right") - 1, 0, len(sdd) - 1)
+        tau = t - times[k]
+        s = np.clip(self.grid[k] + self.sd[k] * tau + 0.5 * sdd[k] * tau**2, self.grid[k], self.grid[k + 1])
+        sd = np.maximum(self.sd[k] + sdd[k] * tau, 0.0)
+        piece = self.pieces[k]
+        d1 = self.path.at(s, piece, 1)
+        acc = self.path.at(s, piece, 2) * (sd**2)[:, None] + d1 * sdd[k][:, None]
+        return self.path.at(s, piece, 0), d1 * sd[:, None], acc
+
+    def peak_ratios(self, limits: Limits) -> tuple[float, float]:
+        """Exact maxima over the whole profile of |joint velocity| / limit and |joint acceleration| / limit.
+
+        On a grid interval ``p'(s) = b + c·σ`` and ``ṡ² = x + 2·u·σ`` (σ = s − s_k), so the joint
+        acceleration ``c·ṡ² + p'·u`` is linear in σ (extremes at the ends) and the squared velocity
+        ``(b + c·σ)²·(x + 2·u·σ)`` is a cubic whose one interior extremum is at
+        ``σ* = −(c·x + u·b) / (3·u·c)``.
+        """
+        delta, u = np.diff(self.grid), self.sdd[:, None]
+        x0, x1 = (self.sd[:-1] ** 2)[:, None], (self.sd[1:] ** 2)[:, None]
+        b = self.path.at(self.grid[:-1], self.pieces, 1)
+        c = self.path.dd[self.pieces]
+        b1 = b + c * delta[:, None]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            star = -(c * x0 + u * b) / (3.0 * u * c)
+        star = np.where(np.isfinite(star), np.clip(star, 0.0, delta[:, None]), 0.0)
+        velocity2 = np.maximum.reduce([b * b * x0, b1 * b1 * x1, (b + c * star) ** 2 * (x0 + 2.0 * u * star)])
+        acceleration = np.maximum(np.abs(c * x0 + b * u), np.abs(c * x1 + b1 * u))
+        return (
+            math.sqrt(float(np.max(velocity2 / limits.velocity**2))),
+            float(np.max(acceleration / limits.acceleration)),
+        )
+
+
+def _toppra(waypoints, limits: Limits, curve_free: CurveFree, max_deviation: float):
+    report = TimingReport("toppra")
+    half = _certified_half_lengths(waypoints, max_deviation, curve_free, report)
+    return [_toppra_section(BlendedPath(w, h), limits) for w, h in _sections(waypoints, half)], report
+
+
+def _toppra_section(path: BlendedPath, limits: Limits) -> _PathVelocity:
+    grid, pieces = path.grid()
+    constraints = _constraints(limits.velocity.tobytes(), limits.acceleration.tobytes())
+    instance = toppra.algorithm.TOPPRA(constraints, path, gridpoints=grid, solver_wrapper="seidel")
+    _sdd, sd, _v = instance.compute_parameterization(0.0, 0.0)
+    if sd is None:
+        raise _ParameterizationFailed(f"toppra: {instance.problem_data.return_code}")
+    profile = _PathVelocity(path, grid, pieces, np.maximum(np.asarray(sd, float), 0.0))
+    return _within_limits(profile, limits)
+
+
+@functools.lru_cache(maxsize=16)
+def _constraints(velocity: bytes, acceleration: bytes) -> list:
+    """toppra's joint velocity and acceleration constraints, cached: building them formats the limits
+    into a description string, which costs more than the parameterisation itself."""
+    return [
+        toppra.constraint.JointVelocityConstraint(np.frombuffer(velocity)),
+        toppra.constraint.JointAccelerationConstraint(np.frombuffer(acceleration)),
+    ]
+
+
+def _within_limits(profile: _PathVelocity, limits: Limits) -> _PathVelocity:
+    """``profile`` uniformly slowed down where toppra's discretisation let a limit be exceeded."""
+    velocity_ratio, acceleration_ratio = profile.peak_ratios(limits)
+    ratio = max(velocity_ratio, math.sqrt(acceleration_ratio))
+    if ratio > 1.0:
+        profile.sd = profile.sd / (ratio * (1.0 + RATIO_TOL))
+    return profile
+
+
+# --- ruckig -----------------------------------------------------------------------------------
+@dataclass
+class _RuckigPieces:
+    """Consecutive Ruckig trajectories (each from one via state to the next), run ``time_scale`` × slower.
+
+    Ruckig rejects very long trajectories, so a slow section is computed under limits sped up by
+    ``time_scale`` (velocity ×k, acceleration ×k², jerk ×k³) and played back k times slower: the same
+    path, within the real limits.
+    """
+
+    trajectories: list
+    peak_speed: float  # the largest joint velocity limit: bounds every joint's speed
+    time_scale: float = 1.0
+
+    @property
+    def durations(self) -> np.ndarray:
+        return np.array([tr.duration for tr in self.trajectories]) * self.time_scale
+
+    @property
+    def duration(self) -> float:
+        return float(self.durations.sum())
+
+    def state(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        starts = np.concatenate([[0.0], np.cumsum(self.durations)])
+        k = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(self.trajectories) - 1)
+        local = np.minimum(t - starts[k], self.durations[k]) / self.time_scale
+        rows = [self.trajectories[i].at_time(float(ti)) for i, ti in zip(k, local, strict=True)]
+        q, qd, qdd = (np.array([row[j] for row in rows]) for j in range(3))
+        return q, qd / self.time_scale, qdd / self.time_scale**2
+
+
+def _ruckig(waypoints, limits: Limits, curve_free: CurveFree, max_deviation: float):
+    report = TimingReport("ruckig")
+    deviation = np.full(len(waypoints), max_deviation)
+    deviation[[0, -1]] = 0.0
+    t0 = time.monotonic()
+    for attempt in range(BLEND_RETRIES + 2):
+        half = np.array([blend_half_length(waypoints, k, deviation[k]) if 0 < k < len(waypoints) - 1 else 0.0
+                         for k in range(len(waypoints))])  # fmt: skip
+        sections = [_ruckig_section(BlendedPath(w, h), limits) for w, h in _sections(waypoints, half)]
+        failing = _failing_corners(sections, waypoints, half, max_deviation, curve_free, report)
+        if not failing:
+            break
+        last = attempt >= BLEND_RETRIES
+        for k in failing:
+            report.fallbacks.append(f"ruckig blend at waypoint {k} collides or deviates at {deviation[k]:.3g} rad")
+            deviation[k] = 0.0 if last else deviation[k] / BLEND_SHRINK
+    else:
+        raise _ParameterizationFailed(f"ruckig: no certified motion near waypoint(s) {failing}, even at rest there")
+    report.certify_time = time.monotonic() - t0
+    _count_corners(waypoints, half, report)
+    return [pieces for pieces, _ in sections], report
+
+
+def _ruckig_section(path: BlendedPath, limits: Limits) -> tuple[_RuckigPieces, list[int]]:
+    """Ruckig through the section's piece boundaries (see :func:`_via_speeds`); also each piece's blend waypoint."""
+    speed, toppra_duration = _via_speeds(path, limits)
+    k = max(1.0, toppra_duration / RUCKIG_DURATION)
+    positions = list(path.p0) + [path.end]
+    directions = list(path.v0) + [np.zeros(path.dof)]
+    otg = ruckig.Ruckig(path.dof)
+    trajectories = []
+    for i in range(len(path.p0)):
+        inp = ruckig.InputParameter(path.dof)
+        inp.current_position, inp.target_position = positions[i], positions[i + 1]
+        inp.current_velocity = directions[i] * speed[i] * k
+        inp.target_velocity = directions[i + 1] * speed[i + 1] * k
+        inp.current_acceleration = inp.target_acceleration = np.zeros(path.dof)
+        inp.max_velocity, inp.max_acceleration = limits.velocity * k, limits.acceleration * k**2
+        inp.max_jerk = limits.jerk * k**3
+        inp.synchronization = ruckig.Synchronization.Phase if path.blend_of[i] < 0 else ruckig.Synchronization.Time
+        trajectory = ruckig.Trajectory(path.dof)
+        try:
+            result = otg.calculate(inp, trajectory)
+        except (ValueError, ruckig.RuckigError) as exc:  # an error code the binding has no name for
+            raise _ParameterizationFailed(f"ruckig failed on piece {i}: {exc}") from exc
+        if result not in (ruckig.Result.Working, ruckig.Result.Finished):
+            raise _ParameterizationFailed(f"ruckig: {result} on piece {i}")
+        trajectories.append(trajectory)
+    return _RuckigPieces(trajectories, float(np.max(limits.velocity)), k), list(path.blend_of)
+
+
+def _via_speeds(path: BlendedPath, limits: Limits) -> tuple[np.ndarray, float]:
+    """Path speed at each piece boundary: toppra's, made reachable under the jerk limits; toppra's duration.
+
+    A straight piece between two blends is crossed at one speed (the lower of toppra's at its
+    ends: no acceleration needed); the first and last straight pieces only ask for a speed that a
+    jerk-limited start (stop) reaches within their length. Otherwise Ruckig would overshoot and
+    come back.
+    """
+    profile = _toppra_section(path, limits)
+    speed = np.interp(path.starts, profile.grid, profile.sd)
+    speed[[0, -1]] = 0.0
+    last = len(path.p0) - 1
+    for i in np.flatnonzero(path.blend_of < 0):
+        length = path.starts[i + 1] - path.starts[i]
+        if i == 0 and i < last:
+            speed[1] = min(speed[1], _reachable_speed(length, path.v0[i], limits))
+        elif i == last and i > 0:
+            speed[i] = min(speed[i], _reachable_speed(length, path.v0[i], limits))
+        elif 0 < i < last:
+            speed[i] = speed[i + 1] = min(speed[i], speed[i + 1])
+    return speed, profile.duration
+
+
+def _reachable_speed(length: float, direction: np.ndarray, limits: Limits) -> float:
+    """Highest speed along ``direction`` a jerk-limited motion from rest reaches within ``length``."""
+    moving = np.abs(direction) > 1e-12
+    a = float(np.min(limits.acceleration[moving] / np.abs(direction[moving])))
+    j = float(np.min(limits.jerk[moving] / np.abs(direction[moving])))
+    v = (length * length * j) ** (1.0 / 3.0)  # never reaches a: d(v) = v·sqrt(v/j)
+    if v > a * a / j:  # reaches a: d(v) = v²/(2a) + v·a/(2j)
+        v = 0.5 * a * (math.sqrt((a / j) ** 2 + 8.0 * length / a) - a / j)
+    return v
+
+
+def _failing_corners(sections, waypoints, half, max_deviation, curve_free: CurveFree, report) -> list[int]:
+    """Interior waypoints whose Ruckig motion leaves the path by more than allowed or collides there."""
+    failing = set()
+    for pieces, blend_of in sections:
+        for trajectory, corner in zip(pieces.trajectories, blend_of, strict=True):
+            q = _dense(trajectory, pieces.peak_speed * pieces.time_scale)
+            deviation = deviation_from_path(q, waypoints)
+            off = deviation > 1e-9
+            if not off.any():
+                continue
+            report.certify_checks += int(off.sum())
+            if deviation.max() > max_deviation + 1e-9 or not curve_free(q[off]):
+                failing.add(int(corner) if corner >= 0 else _nearest_corner(q[off], waypoints))
+    return sorted(k for k in failing if 0 < k < len(waypoints) - 1)
+
+
+def _nearest_corner(points: np.ndarray, waypoints: np.ndarray) -> int:
+    """The interior waypoint closest to ``points`` (a straight piece overshooting past its end)."""
+    if len(waypoints) < 3:
+        return 0
+    d = np.linalg.norm(waypoints[1:-1][None] - points[:, None], axis=2).min(axis=0)
+    return int(np.argmin(d)) + 1
+
+
+def _dense(trajectory, peak_speed: float) -> np.ndarray:
+    """Positions along one Ruckig trajectory at most :data:`CERTIFY_STEP` apart in every joint
+
+    (``peak_speed``: the largest joint speed it may reach, in its own time units).
+    """
+    n = max(2, math.ceil(trajectory.duration * peak_speed / CERTIFY_STEP) + 1)
+    return np.array([trajectory.at_time(t)[0] for t in np.linspace(0.0, trajectory.duration, n)])
+
+
+# --- sampling ---------------------------------------------------------------------------------
+def _sample(sections, joint_names, end: np.ndarray, dt: float, max_points: int) -> Trajectory:
+    """Concatenate the sections sampled every ``dt`` (or coarser: at most ``max_points`` points)."""
+    durations = np.array([section.duration for section in sections])
+    period = max(dt, durations.sum() / max(1, max_points - 1 - len(sections)))
+    times, pos, vel, acc = [np.zeros(1)], [], [], []
+    t0 = 0.0
+    for index, (section, duration) in enumerate(zip(sections, durations, strict=True)):
+        t = np.linspace(0.0, duration, max(1, math.ceil(duration / period)) + 1)
+        q, qd, qdd = section.state(t if index == 0 else t[1:])
+        pos.append(q), vel.append(qd), acc.append(qdd)
+        times.append(t0 + t[1:])
+        t0 += duration
+    positions, velocities = np.vstack(pos), np.vstack(vel)
+    positions[-1], velocities[-1] = end, 0.0
+    return Trajectory(list(joint_names), np.concatenate(times), positions, velocities, np.vstack(acc))
