@@ -6,8 +6,10 @@ import numpy as np
 import pytest
 
 from maru_planner.collision import CollisionChecker
+from maru_planner.collision.checker import bisection_order
 from maru_planner.paths import config_path
 from maru_planner.robot import RobotModel
+from maru_planner.robot.profiles import example_robot_data_dir
 from maru_planner.scene import Obstacle, Scene
 
 DOWN = [-1.57, 1.57, 1.57, 0, -1.57, -1.57]
@@ -97,8 +99,6 @@ def test_clearance_and_padding(robot):
 
 
 def test_bisection_order_is_a_permutation_and_any_invalid_agrees(robot):
-    from maru_planner.collision.checker import bisection_order
-
     for n in (0, 1, 2, 3, 10, 33):
         assert sorted(bisection_order(n).tolist()) == list(range(n))
     assert bisection_order(9)[:3].tolist() == [8, 0, 4]
@@ -124,8 +124,6 @@ def test_broadphase_agrees_with_pair_loop(robot, mode):
 
 
 def test_mesh_obstacle_from_yaml(robot, tmp_path):
-    from maru_planner.robot.example_robots import example_robot_data_dir
-
     stl = example_robot_data_dir() / "panda_description/meshes/collision/link0.stl"
     home = robot.named_state("home")
     hand = robot.frame_pose(home, "r_hand")[:3, 3]

@@ -1,9 +1,8 @@
-"""Goal given as hand poses → a collision-free goal configuration by IK.
+"""Goal given as frame poses → a collision-free goal configuration by IK.
 
-For Maru-1's ``upper_body`` with both hands given, the paper's scheme is used first (waist angle
-from the hands' midpoint, eq. 5–6, then each arm: ``two_hand_ik``); otherwise, or if that fails,
-damped-least-squares IK over the group's joints (``solve_ik``). Both only accept solutions the
-collision checker calls valid, seeded by the start so the goal stays close to it.
+``robot.ik.solve_ik`` tries the robot's own IK strategies first (its profile's: for Maru-1 the paper's
+two-hand scheme and closed-form arms), then damped least squares over the group's joints. Only
+solutions the collision checker calls valid are accepted, seeded by the start so the goal stays close to it.
 """
 
 from __future__ import annotations
@@ -13,12 +12,11 @@ import time
 import numpy as np
 
 from maru_planner import errors
+from maru_planner.robot.ik import solve_ik
 
 
 def solve_pose_goal(robot, checker, group: str, goal_poses: dict, start_full, indices, deadline: float) -> np.ndarray:
     """Full configuration reaching every ``goal_poses`` frame (4x4, root frame); raises NoIKSolution."""
-    from maru_planner.robot.ik import solve_ik, two_hand_ik
-
     if not isinstance(goal_poses, dict) or not goal_poses:
         raise errors.InvalidRequest("goal_poses must map frame names to 4x4 poses")
     targets = {}
@@ -28,7 +26,7 @@ def solve_pose_goal(robot, checker, group: str, goal_poses: dict, start_full, in
             raise errors.InvalidRequest(f"goal pose of frame {frame} must be a finite 4x4 matrix, got {pose.shape}")
         try:
             robot.frame_id(frame)
-        except Exception as exc:
+        except errors.InvalidRequest as exc:
             raise errors.InvalidRequest(f"goal pose names unknown frame {frame!r}") from exc
         targets[frame] = pose
 
@@ -37,16 +35,7 @@ def solve_pose_goal(robot, checker, group: str, goal_poses: dict, start_full, in
 
     if time.monotonic() >= deadline:
         raise errors.PlanningTimedOut("the time budget ran out before IK", source="ik")
-    ee = getattr(robot, "end_effectors", {})
-    right, left = ee.get("right"), ee.get("left")
-    errors_seen = []
-    if group == "upper_body" and set(targets) == {right, left}:
-        try:
-            return two_hand_ik(robot, targets[right], targets[left], start_full, deadline=deadline, is_valid=is_valid)
-        except errors.NoIKSolution as exc:
-            errors_seen.append(str(exc))
     try:
         return solve_ik(robot, targets, start_full, group, deadline=deadline, is_valid=is_valid)
     except errors.NoIKSolution as exc:
-        errors_seen.append(str(exc))
-    raise errors.NoIKSolution(f"no collision-free IK solution for {', '.join(targets)}: {'; '.join(errors_seen)}")
+        raise errors.NoIKSolution(f"no collision-free IK solution for {', '.join(targets)}: {exc}") from None

@@ -1,6 +1,5 @@
-"""Robot model layer: URDF/SRDF loading, FK/Jacobians, IK, example robots."""
+"""Robot model layer: URDF/SRDF loading, robot profiles, FK/Jacobians, IK."""
 
-from maru_planner.robot.example_robots import load_example_robot
-from maru_planner.robot.model import RobotModel
+from maru_planner.robot.model import RobotModel, load_example_robot
 
 __all__ = ["RobotModel", "load_example_robot"]

@@ -1,5 +1,8 @@
 """RobotModel: URDF + SRDF -> Pinocchio model, collision geometry, planning groups, FK.
 
+Robots known by name (Maru-1, the example-robot-data arms) load through their profile
+(``RobotModel.from_profile``, ``maru_planner/robot/profiles.py``); any other URDF through ``from_urdf``.
+
 Any URDF loads with a fixed base. Joints whose configuration is not one
 number (continuous wheels, spherical, planar...) and any joints named in
 ``locked_joints`` are locked (Pinocchio reduced model), so for every robot
@@ -15,9 +18,11 @@ import numpy as np
 import pinocchio as pin
 
 from maru_planner.errors import InvalidGroup, InvalidRequest
+from maru_planner.robot import profiles
+from maru_planner.robot.ik import IKStrategy
+from maru_planner.robot.profiles import DEFAULT_ACCELERATION_LIMIT, RobotProfile
 from maru_planner.robot.srdf import SrdfInfo, parse_srdf
 
-DEFAULT_ACCELERATION_LIMIT = 4.0  # rad/s^2 (or m/s^2): URDF has no field for it
 WORLD = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
 
@@ -33,7 +38,9 @@ class RobotModel:
         *,
         acceleration_limits: float | Sequence[float] = DEFAULT_ACCELERATION_LIMIT,
         end_effectors: Mapping[str, str] | None = None,
+        ik_strategies: Sequence[IKStrategy] = (),
     ):
+        """``ik_strategies``: robot-specific IK tried before the numeric one (``robot.ik.solve_ik``)."""
         if model.nq != model.nv:
             raise ValueError(f"{name}: nq ({model.nq}) != nv ({model.nv}); lock multi-dof joints first")
         self.name = name
@@ -54,6 +61,7 @@ class RobotModel:
         self.named_states = dict(self.srdf.group_states)
         ee = dict(end_effectors) if end_effectors is not None else dict(self.srdf.end_effectors)
         self.end_effectors = {k: v for k, v in ee.items() if model.existFrame(v)} or self._default_end_effector()
+        self.ik_strategies: tuple[IKStrategy, ...] = tuple(ik_strategies)
         self._frame_ids: dict[str, int] = {}
 
     # ------------------------------------------------------------ loading --
@@ -68,8 +76,12 @@ class RobotModel:
         locked_joints: Mapping[str, float] | None = None,
         acceleration_limits: float | Sequence[float] = DEFAULT_ACCELERATION_LIMIT,
         end_effectors: Mapping[str, str] | None = None,
+        ik_strategies: Sequence[IKStrategy] | None = None,
     ) -> RobotModel:
-        """Load any robot; ``locked_joints`` maps joint names to the value they are frozen at."""
+        """Load any robot; ``locked_joints`` maps joint names to the value they are frozen at.
+
+        ``ik_strategies`` None: those of the profile whose ``urdf_name`` is the URDF's robot name, if any.
+        """
         urdf_path = Path(urdf_path)
         if not urdf_path.is_file():
             raise FileNotFoundError(f"URDF not found: {urdf_path}")
@@ -83,6 +95,9 @@ class RobotModel:
             known = set(model.names)
             srdf.groups = {g: [j for j in js if j in known] for g, js in srdf.groups.items()}
             srdf.groups = {g: js for g, js in srdf.groups.items() if js}
+        if ik_strategies is None:
+            matching = profiles.profile_for_urdf(model.name)
+            ik_strategies = matching.ik_strategies if matching is not None else ()
         return cls(
             name or model.name,
             model,
@@ -90,20 +105,33 @@ class RobotModel:
             srdf,
             acceleration_limits=acceleration_limits,
             end_effectors=end_effectors,
+            ik_strategies=ik_strategies,
         )
+
+    @classmethod
+    def from_profile(cls, robot: str | RobotProfile) -> RobotModel:
+        """A robot of the profile table (``maru_planner/robot/profiles.py``), by name or profile."""
+        profile = profiles.profile(robot) if isinstance(robot, str) else robot
+        files = profile.files()
+        loaded = cls.from_urdf(
+            files.urdf,
+            files.srdf,
+            package_dirs=files.package_dirs,
+            name=profile.name,
+            acceleration_limits=profile.acceleration_limits,
+            end_effectors=profile.end_effectors or None,
+            ik_strategies=profile.ik_strategies,
+        )
+        if profile.groups and set(loaded.groups) == {"all"}:
+            loaded.groups = {"all": loaded.groups["all"], **profile.groups}
+        if profile.ignore_links_touching_at_rest:
+            loaded.disable_default_collisions()
+        return loaded
 
     @classmethod
     def maru1(cls) -> RobotModel:
         """The Maru-1 13-DOF upper body (urdf/maru1_upper_body.urdf + .srdf)."""
-        from maru_planner.paths import urdf_path
-        from maru_planner.robot.maru1_description import ACCELERATION_LIMIT
-
-        return cls.from_urdf(
-            urdf_path("maru1_upper_body.urdf"),
-            urdf_path("maru1_upper_body.srdf"),
-            name="maru1",
-            acceleration_limits=ACCELERATION_LIMIT,
-        )
+        return cls.from_profile("maru1")
 
     # ------------------------------------------------------------- groups --
     def _make_groups(self) -> dict[str, list[str]]:
@@ -137,12 +165,22 @@ class RobotModel:
 
         MoveIt's "Default" rule, for robots shipped without an SRDF whose
         links touch in their rest posture (e.g. TIAGo's arm mount). Returns the
-        pairs added. Build CollisionCheckers after calling this.
+        pairs added (pairs on one rigid body or parent/child are never checked anyway).
+        Build CollisionCheckers after calling this.
         """
-        from maru_planner.collision.checker import CollisionChecker
-
-        checker = CollisionChecker(self, broadphase="none")
-        pairs = checker.colliding_pairs(self.neutral() if q is None else np.asarray(q, dtype=float))
+        q = self.neutral() if q is None else np.asarray(q, dtype=float)
+        geom = self.collision_model.copy()
+        geom.addAllCollisionPairs()
+        geom_data = pin.GeometryData(geom)
+        for request in geom_data.collisionRequests:
+            request.enable_contact = False
+        pin.computeCollisions(self.model, self.model.createData(), geom, geom_data, q, False)
+        links = [self.model.frames[g.parentFrame].name for g in geom.geometryObjects]
+        pairs = []
+        for pair, result in zip(geom.collisionPairs, geom_data.collisionResults):
+            a, b = links[pair.first], links[pair.second]
+            if result.isCollision() and a != b and (a, b) not in pairs and (b, a) not in pairs:
+                pairs.append((a, b))
         self.srdf.disabled_pairs.update(frozenset(p) for p in pairs)
         return pairs
 
@@ -230,3 +268,8 @@ def _chain_joints(model: pin.Model, base_link: str, tip_link: str) -> list[str]:
         chain.append(model.names[j])
         j = model.parents[j]
     return chain[::-1]
+
+
+def load_example_robot(name: str) -> RobotModel:
+    """A robot of the profile table by name: 'panda', 'ur5', 'tiago', 'talos' (or 'maru1')."""
+    return RobotModel.from_profile(name)
