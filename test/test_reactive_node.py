@@ -4,7 +4,10 @@
 closed-loop tests (test_reactive_replay.py) use it too. It sends inputs
 lock-step (the next scan goes out once the last one's Twist is back), and
 the node holds each scan until odometry of the scan's time has arrived, so
-a scan is always paired with the odometry sent with it.
+a scan is always paired with the odometry sent with it. For a node on sim
+time (``use_sim_time``) it publishes ``/clock`` before each step, as
+``ros2 bag play --clock`` does; DDS delivers the three in the order sent, and
+the node's clock subscription is served before its others.
 """
 
 from __future__ import annotations
@@ -23,7 +26,7 @@ from maru_planner.paths import config_path
 pytestmark = pytest.mark.ros
 
 NODE_MODULE = "maru_planner.ros.reactive_node"
-NODE_KEY = "/**/reactive_node"  # the params file applies to reactive_node in any namespace
+NODE_KEY = "/**"  # the params file applies to reactive_node in any namespace
 REPO_ROOT = Path(__file__).resolve().parent.parent
 
 
@@ -43,10 +46,13 @@ def shipped_params() -> dict:
 class ReactiveClient:
     """Publishers for the node's inputs and recorders of its outputs (one namespace)."""
 
-    def __init__(self, spinning, namespace: str = "", process=None):
+    def __init__(self, spinning, namespace: str = "", process=None, sim_time: bool = True):
+        """``sim_time``: publish ``<namespace>/clock`` before each step (start the node with
+        ``use_sim_time`` and, in a namespace, ``-r /clock:=<namespace>/clock``)."""
         from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
         from nav_msgs.msg import Odometry, Path
         from rclpy.qos import QoSProfile, ReliabilityPolicy
+        from rosgraph_msgs.msg import Clock
         from sensor_msgs.msg import LaserScan
         from trajectory_msgs.msg import JointTrajectory
         from visualization_msgs.msg import MarkerArray
@@ -63,6 +69,7 @@ class ReactiveClient:
         self.markers: list = []
         # Created in this order on purpose: discovery announces endpoints in creation order, so once the
         # node has matched the last writer (scan) and the last reader (cmd_vel_stamped), it has the others.
+        self.clock_pub = node.create_publisher(Clock, f"{namespace}/clock", reliable) if sim_time else None
         self.odom_pub = node.create_publisher(Odometry, f"{namespace}/odom", reliable)
         self.plan_pub = node.create_publisher(Path, f"{namespace}/plan", reliable)
         self.goal_pub = node.create_publisher(PoseStamped, f"{namespace}/goal_pose", reliable)
@@ -90,7 +97,7 @@ class ReactiveClient:
             self.stamped[stamp_to_ns(msg.header.stamp)] = msg.twist
 
     def wait_connected(self, timeout: float = 90.0) -> None:
-        pubs = (self.scan_pub, self.odom_pub, self.plan_pub, self.goal_pub)
+        pubs = (self.scan_pub, self.odom_pub, self.plan_pub, self.goal_pub, *filter(None, [self.clock_pub]))
         ok = self.spinning.wait_for(lambda: all(p.get_subscription_count() > 0 for p in pubs), timeout=timeout)
         assert ok, "reactive_node did not subscribe to scan, odom, plan and goal_pose"
         subs = self._subscriptions
@@ -138,12 +145,23 @@ class ReactiveClient:
         with self._lock:
             return len(self.twists)
 
-    def step(self, odom, scan, timeout: float = 60.0):
-        """Send odometry and a scan of the same time; return the command (Twist) that answers the scan."""
+    def publish_clock(self, stamp_ns: int) -> None:
+        from rosgraph_msgs.msg import Clock
+
+        from maru_planner.ros.reactive_conversions import ns_to_stamp
+
+        self.clock_pub.publish(Clock(clock=ns_to_stamp(stamp_ns)))
+
+    def step(self, odom, scan, timeout: float = 60.0, clock_ns: int | None = None):
+        """Send the clock (sim time: ``clock_ns``, else the newer of the two stamps), odometry and a scan;
+        return the command (Twist) that answers the scan."""
         from maru_planner.ros.reactive_conversions import stamp_to_ns
 
         stamp = stamp_to_ns(scan.header.stamp)
         assert stamp not in self.stamped, "scan stamps must be unique within a test"
+        if self.clock_pub is not None:
+            newest = max(stamp, stamp_to_ns(odom.header.stamp) if odom is not None else stamp)
+            self.publish_clock(newest if clock_ns is None else clock_ns)
         if odom is not None:
             self.odom_pub.publish(odom)
         self.scan_pub.publish(scan)
@@ -258,23 +276,26 @@ def test_throttled_warnings_count_what_they_suppress():
         def warning(self, text):
             self.lines.append(text)
 
-    logger = Logger()
-    warnings = ThrottledWarnings(logger, period_s=3600.0)
+        def error(self, text):
+            self.lines.append("E " + text)
+
+    logger, now = Logger(), [0.0]
+    warnings = ThrottledWarnings(logger, period_s=3600.0, clock=lambda: now[0])
     for _ in range(5):
         warnings.warn("scan", "bad scan")
     warnings.warn("other", "other problem")
-    assert logger.lines == ["bad scan", "other problem"]
-    warnings._last["scan"] -= 7200.0
+    warnings.error("boom", "callback failed")
+    assert logger.lines == ["bad scan", "other problem", "E callback failed"]
+    now[0] = 7200.0
     warnings.warn("scan", "bad scan")
     assert logger.lines[-1] == "bad scan (4 more since last warning)"
 
 
 def test_shipped_config_declares_only_known_parameters():
-    from maru_planner.reactive import StripParams
-    from maru_planner.ros.reactive_node import NODE_PARAMETERS, strip_params_from_config
+    from maru_planner.ros.reactive_node import NODE_SPECS, ROS_PARAMETERS, STRIP_SPECS, strip_params_from_config
 
     params = shipped_params()
-    known = {f for f in StripParams.__dataclass_fields__} | set(NODE_PARAMETERS)
+    known = set(STRIP_SPECS) | set(NODE_SPECS) | set(ROS_PARAMETERS)
     assert set(params) <= known, f"unknown keys in config/reactive.yaml: {set(params) - known}"
     strip = strip_params_from_config(config_path("reactive.yaml"))
     assert (strip.k_r, strip.k_c) == (0.5, 0.3)
@@ -324,7 +345,8 @@ OBSTACLE = (1.6, 0.25, 0.3)  # a post a little left of the straight line to the 
 @pytest.fixture(scope="module")
 def reactive_node(node_process, tmp_path_factory):
     overrides = reactive_params_file(
-        tmp_path_factory.mktemp("reactive_params"), scan_reliability="reliable", status_period=0.5
+        tmp_path_factory.mktemp("reactive_params"), scan_reliability="reliable", status_period=0.5,
+        use_sim_time=True, scan_timeout=600.0,  # lock-step on a loaded machine: no watchdog stop between steps
     )
     args = ["--ros-args", "--params-file", str(config_path("reactive.yaml")), "--params-file", str(overrides)]
     return node_process(NODE_MODULE, args)
@@ -408,29 +430,36 @@ def test_status_counts_match_what_was_sent(client, reactive_node):
     assert client.plain_twists_end_with(answers), "cmd_vel carries the same commands, one per valid scan"
 
 
-def test_message_time_jumping_back_restarts_the_clock(client, reactive_node):
-    """A bag played in a loop starts over: fresh scans after the jump are not stale."""
+def test_sim_time_jumping_back_restarts_the_clock(client, reactive_node):
+    """A bag played in a loop starts over: /clock goes back, and fresh scans after the jump are not stale."""
     assert client.step(_odom((0.0, 0.0, 0.0), 3.2), synthetic_scan(3.2, [OBSTACLE])).linear.x > 0.0
     again = client.step(_odom((0.0, 0.0, 0.0), 1.25), synthetic_scan(1.25, [OBSTACLE]))
     assert again.linear.x > 0.0
     assert "time jumped back" in reactive_node.log()
 
 
-# ---------------------------------------------------------------- clock mode, bad parameters, launch file
-def test_clock_mode_watchdog_stops_the_base_when_scans_stop(node_process, rclpy_session, tmp_path):
+# ---------------------------------------------------------------- watchdog, bad parameters, launch file
+@pytest.mark.parametrize("sim_time", [False, True], ids=["wall_time", "sim_time"])
+def test_wall_clock_watchdog_stops_the_base_when_scans_stop(node_process, rclpy_session, tmp_path, sim_time):
+    """In both clock modes: no valid scan for scan_timeout s of wall time -> one zero Twist, without a scan.
+
+    On sim time the /clock stops with the scans (a paused bag), so only a wall-clock watchdog notices.
+    """
     from conftest import SpinningNode
 
     from maru_planner.ros import reactive_conversions as conv
 
-    params = reactive_params_file(tmp_path, scan_reliability="reliable", use_message_stamps=False,
-                                  stale_scan_timeout=3.0)  # node clock: room for a loaded machine's delays
-    process = node_process(NODE_MODULE, ["--ros-args", "-r", "__ns:=/clock_mode", "--params-file", str(params)])
-    spinning = SpinningNode("clock_mode_client")
+    ns = f"/watchdog_{'sim' if sim_time else 'wall'}"
+    params = reactive_params_file(tmp_path, scan_reliability="reliable", use_sim_time=sim_time, scan_timeout=3.0,
+                                  stale_scan_timeout=3.0)  # room for a loaded machine's delays
+    process = node_process(NODE_MODULE, ["--ros-args", "-r", f"__ns:={ns}", "-r", f"/clock:={ns}/clock",
+                                         "--params-file", str(params)])
+    spinning = SpinningNode(f"watchdog_client_{ns[10:]}")
     try:
-        client = ReactiveClient(spinning, namespace="/clock_mode", process=process)
+        client = ReactiveClient(spinning, namespace=ns, process=process, sim_time=sim_time)
         client.wait_connected()
         client.send_and_confirm(client.goal_pub, conv.pose_stamped_msg((4.0, 0.0, 0.0), "odom", 0.0), process, "goal (")
-        now = spinning.node.get_clock().now().nanoseconds / 1e9
+        now = 100.0 if sim_time else spinning.node.get_clock().now().nanoseconds / 1e9
         moving = client.step(_odom((0.0, 0.0, 0.0), now), synthetic_scan(now, [OBSTACLE]))
         assert moving.linear.x > 0.0, "a fresh scan on the node clock gets the base moving"
         assert client.plain_twists_end_with([moving])
@@ -441,8 +470,10 @@ def test_clock_mode_watchdog_stops_the_base_when_scans_stop(node_process, rclpy_
         assert (last.linear.x, last.angular.z) == (0.0, 0.0)
         assert "no scan for" in process.log()
         old = now - 10.0
-        stale = client.step(_odom((0.0, 0.0, 0.0), old), synthetic_scan(old, [OBSTACLE]))
+        stale = client.step(_odom((0.0, 0.0, 0.0), old), synthetic_scan(old, [OBSTACLE]),
+                            clock_ns=round((now + 0.1) * 1e9))
         assert (stale.linear.x, stale.angular.z) == (0.0, 0.0), "a scan 10 s behind the node clock is stale"
+        assert process.alive()
     finally:
         spinning.destroy()
 
@@ -450,13 +481,16 @@ def test_clock_mode_watchdog_stops_the_base_when_scans_stop(node_process, rclpy_
 @pytest.mark.parametrize(
     ("override", "message"),
     [
-        ({"strip": "elastic"}, "strip must be 'modified' or 'plain'"),
-        ({"k_r": "strong"}, "k_r"),
-        ({"stale_scan_timeout": -1.0}, "stale_scan_timeout must be a positive"),
-        ({"scan_reliability": "sometimes"}, "scan_reliability must be"),
+        ({"strip": "elastic"}, "'strip'"),
+        ({"k_r": "strong"}, "'k_r'"),
+        ({"d_safe": 1}, "'d_safe' must be a double"),
+        ({"stale_scan_timeout": -1.0}, "'stale_scan_timeout'"),
+        ({"scan_reliability": "sometimes"}, "'scan_reliability'"),
+        ({"num_vias": 2}, "'num_vias'"),
+        ({"beam_window": [50, 10]}, "beam_window must be"),
     ],
 )
-def test_bad_parameters_stop_the_node_with_a_clear_error(tmp_path, override, message):
+def test_bad_parameters_stop_the_node_with_one_line(tmp_path, override, message):
     import subprocess
     import sys
 
@@ -465,8 +499,24 @@ def test_bad_parameters_stop_the_node_with_a_clear_error(tmp_path, override, mes
         [sys.executable, "-m", NODE_MODULE, "--ros-args", "--params-file", str(params)],
         capture_output=True, text=True, timeout=120, cwd=REPO_ROOT,
     )
-    assert result.returncode != 0
-    assert message in result.stderr + result.stdout
+    assert result.returncode == 2
+    lines = (result.stderr + result.stdout).strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in lines[0], lines
+    assert lines[0].startswith("reactive_node: bad parameters:") and message in lines[0], lines[0]
+
+
+def test_params_file_that_is_not_yaml_stops_the_node_without_a_traceback(tmp_path):
+    import subprocess
+    import sys
+
+    params = tmp_path / "broken.yaml"
+    params.write_text("/**:\n  ros__parameters:\n    k_r: [unclosed\n")
+    result = subprocess.run(
+        [sys.executable, "-m", NODE_MODULE, "--ros-args", "--params-file", str(params)],
+        capture_output=True, text=True, timeout=120, cwd=REPO_ROOT,
+    )
+    assert result.returncode == 2 and "Traceback" not in result.stderr
+    assert "reactive_node: cannot start: " in result.stderr
 
 
 def test_launch_file_starts_the_node_with_the_shipped_config(monkeypatch):

@@ -5,6 +5,8 @@ start (their ``/cmd_vel`` is the core controller's answer to the same
 messages, so the node must reproduce it exactly) and the committed ones under
 ``test/data/`` (replayed twice for determinism). Every replay gets its own
 node process in its own namespace, so each starts from a fresh controller.
+The node runs on sim time: the replay publishes ``/clock`` (remapped into the
+namespace) from the bag's receive times, as ``ros2 bag play --clock`` would.
 """
 
 from __future__ import annotations
@@ -65,9 +67,10 @@ class Replay:
 
 def _start_node(node_process, tmp_path: Path):
     ns = f"/replay{next(_namespaces)}"
-    params = reactive_params_file(tmp_path, scan_reliability="reliable", status_period=1.0)
-    args = ["--ros-args", "-r", f"__ns:={ns}", "--params-file", str(config_path("reactive.yaml")),
-            "--params-file", str(params)]
+    params = reactive_params_file(tmp_path, scan_reliability="reliable", status_period=1.0, use_sim_time=True,
+                                  scan_timeout=600.0)  # lock-step on a loaded machine: no watchdog stop between steps
+    args = ["--ros-args", "-r", f"__ns:={ns}", "-r", f"/clock:={ns}/clock",
+            "--params-file", str(config_path("reactive.yaml")), "--params-file", str(params)]
     return ns, node_process(NODE_MODULE, args)
 
 
@@ -97,7 +100,7 @@ def replay_bag(bag: Path, node_process, spinning_factory, tmp_path: Path, inject
         elif record.topic == "/scan":
             if inject_every and len(result.scans) % inject_every == 0:
                 client.scan_pub.publish(_malformed_scans(conv.stamp_to_s(msg.header.stamp))[next(bad)])
-            client.step(odom, msg)
+            client.step(odom, msg, clock_ns=record.timestamp_ns)
             result.scans.append(msg)
     assert spinning.wait_for(
         lambda: len(client.strips) >= len(result.scans) and len(client.arm) >= len(result.scans), timeout=60

@@ -8,17 +8,24 @@ listens, markers on ``~/markers``. ``~/cmd_vel_stamped`` (TwistStamped) repeats
 every command stamped with the time of the scan it answers. Names are relative: ``/scan`` etc. in the
 root namespace, ``/robot1/scan`` with ``-r __ns:=/robot1``.
 
-Each scan is paired with the odometry of its time: it waits (at most until
-the next scan arrives) for an odometry message stamped at or after it.
+Time is ROS time: the system clock, or ``/clock`` with ``use_sim_time`` (a bag
+played with ``ros2 bag play --clock``, a simulator), so replaying a bag gives
+the same commands every time. Each scan is paired with the odometry of its
+time: it waits (at most until the next scan arrives) for an odometry message
+stamped at or after it.
 
-Malformed scans are dropped with a throttled warning; a scan older than
-``stale_scan_timeout`` stops the base (zero Twist). With
-``use_message_stamps`` (default) every time the node uses comes from message
-stamps, so replaying the same bag gives the same commands; otherwise the node
-clock is used and a watchdog also stops the base when scans stop arriving.
+No message can stop the node: malformed scans, goals, plans and odometry are
+dropped with a throttled warning and counted, scans or odometry stamped more
+than ``future_tolerance`` ahead of the clock are dropped (never taken as
+"now"), a scan older than ``stale_scan_timeout`` stops the base (zero Twist),
+and a watchdog on the wall clock stops the base when no valid scan arrived
+for ``scan_timeout`` seconds, in both clock modes. An exception in a callback
+is logged on one line and stops the base; the node keeps serving.
 
-Parameters: ``config/reactive.yaml``; the elastic-strip ones are the fields of
-:class:`maru_planner.reactive.StripParams` and are declared from it.
+Parameters: ``config/reactive.yaml``. Every field of :class:`StripParams` and
+of :class:`NodeSettings` is declared with its description and range; what
+changes at run time applies from the next scan, ``scan_reliability`` is
+read-only.
 """
 
 from __future__ import annotations
@@ -27,88 +34,111 @@ import dataclasses
 import math
 import sys
 import time
-import traceback
 from collections import deque
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 import rclpy
 import yaml
 from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
 from nav_msgs.msg import Odometry, Path
-from rcl_interfaces.msg import ParameterDescriptor
-from rclpy.exceptions import ParameterException
+from rclpy.clock import Clock, ClockType, JumpThreshold, TimeJump
+from rclpy.duration import Duration
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.timer import Timer
 from sensor_msgs.msg import LaserScan
 from trajectory_msgs.msg import JointTrajectory
 from visualization_msgs.msg import MarkerArray
 
-from maru_planner.errors import MaruError
-from maru_planner.reactive import ElasticStripController, ScanError, StripParams
+from maru_planner.errors import InvalidRequest, MaruError
+from maru_planner.params import dataclass_params, param
+from maru_planner.reactive import ElasticStripController, LaserScanData, ScanError, StripParams
 from maru_planner.reactive.description import arm_joint_names
+from maru_planner.ros import parameters
 from maru_planner.ros import reactive_conversions as conv
 from maru_planner.ros.env import configure_loopback_dds
 
-NODE_PARAMETERS = {
-    "use_message_stamps": True,
-    "stale_scan_timeout": 0.5,
-    "odom_sync": True,
-    "odom_frame": "odom",
-    "base_frame": "base_link",
-    "scan_reliability": "best_effort",
-    "publish_arm": True,
-    "warn_throttle_period": 2.0,
-    "goal_path_tolerance": 0.25,
-    "status_period": 30.0,
-}
+
+@dataclasses.dataclass(frozen=True)
+class NodeSettings:
+    """reactive_node's own parameters (the controller's are :class:`StripParams`)."""
+
+    stale_scan_timeout: float = param(0.5, "s: a scan older than this on the node's clock stops the base",
+                                      lower=0.01, upper=60.0)
+    scan_timeout: float = param(0.5, "s of wall time without a valid scan before the watchdog stops the base",
+                                lower=0.05, upper=3600.0)
+    future_tolerance: float = param(0.5, "s: a scan or odometry stamped further ahead of the node's clock is dropped",
+                                    lower=0.0, upper=60.0)
+    odom_sync: bool = param(True, "hold a scan until odometry stamped at or after it arrives (at most one scan)")
+    odom_frame: str = param("odom", "frame of the strip and markers")
+    base_frame: str = param("base_link", "frame of the stamped command")
+    scan_reliability: str = param("best_effort", "QoS of the scan subscription (reliable for lock-step replays)",
+                                  choices=("best_effort", "reliable"), read_only=True)
+    publish_arm: bool = param(True, "publish ~/arm_command")
+    warn_throttle_period: float = param(2.0, "s between repeats of one kind of warning", lower=0.0, upper=3600.0)
+    goal_path_tolerance: float = param(0.25, "m: a /plan ending this close to a new /goal_pose stays the initial path",
+                                       lower=0.0, upper=100.0)
+    status_period: float = param(30.0, "s of wall time between status lines in the log (0 = off)",
+                                 lower=0.0, upper=86400.0)
+
+
+NODE_SPECS = dataclass_params(NodeSettings)
+STRIP_SPECS = dataclass_params(StripParams)
+ROS_PARAMETERS = ("use_sim_time",)  # declared by rclpy itself
 
 
 class ThrottledWarnings:
-    """Warn at most once per period per key, saying how many were suppressed meanwhile."""
+    """Log at most once per period per key, saying how many were suppressed meanwhile."""
 
-    def __init__(self, logger, period_s: float):
-        self._logger, self._period = logger, float(period_s)
+    def __init__(self, logger, period_s: float, clock: Callable[[], float] = time.monotonic):
+        self._logger, self.period, self._clock = logger, float(period_s), clock
         self._last: dict[str, float] = {}
         self._suppressed: dict[str, int] = {}
 
     def warn(self, key: str, message: str) -> None:
-        now = time.monotonic()
-        if now - self._last.get(key, -math.inf) < self._period:
+        self._emit(key, message, self._logger.warning)
+
+    def error(self, key: str, message: str) -> None:
+        self._emit(key, message, self._logger.error)
+
+    def _emit(self, key: str, message: str, log: Callable[[str], Any]) -> None:
+        now = self._clock()
+        if now - self._last.get(key, -math.inf) < self.period:
             self._suppressed[key] = self._suppressed.get(key, 0) + 1
             return
         skipped = self._suppressed.pop(key, 0)
         suffix = f" ({skipped} more since last warning)" if skipped else ""
         self._last[key] = now
-        self._logger.warning(message + suffix)
-
-
-def _strip_param_defaults() -> dict[str, object]:
-    """ROS-parameter defaults for every StripParams field (tuples become lists)."""
-    defaults = {}
-    for f in dataclasses.fields(StripParams):
-        value = f.default if f.default is not dataclasses.MISSING else f.default_factory()  # type: ignore[misc]
-        defaults[f.name] = list(value) if isinstance(value, tuple) else value
-    return defaults
+        log(message + suffix)
 
 
 def strip_params_from_config(path) -> StripParams:
-    """StripParams from a ``--params-file`` YAML (section ``/**/reactive_node``), defaults elsewhere.
+    """StripParams from a ``--params-file`` YAML (section ``/**``, ``/**/reactive_node`` ...), defaults elsewhere.
 
     Lets tools outside ROS (the bag recorder, benchmarks) run the controller
     exactly as the node configured from the same file would.
     """
     with open(path) as stream:
         params = node_section(yaml.safe_load(stream) or {})
-    return StripParams.from_dict({k: v for k, v in params.items() if k not in NODE_PARAMETERS})
+    node_only = set(NODE_SPECS) | set(ROS_PARAMETERS)
+    return StripParams.from_dict({k: v for k, v in params.items() if k not in node_only})
 
 
 def node_section(params_file: dict) -> dict:
-    """The ``ros__parameters`` of reactive_node in a parsed params file (``reactive_node`` or ``/**/reactive_node``)."""
+    """The ``ros__parameters`` of reactive_node in a parsed params file (``/**``, ``reactive_node`` ...)."""
     for key in ("/**/reactive_node", "reactive_node", "/reactive_node", "/**"):
         if key in params_file:
             return params_file[key].get("ros__parameters", {})
     return {}
+
+
+def one_line(exc: BaseException, limit: int = 300) -> str:
+    """An exception as one log line of at most ``limit`` characters."""
+    text = " ".join(str(exc).split()) or type(exc).__name__
+    return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 class ReactiveNode(Node):
@@ -116,117 +146,160 @@ class ReactiveNode(Node):
 
     def __init__(self, **kwargs):
         super().__init__("reactive_node", **kwargs)
-        self._strip_defaults = _strip_param_defaults()
-        for name, default in {**self._strip_defaults, **NODE_PARAMETERS}.items():
-            if default is None:  # optional StripParams fields (e.g. a beam window): any type, unset = None
-                self.declare_parameter(name, None, ParameterDescriptor(dynamic_typing=True))
-            else:
-                self.declare_parameter(name, default)
-        self.params = self._read_strip_params()
-        self.controller = ElasticStripController(self.params)
-        self.warnings = ThrottledWarnings(self.get_logger(), self._param("warn_throttle_period"))
-        self.use_stamps = bool(self._param("use_message_stamps"))
-        self.stale_timeout = float(self._param("stale_scan_timeout"))
-        if not math.isfinite(self.stale_timeout) or self.stale_timeout <= 0.0:
-            raise ValueError(f"stale_scan_timeout must be a positive number of seconds, got {self.stale_timeout}")
-        self.odom_frame = str(self._param("odom_frame"))
-        self.base_frame = str(self._param("base_frame"))
+        values = parameters.declare_parameters(self, {**STRIP_SPECS, **NODE_SPECS})
+        self.settings = NodeSettings(**{name: values[name] for name in NODE_SPECS})
+        self.controller = ElasticStripController(StripParams(**{name: values[name] for name in STRIP_SPECS}))
+        self.warnings = ThrottledWarnings(self.get_logger(), self.settings.warn_throttle_period)
 
         self.pose: conv.Pose2D | None = None
         self.odom_stamp: float | None = None
-        self.pending = None  # (LaserScanData, header stamp) waiting for its odometry
-        self.odom_sync = bool(self._param("odom_sync"))
-        self.newest_stamp = -math.inf  # newest message stamp seen (seconds), the clock in stamp mode
+        self.pending: LaserScanData | None = None  # the scan waiting for its odometry
         self.path: np.ndarray | None = None
         self.last_arm_stamp: float | None = None
-        self.last_scan_received = time.monotonic()
+        self.last_valid_scan = time.monotonic()
         self.base_stopped = True
-        self.counts = {"scans": 0, "updates": 0, "dropped": 0, "stale": 0}
+        self.counts = dict.fromkeys(
+            ("scans", "updates", "dropped", "stale", "future", "bad_goals", "bad_plans", "bad_odometry", "errors"), 0
+        )
         self.update_ms: deque[float] = deque(maxlen=200)  # recent controller update times, for the status line
         self._goal_logged = False
+        self.arm_names = self._arm_names()
+        self._watchdog: Timer | None = None
+        self._status_timer: Timer | None = None
 
-        self._setup_arm()
         self._setup_topics()
+        self._setup_timers()
+        self._jump_handle = self.get_clock().create_jump_callback(
+            JumpThreshold(min_forward=None, min_backward=Duration(nanoseconds=-1), on_clock_change=False),
+            post_callback=self.on_time_jump,
+        )
+        parameters.add_on_set_parameters_callback(self, {**STRIP_SPECS, **NODE_SPECS}, self.apply_parameters)
 
     # ------------------------------------------------------------ set-up
-    def _param(self, name: str):
-        return self.get_parameter(name).value
-
-    def _read_strip_params(self) -> StripParams:
-        try:
-            values = {name: self._param(name) for name in self._strip_defaults}
-            return StripParams.from_dict({k: tuple(v) if isinstance(v, list) else v for k, v in values.items()})
-        except (TypeError, ValueError) as exc:
-            raise ValueError(f"invalid reactive_node parameters: {exc}") from exc
-
-    def _setup_arm(self) -> None:
-        self.arm_names: list[str] = []
-        if self._param("publish_arm"):
-            self.arm_names = arm_joint_names("left") + arm_joint_names("right")
+    def _arm_names(self) -> list[str]:
+        return arm_joint_names("left") + arm_joint_names("right") if self.settings.publish_arm else []
 
     def _setup_topics(self) -> None:
-        reliability = str(self._param("scan_reliability"))
-        if reliability not in ("best_effort", "reliable"):
-            raise ValueError(f"scan_reliability must be 'best_effort' or 'reliable', not {reliability!r}")
+        reliable = self.settings.scan_reliability == "reliable"
         scan_qos = QoSProfile(
-            depth=5,
-            reliability=ReliabilityPolicy.RELIABLE if reliability == "reliable" else ReliabilityPolicy.BEST_EFFORT,
+            depth=5, reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT
         )
         # Creation order matters: when several messages are ready at once the executor takes them in
         # this order, so a goal or plan that arrived with a scan is applied before that scan.
-        self.odom_topic = self.create_subscription(Odometry, "odom", self.on_odom, 10).topic_name
-        self.create_subscription(PoseStamped, "goal_pose", self.on_goal, 10)
-        self.create_subscription(Path, "plan", self.on_plan, 10)
-        self.scan_topic = self.create_subscription(LaserScan, "scan", self.on_scan, scan_qos).topic_name
+        self.odom_topic = self.create_subscription(Odometry, "odom", self._guarded("odom", self.on_odom), 10).topic_name
+        self.create_subscription(PoseStamped, "goal_pose", self._guarded("goal_pose", self.on_goal), 10)
+        self.create_subscription(Path, "plan", self._guarded("plan", self.on_plan), 10)
+        self.scan_topic = self.create_subscription(LaserScan, "scan", self._guarded("scan", self.on_scan),
+                                                   scan_qos).topic_name
         self.cmd_pub = self.create_publisher(Twist, "cmd_vel", 10)
         self.cmd_stamped_pub = self.create_publisher(TwistStamped, "~/cmd_vel_stamped", 10)
         self.strip_pub = self.create_publisher(Path, "~/strip", 10)
         self.arm_pub = self.create_publisher(JointTrajectory, "~/arm_command", 10)
         self.marker_pub = self.create_publisher(MarkerArray, "~/markers", 10)
-        if not self.use_stamps:
-            self.create_timer(max(self.stale_timeout / 2.0, 0.01), self.on_watchdog)
-        if float(self._param("status_period")) > 0.0:
-            self.create_timer(float(self._param("status_period")), self.log_status)
+
+    def _setup_timers(self) -> None:
+        """The watchdog and the status line run on the wall clock, whatever clock the node uses."""
+        for timer in (self._watchdog, self._status_timer):
+            if timer is not None:
+                self.destroy_timer(timer)
+        wall = Clock(clock_type=ClockType.STEADY_TIME)
+        period = max(self.settings.scan_timeout / 4.0, 0.01)
+        self._watchdog = self.create_timer(period, self._guarded("watchdog", self.on_watchdog), clock=wall)
+        self._status_timer = None
+        if self.settings.status_period > 0.0:
+            self._status_timer = self.create_timer(self.settings.status_period, self.log_status, clock=wall)
+
+    def apply_parameters(self, changes: dict[str, Any]) -> None:
+        """A run-time parameter change: checked as a whole, then applied from the next scan on.
+
+        InvalidRequest (the reason the caller sees) when the new values do not fit together.
+        """
+        strip_changes = {k: v for k, v in changes.items() if k in STRIP_SPECS}
+        node_changes = {k: v for k, v in changes.items() if k in NODE_SPECS}
+        strip_params = dataclasses.replace(self.controller.params, **strip_changes) if strip_changes else None
+        previous, self.settings = self.settings, dataclasses.replace(self.settings, **node_changes)
+        if strip_params is not None:
+            self.controller.set_params(strip_params)
+        self.warnings.period = self.settings.warn_throttle_period
+        self.arm_names = self._arm_names()
+        if (previous.scan_timeout, previous.status_period) != (self.settings.scan_timeout, self.settings.status_period):
+            self._setup_timers()
+        self.get_logger().info("parameters set: " + ", ".join(f"{k}={v!r}" for k, v in changes.items()))
+
+    def _guarded(self, name: str, callback: Callable[..., None]) -> Callable[..., None]:
+        """``callback`` with an error boundary: an exception is counted, logged on one line and stops the base."""
+
+        def guarded(*args) -> None:
+            try:
+                callback(*args)
+            except Exception as exc:  # noqa: BLE001 - no message may kill the node; it keeps serving
+                self.counts["errors"] += 1
+                self.warnings.error(f"error:{name}", f"{name} callback failed, stopping the base: "
+                                                     f"{type(exc).__name__}: {one_line(exc)}")
+                self._stop_base()
+
+        return guarded
 
     def log_status(self) -> None:
         self.get_logger().info(self.status())
 
     def status(self) -> str:
-        text = "scans {scans}, updates {updates}, dropped {dropped}, stale {stale}".format(**self.counts)
+        c = self.counts
+        parts = ["scans {scans}, updates {updates}, dropped {dropped}, stale {stale}".format(**c)]
         if self.update_ms:
             ms = np.array(self.update_ms)
-            text += f"; update median {np.median(ms):.2f} ms, max {ms.max():.2f} ms (last {len(ms)})"
-        return text
+            parts.append(f"update median {np.median(ms):.2f} ms, max {ms.max():.2f} ms (last {len(ms)})")
+        parts.append("future {future}, rejected goals {bad_goals}, plans {bad_plans}, odometry {bad_odometry}, "
+                     "callback errors {errors}".format(**c))
+        return "; ".join(parts)
 
-    # ------------------------------------------------------------ inputs
+    # ------------------------------------------------------------ time
     def _now(self) -> float:
-        if self.use_stamps:
-            return self.newest_stamp
         return self.get_clock().now().nanoseconds / conv.NS_PER_S
 
-    def _see_stamp(self, stamp) -> None:
-        self.newest_stamp = max(self.newest_stamp, conv.stamp_to_s(stamp))
+    def _in_time(self, stamp: float, what: str) -> bool:
+        """False (counted, warned) for a message stamped more than future_tolerance ahead of the clock."""
+        now = self._now()
+        ahead = stamp - now
+        if ahead <= self.settings.future_tolerance:
+            return True
+        self.counts["future"] += 1
+        hint = " (no /clock received yet?)" if now == 0.0 else ""
+        self.warnings.warn(f"future:{what}", f"dropped {what} stamped {ahead:.3f} s ahead of the clock "
+                                             f"(future_tolerance {self.settings.future_tolerance} s){hint}")
+        return False
 
+    def on_time_jump(self, jump: TimeJump) -> None:
+        """The clock went back (``ros2 bag play --loop`` starting over, a simulator reset): drop the held scan."""
+        self.pending = None
+        self.last_arm_stamp = None
+        self.get_logger().warning(f"time jumped back {-jump.delta.nanoseconds / conv.NS_PER_S:.2f} s")
+
+    # ------------------------------------------------------------ inputs
     def on_odom(self, msg: Odometry) -> None:
+        try:
+            pose = conv.pose_from_odom(msg)
+        except InvalidRequest as exc:
+            self.counts["bad_odometry"] += 1
+            self.warnings.warn("odom_input", f"dropped odometry: {exc}")
+            return
+        stamp = conv.stamp_to_s(msg.header.stamp)
+        if not self._in_time(stamp, "odometry"):
+            return
         if self.pose is None:
             self.get_logger().info(f"receiving odometry on {self.odom_topic}")
-        stamp = conv.stamp_to_s(msg.header.stamp)
-        if self.use_stamps and self.odom_stamp is not None and stamp < self.odom_stamp - self.stale_timeout:
-            # e.g. `ros2 bag play --loop` starting over: restart the message clock instead of calling
-            # every later scan stale
-            jump = self.odom_stamp - stamp
-            self.get_logger().warning(f"odometry time jumped back {jump:.2f} s: restarting the clock")
-            self.newest_stamp = -math.inf
-            self.pending = None
-        self.pose = conv.pose_from_odom(msg)
-        self.odom_stamp = stamp
-        self._see_stamp(msg.header.stamp)
+        self.pose, self.odom_stamp = pose, stamp
         self._process_pending(force=False)
 
     def on_goal(self, msg: PoseStamped) -> None:
         """A new goal; a /plan already received that ends there stays the initial path, else a straight line."""
-        goal = conv.pose_from_pose_stamped(msg)
-        tolerance = float(self._param("goal_path_tolerance"))
+        try:
+            goal = conv.pose_from_pose_stamped(msg)
+        except InvalidRequest as exc:
+            self.counts["bad_goals"] += 1
+            self.warnings.warn("goal", f"ignored /goal_pose: {exc}")
+            return
+        tolerance = self.settings.goal_path_tolerance
         if self.path is not None and np.hypot(*(self.path[-1, :2] - np.asarray(goal[:2]))) <= tolerance:
             self.controller.set_path(self.path)
         else:
@@ -237,12 +310,16 @@ class ReactiveNode(Node):
 
     def on_plan(self, msg: Path) -> None:
         """The initial path; its last pose becomes the goal (eq. 36-44 deform it from here on)."""
-        points = conv.path_points_from_msg(msg)
-        if len(points) < 2 or not np.all(np.isfinite(points)):
-            self.warnings.warn("plan", f"ignored /plan with {len(points)} poses (need >= 2 finite poses)")
+        try:
+            points = conv.path_points_from_msg(msg)
+            if len(points) < 2:
+                raise InvalidRequest(f"plan has {len(points)} poses (need >= 2)")
+            self.controller.set_path(points)
+        except InvalidRequest as exc:
+            self.counts["bad_plans"] += 1
+            self.warnings.warn("plan", f"ignored /plan: {exc}")
             return
         self.path = points
-        self.controller.set_path(points)
         self._goal_logged = False
         self.get_logger().info(f"initial path with {len(points)} poses to ({points[-1, 0]:.2f}, {points[-1, 1]:.2f})")
 
@@ -251,20 +328,19 @@ class ReactiveNode(Node):
         """Validate, then wait (at most until the next scan) for the odometry of the scan's time."""
         self.counts["scans"] += 1
         try:
-            stamp = conv.stamp_to_s(msg.header.stamp) if self.use_stamps else self._now()
-            scan = conv.scan_from_msg(msg, stamp=stamp)
+            scan = conv.scan_from_msg(msg)
         except ScanError as exc:
             self.counts["dropped"] += 1
             self.warnings.warn("malformed", f"dropped malformed scan: {exc}")
             return
-        if self.use_stamps:
-            self._see_stamp(msg.header.stamp)
-        if self.counts["scans"] - self.counts["dropped"] == 1:
+        if not self._in_time(scan.stamp, "scan"):
+            return
+        if self.counts["scans"] - self.counts["dropped"] - self.counts["future"] == 1:
             self.get_logger().info(f"receiving scans on {self.scan_topic}")
-        self.last_scan_received = time.monotonic()
+        self.last_valid_scan = time.monotonic()
         self._process_pending(force=True)
-        self.pending = (scan, conv.stamp_to_s(msg.header.stamp))
-        self._process_pending(force=not self.odom_sync)
+        self.pending = scan
+        self._process_pending(force=not self.settings.odom_sync)
 
     def _process_pending(self, force: bool) -> None:
         """Run the update for the waiting scan once odometry stamped at or after it is in (or when forced).
@@ -272,46 +348,41 @@ class ReactiveNode(Node):
         Pairing each scan with the odometry of its own time, whatever order the two
         arrive in, is what makes a replayed bag give the same commands every time.
         """
-        if self.pending is None:
-            return
-        scan, header_stamp = self.pending
-        if not force and (self.odom_stamp is None or self.odom_stamp < header_stamp):
+        scan = self.pending
+        if scan is None or (not force and (self.odom_stamp is None or self.odom_stamp < scan.stamp)):
             return
         self.pending = None
-        if self.odom_stamp is not None and self.odom_stamp < header_stamp - self.stale_timeout:
-            lag = header_stamp - self.odom_stamp
+        timeout = self.settings.stale_scan_timeout
+        if self.odom_stamp is not None and self.odom_stamp < scan.stamp - timeout:
+            lag = scan.stamp - self.odom_stamp
             self.warnings.warn("odom", f"odometry is {lag:.3f} s older than the scan: using it anyway")
-        scan_age = self._now() - header_stamp
-        if scan_age > self.stale_timeout:
+        scan_age = self._now() - scan.stamp
+        if scan_age > timeout:
             self.counts["stale"] += 1
-            self.warnings.warn("stale", f"scan is {scan_age:.3f} s old (> {self.stale_timeout} s): stopping the base")
-            self._stop_base(header_stamp)
+            self.warnings.warn("stale", f"scan is {scan_age:.3f} s old (> {timeout} s): stopping the base")
+            self._stop_base(scan.stamp)
             return
         if self.pose is None or not self.controller.has_goal:
             missing = "odometry" if self.pose is None else "a goal"
             self.warnings.warn("waiting", f"no {missing} yet: holding still")
-            self._stop_base(header_stamp)
+            self._stop_base(scan.stamp)
             return
         try:
-            self._update(scan, scan.stamp, header_stamp)
-        except (MaruError, ValueError, RuntimeError) as exc:
-            self.warnings.warn("update", f"update failed, stopping the base: {exc}")
-            self._stop_base(header_stamp)
-        except Exception:  # noqa: BLE001 - a controller bug must stop the base, not kill the node
-            self.get_logger().error("controller update raised; stopping the base\n" + traceback.format_exc())
-            self._stop_base(header_stamp)
+            self._update(scan)
+        except (MaruError, ValueError) as exc:
+            self.warnings.warn("update", f"update failed, stopping the base: {one_line(exc)}")
+            self._stop_base(scan.stamp)
 
-    def _update(self, scan, stamp: float, header_stamp: float) -> None:
+    def _update(self, scan: LaserScanData) -> None:
         out = self.controller.update(pose=self.pose, scan=scan)
         self.counts["updates"] += 1
         self.update_ms.append(out.update_time * 1e3)
-        self._send_command(out.v, out.w, header_stamp)
-        self.strip_pub.publish(conv.path_msg(np.asarray(out.strip), self.odom_frame, stamp))
-        self._publish_arm(out, stamp)
+        frame = self.settings.odom_frame
+        self._send_command(out.v, out.w, scan.stamp)
+        self.strip_pub.publish(conv.path_msg(np.asarray(out.strip), frame, scan.stamp))
+        self._publish_arm(out, scan.stamp)
         if self.marker_pub.get_subscription_count() > 0:
-            self.marker_pub.publish(
-                conv.strip_markers(out.strip, out.obstacle_points, out.target, self.odom_frame, stamp)
-            )
+            self.marker_pub.publish(conv.strip_markers(out.strip, out.obstacle_points, out.target, frame, scan.stamp))
         if out.reached_goal and not self._goal_logged:
             self.get_logger().info("goal reached")
             self._goal_logged = True
@@ -330,27 +401,32 @@ class ReactiveNode(Node):
     def _send_command(self, v: float, w: float, stamp: float) -> None:
         """cmd_vel, and the same command stamped with the time of the scan it answers."""
         self.cmd_pub.publish(conv.twist_msg(v, w))
-        self.cmd_stamped_pub.publish(conv.twist_stamped_msg(v, w, self.base_frame, stamp))
+        self.cmd_stamped_pub.publish(conv.twist_stamped_msg(v, w, self.settings.base_frame, stamp))
         self.base_stopped = v == 0.0 and w == 0.0
 
     def _stop_base(self, stamp: float | None = None) -> None:
         self._send_command(0.0, 0.0, self._now() if stamp is None else stamp)
 
     def on_watchdog(self) -> None:
-        """Clock mode only: stop the base once when scans stop arriving."""
-        silent = time.monotonic() - self.last_scan_received
-        if not self.base_stopped and silent > self.stale_timeout:
-            self.warnings.warn("silent", f"no scan for {silent:.2f} s: stopping the base")
+        """Wall clock, both clock modes: stop the base once when no valid scan arrived for scan_timeout."""
+        silent = time.monotonic() - self.last_valid_scan
+        if not self.base_stopped and silent > self.settings.scan_timeout:
+            self.warnings.warn("silent", f"no scan for {silent:.2f} s (none valid within scan_timeout "
+                                         f"{self.settings.scan_timeout} s): stopping the base")
             self._stop_base()
 
 
 def main(args=None) -> int:
     configure_loopback_dds()
-    rclpy.init(args=args)
+    try:
+        rclpy.init(args=args)
+    except RuntimeError as exc:  # rcl's RCLError, e.g. a params file that is not valid YAML
+        print(f"reactive_node: cannot start: {one_line(exc)}", file=sys.stderr)
+        return 2
     try:
         node = ReactiveNode()
-    except (ValueError, ParameterException) as exc:
-        print(f"reactive_node: bad parameters: {exc}", file=sys.stderr)
+    except (MaruError, ValueError) as exc:
+        print(f"reactive_node: bad parameters: {one_line(exc)}", file=sys.stderr)
         rclpy.try_shutdown()
         return 2
     try:
