@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from planning_toys import BoxWorldChecker
+from planning_toys import BoxWorldChecker, ToyRobot, maze_checker
 
 from maru_planner import errors
-from maru_planner.planning import timing
+from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig, PlanStatus, timing
 
 TOL = 1e-6
 NAMES3 = ["a", "b", "c"]
@@ -17,6 +17,13 @@ LIMITS3 = timing.Limits.scaled([1.0, 1.5, 2.0], [2.0, 3.0, 4.0])
 
 def always_free(_states: np.ndarray) -> bool:
     return True
+
+
+def parameterize(path, method, *, limits=LIMITS3, **options):
+    """``timing.parameterize`` with the test's joint names, every curve free and a 0.3 rad deviation by default."""
+    options.setdefault("curve_free", always_free)
+    options.setdefault("max_deviation", 0.3)
+    return timing.parameterize(path, NAMES3[: np.shape(path)[1]], limits, method, **options)
 
 
 def never_off_path(path: np.ndarray):
@@ -49,9 +56,7 @@ def assert_consistent(traj) -> None:
 
 @pytest.mark.parametrize("method", timing.METHODS)
 def test_every_method_respects_the_limits_and_hits_the_endpoints_exactly(method):
-    traj, report = timing.parameterize(
-        ZIGZAG, NAMES3, LIMITS3, method, curve_free=always_free, max_deviation=0.3, dt=0.005
-    )
+    traj, report = parameterize(ZIGZAG, method, max_deviation=0.3, dt=0.005)
     assert report.method == method
     assert_within_limits(traj, LIMITS3, jerk=method == "ruckig")
     assert_consistent(traj)
@@ -62,11 +67,9 @@ def test_every_method_respects_the_limits_and_hits_the_endpoints_exactly(method)
 
 @pytest.mark.parametrize("method", ["toppra", "ruckig"])
 def test_blends_stay_within_the_deviation_and_beat_the_trapezoids(method):
-    trapezoid, _ = timing.parameterize(ZIGZAG, NAMES3, LIMITS3, "trapezoid", curve_free=always_free, dt=0.005)
+    trapezoid, _ = parameterize(ZIGZAG, "trapezoid", dt=0.005)
     for max_deviation in (0.05, 0.3):
-        traj, report = timing.parameterize(
-            ZIGZAG, NAMES3, LIMITS3, method, curve_free=always_free, max_deviation=max_deviation, dt=0.005
-        )
+        traj, report = parameterize(ZIGZAG, method, max_deviation=max_deviation, dt=0.005)
         assert report.blends == len(ZIGZAG) - 2 and report.stops == 0 and not report.fallbacks
         assert 0.0 < report.max_deviation <= max_deviation + 1e-12
         assert timing.deviation_from_path(traj.positions, ZIGZAG).max() <= max_deviation + 1e-9
@@ -75,7 +78,7 @@ def test_blends_stay_within_the_deviation_and_beat_the_trapezoids(method):
 
 def test_toppra_is_time_optimal_on_a_straight_line():
     line = np.array([[0.0, 0.0, 0.0], [2.0, 1.0, 0.5]])
-    traj, _ = timing.parameterize(line, NAMES3, LIMITS3, "toppra", curve_free=always_free)
+    traj, _ = parameterize(line, "toppra")
     # limiting joint a: 2 rad at 1 rad/s, 2 rad/s^2 -> 2/1 + 1/2 s (accelerate, cruise, brake)
     assert traj.duration == pytest.approx(2.5, rel=2e-2)
     assert traj.duration >= 2.5 - 1e-9
@@ -95,15 +98,13 @@ def test_a_colliding_blend_is_shrunk_then_the_motion_stops_at_that_corner():
 
     assert free(np.vstack([np.linspace(a, b, 200) for a, b in zip(ZIGZAG[:-1], ZIGZAG[1:], strict=True)]))
     for method in ("toppra", "ruckig"):
-        traj, report = timing.parameterize(ZIGZAG, NAMES3, LIMITS3, method, curve_free=free, max_deviation=0.3)
+        traj, report = parameterize(ZIGZAG, method, curve_free=free, max_deviation=0.3)
         assert any("waypoint 2" in reason for reason in report.fallbacks), report.fallbacks
         assert report.blends == 3 and report.stops == 0
         assert box.first_invalid(traj.positions) < 0
         assert_within_limits(traj, LIMITS3, jerk=method == "ruckig")
 
-        stopped, report = timing.parameterize(
-            ZIGZAG, NAMES3, LIMITS3, method, curve_free=never_off_path(ZIGZAG), max_deviation=0.3
-        )
+        stopped, report = parameterize(ZIGZAG, method, curve_free=never_off_path(ZIGZAG), max_deviation=0.3)
         assert report.blends == 0 and report.stops == 3
         assert timing.deviation_from_path(stopped.positions, ZIGZAG).max() <= 1e-9
         assert_within_limits(stopped, LIMITS3, jerk=method == "ruckig")
@@ -115,7 +116,7 @@ def test_a_colliding_blend_is_shrunk_then_the_motion_stops_at_that_corner():
 @pytest.mark.parametrize("method", timing.METHODS)
 def test_tiny_velocity_scaling_stays_within_the_point_cap(method):
     limits = timing.Limits.scaled([1.0, 1.5, 2.0], [2.0, 3.0, 4.0], velocity_scaling=1e-4)
-    traj, _ = timing.parameterize(ZIGZAG, NAMES3, limits, method, curve_free=always_free, max_points=500)
+    traj, _ = parameterize(ZIGZAG, method, limits=limits, max_points=500)
     assert len(traj.times) <= 500
     assert traj.duration > 1e4  # 1e-4 of the speed: the motion really is that slow
     assert_within_limits(traj, limits, jerk=method == "ruckig")
@@ -123,7 +124,7 @@ def test_tiny_velocity_scaling_stays_within_the_point_cap(method):
 
 
 def test_zero_deviation_means_rest_at_every_corner():
-    traj, report = timing.parameterize(ZIGZAG, NAMES3, LIMITS3, "toppra", curve_free=always_free, max_deviation=0.0)
+    traj, report = parameterize(ZIGZAG, "toppra", max_deviation=0.0)
     assert report.blends == 0 and report.stops == 3
     assert timing.deviation_from_path(traj.positions, ZIGZAG).max() <= 1e-9
 
@@ -131,23 +132,23 @@ def test_zero_deviation_means_rest_at_every_corner():
 def test_repeated_and_collinear_waypoints_are_harmless():
     path = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.5, 0.5, 0.5], [1.0, 1.0, 1.0], [1.0, 1.0, 1.0]])
     for method in timing.METHODS:
-        traj, _ = timing.parameterize(path, NAMES3, LIMITS3, method, curve_free=always_free)
+        traj, _ = parameterize(path, method)
         assert np.array_equal(traj.positions[-1], path[-1])
         assert_within_limits(traj, LIMITS3, jerk=method == "ruckig")
 
 
 def test_a_path_of_one_configuration_is_a_trajectory_of_zero_duration():
-    traj, _ = timing.parameterize(ZIGZAG[:1], NAMES3, LIMITS3, "toppra", curve_free=always_free)
+    traj, _ = parameterize(ZIGZAG[:1], "toppra")
     assert traj.duration == 0.0 and np.array_equal(traj.positions[-1], ZIGZAG[0])
 
 
 def test_bad_method_deviation_and_point_cap_raise_typed_errors():
     with pytest.raises(errors.InvalidRequest, match="time_parameterization"):
-        timing.parameterize(ZIGZAG, NAMES3, LIMITS3, "fastest", curve_free=always_free)
+        parameterize(ZIGZAG, "fastest")
     with pytest.raises(errors.InvalidRequest, match="deviation"):
-        timing.parameterize(ZIGZAG, NAMES3, LIMITS3, "toppra", curve_free=always_free, max_deviation=float("nan"))
+        parameterize(ZIGZAG, "toppra", max_deviation=float("nan"))
     with pytest.raises(errors.InvalidRequest, match="max_points"):
-        timing.parameterize(ZIGZAG, NAMES3, LIMITS3, "toppra", curve_free=always_free, max_points=1)
+        parameterize(ZIGZAG, "toppra", max_points=1)
 
 
 def test_default_jerk_limits_reach_full_acceleration_in_the_ramp_time():
@@ -160,3 +161,50 @@ def test_deviation_from_path_is_the_distance_to_the_nearest_segment():
     path = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]])
     points = np.array([[0.5, 0.2], [1.3, 0.5], [2.0, 2.0], [1.0, 0.0]])
     assert np.allclose(timing.deviation_from_path(points, path), [0.2, 0.3, np.sqrt(2.0), 0.0])
+
+
+# --- through MotionPlanner.plan ----------------------------------------------------------------
+def maze_planner(**config) -> MotionPlanner:
+    config.setdefault("resolution", 0.01)
+    return MotionPlanner(ToyRobot(2), maze_checker(), PlannerConfig(**config))
+
+
+def maze_request(**kw) -> MotionRequest:
+    return MotionRequest("all", start={"j0": 0.05, "j1": 0.05}, goal_joints={"j0": 0.95, "j1": 0.95},
+                         planner_id="RRTConnect", time_budget=5.0, seed=3, **kw)  # fmt: skip
+
+
+@pytest.mark.parametrize("method", timing.METHODS)
+def test_each_method_through_the_planner_gives_a_free_trajectory_within_the_limits(method):
+    planner = maze_planner()
+    result = planner.plan(maze_request(time_parameterization=method, velocity_scaling=0.5, jerk_scaling=0.5))
+    assert result.success, result.message
+    assert result.stats.time_parameterization == method and method in result.message
+    traj = result.trajectory
+    robot = planner.robot
+    limits = timing.Limits.scaled(robot.velocity_limits, robot.acceleration_limits, 0.5, 1.0, 0.5)
+    assert_within_limits(traj, limits, jerk=method == "ruckig")
+    assert np.array_equal(traj.positions[0], result.path[0]) and np.array_equal(traj.positions[-1], result.path[-1])
+    assert maze_checker().first_invalid(traj.positions) < 0
+    assert timing.deviation_from_path(traj.positions, result.path).max() <= planner.config.blend_deviation + 1e-9
+
+
+def test_the_planner_uses_its_configured_method_when_the_request_names_none():
+    assert maze_planner().plan(maze_request()).stats.time_parameterization == "toppra"
+    planner = maze_planner(time_parameterization="trapezoid")
+    assert planner.plan(maze_request()).stats.time_parameterization == "trapezoid"
+
+
+def test_the_planner_caps_the_points_of_a_very_slow_trajectory():
+    planner = maze_planner(max_trajectory_points=300)
+    result = planner.plan(maze_request(velocity_scaling=1e-4))
+    assert result.success and len(result.trajectory.times) <= 300
+    assert result.trajectory.duration > 1e3
+
+
+@pytest.mark.parametrize(
+    ("field", "value"), [("time_parameterization", "bang-bang"), ("jerk_scaling", 0.0), ("jerk_scaling", 2.0)]
+)
+def test_bad_time_parameterization_fields_are_invalid_requests(field, value):
+    result = maze_planner().plan(maze_request(**{field: value}))
+    assert result.status is PlanStatus.INVALID_REQUEST and field in result.message

@@ -4,7 +4,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from maru_planner.params import param
+
 COLLISION_MODELS = ("exact", "spheres")
+TIME_PARAMETERIZATIONS = ("toppra", "ruckig", "trapezoid")  # see maru_planner.planning.timing
 
 
 @dataclass
@@ -27,6 +30,8 @@ class PlannerConfig:
     verify_resolution: joint step (rad) of that re-check; None = a quarter of ``resolution``.
     max_refinements: re-plans, each at half the previous ``resolution``, after a path fails
         verification (within the same time budget); then the request fails (PLANNING_FAILED).
+    time_parameterization, blend_deviation, max_trajectory_points: see their ``param`` descriptions
+        and :mod:`maru_planner.planning.timing`.
     """
 
     resolution: float = 0.02
@@ -39,6 +44,25 @@ class PlannerConfig:
     collision_model: str = "exact"
     verify_resolution: float | None = None
     max_refinements: int = 2
+    time_parameterization: str = param(
+        "toppra",
+        "time parameterisation of a request that names none: toppra (time-optimal through blended corners), "
+        "ruckig (jerk-limited through blended corners) or trapezoid (rest at every waypoint)",
+        choices=TIME_PARAMETERIZATIONS,
+    )
+    blend_deviation: float = param(
+        0.5,
+        "largest distance (rad) of a blended corner from the path's corner; blends are re-checked for collision "
+        "and shrunk (or the motion stops there) when they collide; 0 = stop at every waypoint",
+        lower=0.0,
+        upper=3.0,
+    )
+    max_trajectory_points: int = param(
+        10_000,
+        "most samples in a trajectory: the sample period grows past trajectory_dt when a slow motion needs more",
+        lower=2,
+        upper=1_000_000,
+    )
 
     def __post_init__(self):
         if not self.resolution > 0:
@@ -56,6 +80,15 @@ class PlannerConfig:
             raise ValueError(f"PlannerConfig.verify_resolution must be > 0 rad, got {self.verify_resolution}")
         if self.max_refinements < 0:
             raise ValueError(f"PlannerConfig.max_refinements must be >= 0, got {self.max_refinements}")
+        if self.time_parameterization not in TIME_PARAMETERIZATIONS:
+            raise ValueError(
+                f"PlannerConfig.time_parameterization must be one of {', '.join(TIME_PARAMETERIZATIONS)}, "
+                f"got {self.time_parameterization!r}"
+            )
+        if not 0.0 <= self.blend_deviation <= 3.0:
+            raise ValueError(f"PlannerConfig.blend_deviation must be in [0, 3] rad, got {self.blend_deviation}")
+        if self.max_trajectory_points < 2:
+            raise ValueError(f"PlannerConfig.max_trajectory_points must be >= 2, got {self.max_trajectory_points}")
 
     @property
     def verify_step(self) -> float:

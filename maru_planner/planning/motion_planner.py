@@ -24,7 +24,7 @@ from ompl import geometric as og
 from ompl import util as ou
 
 from maru_planner import errors
-from maru_planner.planning import postprocess
+from maru_planner.planning import postprocess, timing
 from maru_planner.planning.checkers import collision_model_of, default_exact_checker, make_checkers
 from maru_planner.planning.config import PlannerConfig
 from maru_planner.planning.pose_goal import solve_pose_goal
@@ -38,7 +38,14 @@ from maru_planner.planning.registry import (
 )
 from maru_planner.planning.roadmap import Roadmap
 from maru_planner.planning.space import BatchedMotionValidator, EdgeChecker, GroupSpace, make_validity_fn
-from maru_planner.planning.types import MotionRequest, MotionResult, PlanStats, PlanStatus, status_of_error
+from maru_planner.planning.types import (
+    MotionRequest,
+    MotionResult,
+    PlanStats,
+    PlanStatus,
+    Trajectory,
+    status_of_error,
+)
 
 OMPL_LOCK = threading.RLock()
 ou.setLogLevel(ou.LOG_WARN)  # OMPL's INFO chatter would mix into CLI output
@@ -188,10 +195,15 @@ class MotionPlanner:
         attempts = int(req.attempts)
         if attempts < 1:
             raise errors.InvalidRequest(f"attempts must be >= 1, got {req.attempts}")
-        for name in ("velocity_scaling", "acceleration_scaling"):
+        for name in ("velocity_scaling", "acceleration_scaling", "jerk_scaling"):
             value = float(getattr(req, name))
             if not (math.isfinite(value) and 0.0 < value <= 1.0):
                 raise errors.InvalidRequest(f"{name} must be in (0, 1], got {value}")
+        method = req.time_parameterization or self.config.time_parameterization
+        if method not in timing.METHODS:
+            raise errors.InvalidRequest(
+                f"time_parameterization must be one of {', '.join(timing.METHODS)}, got {method!r}"
+            )
         seed = int(req.seed) if req.seed is not None else secrets.randbelow(2**31 - 1)
         stats.seed = seed
 
@@ -222,15 +234,7 @@ class MotionPlanner:
             stats.collision_checks = int(self.checker.check_count - checks0)
 
         t_par = time.monotonic()
-        result.trajectory = postprocess.time_parameterize(
-            path,
-            names,
-            np.asarray(self.robot.velocity_limits)[indices],
-            np.asarray(self.robot.acceleration_limits)[indices],
-            float(req.velocity_scaling),
-            float(req.acceleration_scaling),
-            self.config.trajectory_dt,
-        )
+        result.trajectory = self._time_parameterize(req, method, path, start_full, indices, stats)
         stats.parameterize_time = time.monotonic() - t_par
         result.path = path
         stats.waypoints = len(path)
@@ -243,8 +247,37 @@ class MotionPlanner:
         result.status = PlanStatus.SUCCESS
         result.message = (
             f"{planner_id}: {len(path)} waypoints, length {stats.path_length:.3f} rad, "
-            f"trajectory {result.trajectory.duration:.2f} s"
+            f"trajectory {result.trajectory.duration:.2f} s ({stats.time_parameterization})"
         )
+
+    def _time_parameterize(self, req, method: str, path, start_full, indices, stats: PlanStats) -> Trajectory:
+        """``path`` timed by ``method`` (:mod:`~maru_planner.planning.timing`); blends re-checked on the exact model."""
+        checker = self.exact_checker or self.checker
+
+        def curve_free(states: np.ndarray) -> bool:
+            full = np.repeat(start_full[None], len(states), axis=0)
+            full[:, indices] = states
+            return checker.first_invalid(full) < 0
+
+        limits = timing.Limits.scaled(
+            np.asarray(self.robot.velocity_limits)[indices],
+            np.asarray(self.robot.acceleration_limits)[indices],
+            float(req.velocity_scaling),
+            float(req.acceleration_scaling),
+            float(req.jerk_scaling),
+        )
+        trajectory, report = timing.parameterize(
+            path,
+            [self.robot.joint_names[i] for i in indices],
+            limits,
+            method,
+            curve_free=curve_free,
+            max_deviation=self.config.blend_deviation,
+            dt=self.config.trajectory_dt,
+            max_points=self.config.max_trajectory_points,
+        )
+        stats.time_parameterization = report.method
+        return trajectory
 
     # --- request validation -----------------------------------------------------------------
     def _check_values(self, values: dict, what: str) -> dict[int, float]:

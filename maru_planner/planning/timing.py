@@ -40,10 +40,10 @@ import toppra.interpolator
 
 from maru_planner import errors
 from maru_planner.planning import postprocess
+from maru_planner.planning.config import TIME_PARAMETERIZATIONS
 from maru_planner.planning.types import Trajectory
 
-METHODS = ("toppra", "ruckig", "trapezoid")
-DEFAULT_METHOD = "toppra"
+METHODS = TIME_PARAMETERIZATIONS
 JERK_RAMP_TIME = 0.1  # s: default jerk limit = acceleration limit / this (full acceleration in 0.1 s)
 CERTIFY_STEP = 0.005  # rad: joint step of the collision re-check of blends
 BLEND_SHRINK = 4.0  # each retry of a colliding blend divides its deviation by this
@@ -220,10 +220,10 @@ def parameterize(
     path: np.ndarray,
     joint_names: Sequence[str],
     limits: Limits,
-    method: str = DEFAULT_METHOD,
+    method: str,
     *,
     curve_free: CurveFree,
-    max_deviation: float = 0.1,
+    max_deviation: float,
     dt: float = 0.05,
     max_points: int = 10_000,
 ) -> tuple[Trajectory, TimingReport]:

@@ -67,7 +67,10 @@ class MotionRequest:
     ``start`` maps joint names to values (the full robot state is fine: joints outside
     the group are held fixed at these values). The goal is either ``goal_joints`` (all
     joints of the group) or ``goal_poses`` ({frame: 4x4 homogeneous matrix}, solved by IK
-    first). ``seed=None`` draws a random seed (reported in the stats).
+    first). ``seed=None`` draws a random seed (reported in the stats). ``time_parameterization``
+    is "toppra", "ruckig" or "trapezoid" (:mod:`~maru_planner.planning.timing`); empty = the
+    planner's ``PlannerConfig.time_parameterization``. ``jerk_scaling`` scales the jerk limits
+    ("ruckig" only).
     """
 
     group: str
@@ -81,6 +84,8 @@ class MotionRequest:
     velocity_scaling: float = 1.0
     acceleration_scaling: float = 1.0
     simplify: bool = True
+    time_parameterization: str = ""
+    jerk_scaling: float = 1.0
 
 
 @dataclass
@@ -134,6 +139,7 @@ class PlanStats:
     verified: bool = False  # "spheres": the returned path was re-checked on the exact model and is free
     verify_time: float = 0.0  # s spent re-checking paths on the exact model
     replans: int = 0  # re-plans at a finer resolution after a path failed that check
+    time_parameterization: str = ""  # the method that made the trajectory (a blended one may fall back)
 
     def to_dict(self) -> dict:
         return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in asdict(self).items()}
