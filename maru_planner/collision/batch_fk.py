@@ -15,11 +15,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-
-try:
-    from numba import njit
-except ImportError:  # pragma: no cover - numba is a declared dependency; keep numpy-only use working
-    njit = None
+import pinocchio as pin
+from numba import njit
 
 FIXED, REVOLUTE, PRISMATIC, REVOLUTE_UNBOUNDED = 0, 1, 2, 3
 
@@ -44,8 +41,6 @@ class KinematicTree:
     @classmethod
     def from_pinocchio(cls, model) -> KinematicTree:
         """Flatten a pinocchio ``Model``; unsupported joint types raise ``ValueError`` naming the joint."""
-        import pinocchio as pin
-
         nj = model.njoints
         data = model.createData()
         pin.forwardKinematics(model, data, pin.neutral(model))
@@ -178,12 +173,8 @@ def _sphere_centers_py(rot, pos, sphere_joint, sphere_local, out):
             )
 
 
-if njit is not None:
-    joint_poses_nb = njit(cache=True, fastmath=False)(_joint_poses_py)
-    sphere_centers_nb = njit(cache=True)(_sphere_centers_py)
-else:  # pragma: no cover
-    joint_poses_nb = _joint_poses_py
-    sphere_centers_nb = _sphere_centers_py
+joint_poses_nb = njit(cache=True, fastmath=False)(_joint_poses_py)
+sphere_centers_nb = njit(cache=True)(_sphere_centers_py)
 
 
 def tree_arrays(tree: KinematicTree) -> tuple:

@@ -23,6 +23,7 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
+import coal
 import numpy as np
 from scipy.spatial import ConvexHull, Delaunay
 
@@ -210,8 +211,6 @@ def bounding_sphere(centers: np.ndarray, radii: np.ndarray) -> tuple[np.ndarray,
 
 def fit_geometry(geometry, options: SphereFitOptions) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Covering spheres (centres, outer radii, inner radii) of one coal geometry, in its own frame."""
-    import coal
-
     if isinstance(geometry, coal.Sphere):
         return np.zeros((1, 3)), np.array([geometry.radius]), np.array([geometry.radius])
     if isinstance(geometry, coal.Capsule):
@@ -230,8 +229,6 @@ def inner_radii(geometry, centers: np.ndarray, vertices: np.ndarray) -> np.ndarr
     mesh) inside it is not a collision; no ball is certainly "in collision" then, and every contact near a
     mesh link is left to coal.
     """
-    import coal
-
     if isinstance(geometry, coal.Box):
         return np.maximum((np.asarray(geometry.halfSide) - np.abs(centers)).min(axis=1), 0.0)
     if isinstance(geometry, coal.Cylinder):
@@ -245,8 +242,6 @@ def inner_radii(geometry, centers: np.ndarray, vertices: np.ndarray) -> np.ndarr
 
 def surface_of(geometry, options: SphereFitOptions) -> tuple[np.ndarray, np.ndarray]:
     """A closed triangle surface (vertices, triangles) enclosing the geometry."""
-    import coal
-
     if isinstance(geometry, coal.Box):
         return box_surface(np.asarray(geometry.halfSide, dtype=float))
     if isinstance(geometry, coal.Cylinder):
@@ -316,13 +311,6 @@ def interior_points(vertices: np.ndarray, step: float) -> np.ndarray:
     except Exception:  # flat or degenerate hull: every grid point is a candidate
         inside = grid
     return np.concatenate([inside, vertices.mean(axis=0, keepdims=True)])
-
-
-def hull_volume(vertices: np.ndarray) -> float:
-    try:
-        return float(ConvexHull(vertices).volume)
-    except Exception:  # flat or degenerate
-        return 0.0
 
 
 def depth_in_hull(points: np.ndarray, vertices: np.ndarray) -> np.ndarray:

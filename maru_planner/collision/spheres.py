@@ -25,16 +25,12 @@ from dataclasses import dataclass
 import coal
 import numpy as np
 
+from maru_planner.collision import sphere_kernels as _kernels
 from maru_planner.collision.batch_fk import KinematicTree, batch_joint_poses, joint_poses_nb, sphere_centers_nb
 from maru_planner.collision.checker import self_collision_pairs
 from maru_planner.collision.sphere_model import SphereFitOptions, SphereModel, load_or_fit
 from maru_planner.scene import Obstacle, Scene
 from maru_planner.shapes import KERNEL_KINDS, KernelPrimitive
-
-try:  # numba is a dependency; without it (or with use_numba=False) the numpy path is used
-    from maru_planner.collision import sphere_kernels as _kernels
-except ImportError:  # pragma: no cover
-    _kernels = None
 
 VALID, COLLIDING, AMBIGUOUS = 0, 1, 2  # same codes as sphere_kernels
 
@@ -130,7 +126,7 @@ class SphereCollisionChecker:
         self.self_pairs = self_collision_groups(robot)
         self.padding = float(padding)
         self.confirm = bool(confirm)
-        self.use_numba = bool(use_numba and _kernels is not None)
+        self.use_numba = bool(use_numba)
         self.check_count = 0
         self.exact_pair_checks = 0  # coal calls made to settle near contacts
         self.scene = None

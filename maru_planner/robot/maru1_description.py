@@ -36,6 +36,8 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
+from maru_planner.paths import urdf_path
+from maru_planner.robot.disabled_collisions import compute_disabled_collisions
 from maru_planner.scene import matrix_rpy
 
 # ---------------------------------------------------------------- Table 1 ----
@@ -281,16 +283,12 @@ def generate_srdf(disabled: list[tuple[str, str, str]]) -> str:
 
 def generate(n_samples: int = DISABLED_PAIR_SAMPLES) -> tuple[str, str]:
     """(urdf_text, srdf_text); the SRDF's disabled pairs are computed by sampling."""
-    from maru_planner.robot.disabled_collisions import compute_disabled_collisions
-
     urdf = generate_urdf()
     disabled = compute_disabled_collisions(urdf, n_samples=n_samples, seed=DISABLED_PAIR_SEED)
     return urdf, generate_srdf(disabled)
 
 
 def main(argv: list[str] | None = None) -> int:
-    from maru_planner.paths import urdf_path
-
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out-dir", type=Path, default=None, help="default: the package's urdf/ directory")
     parser.add_argument("--samples", type=int, default=DISABLED_PAIR_SAMPLES)
