@@ -1,8 +1,9 @@
 """Start reactive_node with config/reactive.yaml (ros2 launch maru_planner reactive.launch.py).
 
-Arguments: ``params_file`` (default: the installed config/reactive.yaml), ``namespace`` (every topic
-is relative, so a namespace moves them all), ``strip`` (``modified`` | ``plain``, overrides the
-file), and remappings for the robot's own topic names: ``scan_topic``, ``odom_topic``,
+Arguments: ``params_file`` (default: the installed config/reactive.yaml, keyed ``/**`` so it applies
+in any namespace), ``namespace`` (every topic is relative, so a namespace moves them all), ``strip``
+(``modified`` | ``plain``, overrides the file), ``use_sim_time`` (``true``: time from ``/clock``, e.g.
+``ros2 bag play --clock``), and remappings for the robot's own topic names: ``scan_topic``, ``odom_topic``,
 ``plan_topic``, ``goal_topic``, ``cmd_vel_topic``.
 """
 
@@ -34,6 +35,7 @@ def generate_launch_description():
         ),
         DeclareLaunchArgument("namespace", default_value="", description="namespace of the node and its topics"),
         DeclareLaunchArgument("strip", default_value="modified", description="elastic strip: modified | plain"),
+        DeclareLaunchArgument("use_sim_time", default_value="false", description="time from /clock"),
     ]
     arguments += [
         DeclareLaunchArgument(argument, default_value=topic, description=description)
@@ -45,7 +47,10 @@ def generate_launch_description():
         name="reactive_node",
         namespace=LaunchConfiguration("namespace"),
         output="screen",
-        parameters=[LaunchConfiguration("params_file"), {"strip": LaunchConfiguration("strip")}],
+        parameters=[
+            LaunchConfiguration("params_file"),
+            {"strip": LaunchConfiguration("strip"), "use_sim_time": LaunchConfiguration("use_sim_time")},
+        ],
         remappings=[(topic, LaunchConfiguration(argument)) for topic, (argument, _) in REMAPPED.items()],
     )
     return LaunchDescription([*arguments, node])

@@ -546,6 +546,9 @@ def test_launch_file_starts_the_node_with_the_shipped_config(monkeypatch):
     defaults = {a.args[0]: a.kwargs["default_value"] for a in arguments}
     assert Path(defaults["params_file"]) == config_path("reactive.yaml")
     assert node.kwargs["executable"] == "reactive_node" and node.kwargs["name"] == "reactive_node"
+    file, overrides = node.kwargs["parameters"]
+    assert file == "<params_file>" and overrides == {"strip": "<strip>", "use_sim_time": "<use_sim_time>"}
+    assert defaults["use_sim_time"] == "false"
     assert "reactive_node = maru_planner.ros.reactive_node:main" in (REPO_ROOT / "setup.py").read_text()
     remapped = dict(node.kwargs["remappings"])
     assert set(remapped) == {"scan", "odom", "plan", "goal_pose", "cmd_vel"}
