@@ -16,10 +16,12 @@ import threading
 import time
 
 import rclpy
+from geometry_msgs.msg import Pose, PoseStamped
 from rclpy.executors import SingleThreadedExecutor
 from sensor_msgs.msg import JointState
 
 from maru_planner.ros import planning_conversions as conv
+from maru_planner.ros.env import configure_loopback_dds
 from maru_planner_interfaces.msg import SceneObstacle
 from maru_planner_interfaces.srv import ApplyScene, ComputeIK, GetScene, PlanMotion
 
@@ -34,8 +36,6 @@ class PlanningClient:
 
     def __init__(self, node=None, namespace: str = "", *, node_name: str = "planning_client", init: bool = False):
         if init and not rclpy.ok():
-            from maru_planner.ros.env import configure_loopback_dds
-
             configure_loopback_dds()
             rclpy.init()
         self._owns_node = node is None
@@ -223,14 +223,10 @@ def _joint_state(values: dict[str, float]) -> JointState:
 
 
 def _pose(pose):
-    from geometry_msgs.msg import Pose
-
     return pose if isinstance(pose, Pose) else conv.matrix_to_pose(pose)
 
 
 def _stamped_poses(poses: dict, frame_id: str):
-    from geometry_msgs.msg import PoseStamped
-
     links, stamped = [], []
     for link, pose in poses.items():
         msg = PoseStamped(pose=_pose(pose))

@@ -14,6 +14,7 @@ import math
 import numpy as np
 from builtin_interfaces.msg import Duration
 from geometry_msgs.msg import Pose
+from sensor_msgs.msg import JointState
 from shape_msgs.msg import SolidPrimitive
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
@@ -139,8 +140,6 @@ def configuration(robot, values: dict[str, float], *, strict: bool = False) -> n
 
 def joint_state_msg(names, positions, stamp=None):
     """``sensor_msgs/JointState`` with positions only."""
-    from sensor_msgs.msg import JointState
-
     msg = JointState()
     if stamp is not None:
         msg.header.stamp = stamp
