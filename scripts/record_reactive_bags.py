@@ -26,9 +26,9 @@ from pathlib import Path
 import numpy as np
 from rclpy.serialization import deserialize_message, serialize_message
 
-from maru_planner.bag import TF_MSGTYPE, BagWriter, planar_transform, summarize, tf_message
+from maru_planner.bag import TF_MSGTYPE, BagWriter, planar_transform, read_messages, summarize, tf_message
 from maru_planner.paths import config_path
-from maru_planner.reactive import ElasticStripController
+from maru_planner.reactive import ElasticStripController, scan_to_points, to_world
 from maru_planner.ros import reactive_conversions as conv
 from maru_planner.ros.reactive_node import strip_params_from_config
 from maru_planner.sim import Simulator, World
@@ -140,13 +140,12 @@ def record_world(world_path: Path, out: Path, *, seed: int = 0, skip: float = 0.
 
 def save_picture(path: Path, recordings: list[dict]) -> None:
     """One panel per bag, drawn from what the bag holds: odometry path, scan points, and the core's strips."""
+    # matplotlib is loaded only when a picture is asked for (an optional heavy import)
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from maru_planner.bag import read_messages
-    from maru_planner.reactive import scan_to_points, to_world
     from maru_planner.viz.reactive import draw_world
 
     cols = 2 if len(recordings) > 1 else 1

@@ -8,6 +8,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.patches import Circle, Polygon  # noqa: E402
+from PIL import Image  # noqa: E402
 
 STRIP_COLOURS = {"modified": "tab:blue", "plain": "tab:red", "baseline": "tab:gray", "modified_literal": "tab:purple",
                  "modified_straight": "tab:cyan"}
@@ -82,8 +83,6 @@ def save_run_picture(path, world, results: dict, title: str = "") -> None:
 
 def save_run_gif(path, world, result, fps: int = 10, robot_radius: float = 0.3, mover_offset: float = 0.0) -> None:
     """Animated GIF of a run from its strip snapshots (needs strip_every > 0 in the run)."""
-    from PIL import Image
-
     frames = []
     for snap in result.strips:
         fig, ax = plt.subplots(figsize=(6, 4))
