@@ -1,8 +1,13 @@
-"""Keep every DDS participant of maru_planner on loopback.
+"""DDS networking of maru_planner processes: the user's settings for nodes, loopback for our own runs.
 
-Call :func:`configure_loopback_dds` before ``rclpy.init`` in every entry point
-(nodes, demo, benchmarks); tests do it once in ``test/conftest.py``. Imports no
-rclpy, so it is safe to call first thing.
+- A node's ``main()`` calls :func:`network_from_environment` before ``rclpy.init``: whatever the
+  user set (:data:`NETWORK_VARIABLES`: RMW, discovery range, localhost-only, Fast DDS profiles,
+  static peers, domain) is left exactly as it is; only when none of them is set does the node
+  fall back to the safe local setting (loopback Fast DDS). It returns the line the node logs.
+- Tests, the demo, CI and benchmarks call :func:`configure_loopback_dds`: all their own traffic
+  stays on 127.0.0.1, whatever the environment says (the nodes they start inherit it).
+
+Imports no rclpy, so it is safe to call first thing.
 """
 
 from __future__ import annotations
@@ -13,6 +18,17 @@ import random
 from maru_planner.paths import config_path
 
 LOOPBACK_PROFILE = "fastdds_loopback.xml"
+
+#: The variables through which a user chooses ROS 2 networking; nodes never change them.
+NETWORK_VARIABLES = (
+    "RMW_IMPLEMENTATION",
+    "ROS_AUTOMATIC_DISCOVERY_RANGE",
+    "ROS_LOCALHOST_ONLY",
+    "FASTRTPS_DEFAULT_PROFILES_FILE",
+    "FASTDDS_DEFAULT_PROFILES_FILE",
+    "ROS_STATIC_PEERS",
+    "ROS_DOMAIN_ID",
+)
 
 
 def loopback_dds_environment(domain_id: int | None = None) -> dict[str, str]:
@@ -28,7 +44,7 @@ def loopback_dds_environment(domain_id: int | None = None) -> dict[str, str]:
 
 
 def configure_loopback_dds(domain_id: int | None = None, *, random_domain: bool = False) -> dict[str, str]:
-    """Set the loopback DDS variables in ``os.environ`` and return them.
+    """Set the loopback DDS variables in ``os.environ`` and return them (tests, demo, CI, benchmarks).
 
     The discovery range and profile are always forced (traffic to any other
     address is never wanted). The domain id is taken from ``domain_id``, else a
@@ -41,3 +57,22 @@ def configure_loopback_dds(domain_id: int | None = None, *, random_domain: bool 
     os.environ.pop("ROS_LOCALHOST_ONLY", None)
     os.environ.pop("ROS_STATIC_PEERS", None)
     return env
+
+
+def user_network_settings() -> dict[str, str]:
+    """The networking variables set (non-empty) in this process's environment, by name."""
+    return {name: os.environ[name] for name in NETWORK_VARIABLES if os.environ.get(name)}
+
+
+def network_from_environment() -> str:
+    """A node's networking, before ``rclpy.init``: the user's settings if any, else loopback; the line to log."""
+    settings = user_network_settings()
+    if settings:
+        chosen = ", ".join(f"{name}={value}" for name, value in settings.items())
+        return f"DDS networking from the environment: {chosen}"
+    configure_loopback_dds()
+    return (
+        "DDS networking: no ROS networking variable set, so loopback only "
+        f"(ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST, {LOOPBACK_PROFILE}); set any of "
+        f"{', '.join(NETWORK_VARIABLES)} to choose your own"
+    )
