@@ -33,7 +33,7 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from maru_planner.base import registry
 from maru_planner.errors import InvalidPlanner, MaruError
 from maru_planner.ros import base_conversions as conv
-from maru_planner.ros.env import configure_loopback_dds
+from maru_planner.ros.env import network_from_environment
 from maru_planner_interfaces.srv import PlanBasePath
 
 E = PlanBasePath.Response
@@ -192,9 +192,10 @@ def _accepted(factory, params: dict) -> dict:
 
 
 def main(args=None):
-    configure_loopback_dds()
+    network = network_from_environment()
     rclpy.init(args=args)
     node = BasePlannerNode()
+    node.get_logger().info(network)
     try:
         rclpy.spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):

@@ -59,7 +59,7 @@ from maru_planner.reactive import ElasticStripController, LaserScanData, ScanErr
 from maru_planner.reactive.description import arm_joint_names
 from maru_planner.ros import parameters
 from maru_planner.ros import reactive_conversions as conv
-from maru_planner.ros.env import configure_loopback_dds
+from maru_planner.ros.env import network_from_environment
 
 
 @dataclasses.dataclass(frozen=True)
@@ -417,7 +417,7 @@ class ReactiveNode(Node):
 
 
 def main(args=None) -> int:
-    configure_loopback_dds()
+    network = network_from_environment()
     try:
         rclpy.init(args=args)
     except RuntimeError as exc:  # rcl's RCLError, e.g. a params file that is not valid YAML
@@ -429,6 +429,7 @@ def main(args=None) -> int:
         print(f"reactive_node: bad parameters: {one_line(exc)}", file=sys.stderr)
         rclpy.try_shutdown()
         return 2
+    node.get_logger().info(network)
     try:
         rclpy.spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):
