@@ -5,8 +5,8 @@
 ...     response = client.plan(goal_joints={"waist_yaw": 0.9, ...}, start={...}, planner_id="RRTConnect")
 ...     response.error.code == PlanningError.SUCCESS, response.trajectory
 
-Call ``maru_planner.ros.env.configure_loopback_dds()`` and ``rclpy.init()`` first
-(or pass ``init=True``). Every method returns the service response as is; a
+Call ``rclpy.init()`` first (or pass ``init=True``, which keeps the user's DDS networking, as the
+nodes do: ``maru_planner.ros.env.network_from_environment``). Every method returns the service response as is; a
 call that gets no answer within ``timeout`` raises ``TimeoutError``.
 """
 
@@ -21,7 +21,7 @@ from rclpy.executors import SingleThreadedExecutor
 from sensor_msgs.msg import JointState
 
 from maru_planner.ros import planning_conversions as conv
-from maru_planner.ros.env import configure_loopback_dds
+from maru_planner.ros.env import network_from_environment
 from maru_planner_interfaces.msg import SceneObstacle
 from maru_planner_interfaces.srv import ApplyScene, ComputeIK, GetScene, PlanMotion
 
@@ -36,7 +36,7 @@ class PlanningClient:
 
     def __init__(self, node=None, namespace: str = "", *, node_name: str = "planning_client", init: bool = False):
         if init and not rclpy.ok():
-            configure_loopback_dds()
+            network_from_environment()
             rclpy.init()
         self._owns_node = node is None
         self.node = node if node is not None else rclpy.create_node(node_name)
