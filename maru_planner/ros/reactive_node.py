@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 import sys
 import time
 from collections import deque
@@ -55,7 +56,7 @@ from visualization_msgs.msg import MarkerArray
 
 from maru_planner.errors import InvalidRequest, MaruError
 from maru_planner.params import dataclass_params, param
-from maru_planner.reactive import ElasticStripController, LaserScanData, ScanError, StripParams
+from maru_planner.reactive import ControlOutput, ElasticStripController, LaserScanData, ScanError, StripParams
 from maru_planner.reactive.description import arm_joint_names
 from maru_planner.ros import parameters
 from maru_planner.ros import reactive_conversions as conv
@@ -93,7 +94,7 @@ ROS_PARAMETERS = ("use_sim_time",)  # declared by rclpy itself
 class ThrottledWarnings:
     """Log at most once per period per key, saying how many were suppressed meanwhile."""
 
-    def __init__(self, logger, period_s: float, clock: Callable[[], float] = time.monotonic):
+    def __init__(self, logger: Any, period_s: float, clock: Callable[[], float] = time.monotonic) -> None:
         self._logger, self.period, self._clock = logger, float(period_s), clock
         self._last: dict[str, float] = {}
         self._suppressed: dict[str, int] = {}
@@ -115,7 +116,7 @@ class ThrottledWarnings:
         log(message + suffix)
 
 
-def strip_params_from_config(path) -> StripParams:
+def strip_params_from_config(path: str | os.PathLike) -> StripParams:
     """StripParams from a ``--params-file`` YAML (section ``/**``, ``/**/reactive_node`` ...), defaults elsewhere.
 
     Lets tools outside ROS (the bag recorder, benchmarks) run the controller
@@ -144,7 +145,7 @@ def one_line(exc: BaseException, limit: int = 300) -> str:
 class ReactiveNode(Node):
     """Convert messages, call the elastic-strip controller, publish its commands."""
 
-    def __init__(self, **kwargs):
+    def __init__(self, **kwargs: Any) -> None:
         super().__init__("reactive_node", **kwargs)
         values = parameters.declare_parameters(self, {**STRIP_SPECS, **NODE_SPECS})
         self.settings = NodeSettings(**{name: values[name] for name in NODE_SPECS})
@@ -387,7 +388,7 @@ class ReactiveNode(Node):
             self.get_logger().info("goal reached")
             self._goal_logged = True
 
-    def _publish_arm(self, out, stamp: float) -> None:
+    def _publish_arm(self, out: ControlOutput, stamp: float) -> None:
         if not self.arm_names or out.arm_joint_steps is None or out.arm_joint_positions is None:
             return
         # the scan period, for the velocities; a nominal one at start or after a time jump
@@ -416,7 +417,7 @@ class ReactiveNode(Node):
             self._stop_base()
 
 
-def main(args=None) -> int:
+def main(args: list[str] | None = None) -> int:
     network = network_from_environment()
     try:
         rclpy.init(args=args)
