@@ -1,0 +1,490 @@
+"""Certified collision-free arm paths: continuous validation of straight joint-space segments.
+
+The validation of ``hpp-core`` (HPP's continuous validation), on Pinocchio + coal. For every pair
+the exact :class:`~maru_planner.collision.checker.CollisionChecker` checks (robot geometry vs
+obstacle, and its SRDF-filtered self-collision pairs) two numbers decide:
+
+- a lower bound ``d`` on the pair's distance at a configuration: a bounding-volume bound first
+  (the geometry's bounding sphere against the obstacle's oriented bounding box, or two bounding
+  spheres), the exact coal distance only for the pairs where that bound is not enough;
+- an upper bound ``M`` on how fast that distance can change along a segment:
+  ``M = sum_j c_j |q1_j - q0_j|`` over the joints that move one body of the pair but not the other,
+  ``c_j`` the largest distance from joint ``j``'s axis to any point of the body (revolute; a bound
+  from the joint offsets down the chain plus the geometry's bounding radius) or 1 (prismatic).
+
+On ``q(t) = q0 + t (q1 - q0)``, a pair whose distance at ``t_m`` is ``d`` keeps more than
+``margin`` of clearance for ``|t - t_m| < (d - margin) / M``. Each segment is bisected until those
+intervals cover it (a proof) or the exact distance at a checked configuration is within the margin
+(a counter-example). Bounding volumes only ever prove; exact geometry decides every failure.
+:func:`certify_and_repair` re-plans a failing segment locally. See ``docs/certification.md``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import coal
+import numpy as np
+import pinocchio as pin
+from numba import njit
+
+from maru_planner import errors
+from maru_planner.collision.batch_fk import KinematicTree, joint_poses_nb, sphere_centers_nb, tree_arrays
+from maru_planner.collision.checker import CollisionChecker
+from maru_planner.robot.model import RobotModel
+from maru_planner.scene import Scene
+
+DEFAULT_SAFETY_MARGIN = 0.01  # m
+DISTANCE_TOLERANCE = 1e-6  # m: coal's GJK tolerance, taken off every exact distance
+MIN_INTERVAL = 1e-9  # rad: a piece of segment this short that is still unproven fails as "unproven"
+REVOLUTE = ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned")
+PRISMATIC = ("JointModelPX", "JointModelPY", "JointModelPZ", "JointModelPrismaticUnaligned")
+
+
+@dataclass
+class Certificate:
+    """Whether a piecewise-linear path keeps more than ``margin`` (m) from every checked pair, and its cost.
+
+    ``reason`` of a failure: "collision" (the exact geometry overlaps at ``witness``), "margin" (closer than
+    the margin at ``witness``), "unproven" (a piece shorter than ``MIN_INTERVAL`` stayed unproven) or
+    "timeout". ``min_clearance`` is the smallest distance bound seen at a checked configuration (exact
+    where the bounding volumes were not enough): the path's true minimum lies between ``margin`` and it.
+    """
+
+    valid: bool
+    margin: float
+    first_failing_segment: int = -1
+    reason: str = ""
+    witness: np.ndarray | None = None
+    min_clearance: float = math.inf
+    segment_clearance: list[float] = field(default_factory=list)  # min_clearance of each certified segment
+    checks: int = 0  # configurations evaluated
+    exact_queries: int = 0  # coal distance calls on the exact geometry
+    hull_queries: int = 0  # coal distance calls on convex hulls of meshes
+    seconds: float = 0.0
+
+
+def bounding_sphere(geometry: coal.CollisionGeometry) -> tuple[np.ndarray, float]:
+    """Centre (in the geometry's frame) and radius of a sphere containing ``geometry``."""
+    if isinstance(geometry, coal.BVHModelBase):
+        vertices = np.asarray(geometry.vertices(), dtype=float)
+        center = 0.5 * (vertices.min(axis=0) + vertices.max(axis=0))
+        return center, float(np.linalg.norm(vertices - center, axis=1).max())
+    if isinstance(geometry, coal.Sphere):
+        return np.zeros(3), float(geometry.radius)
+    if isinstance(geometry, (coal.Cylinder, coal.Cone)):
+        return np.zeros(3), float(math.hypot(geometry.radius, geometry.halfLength))
+    geometry.computeLocalAABB()
+    return np.asarray(geometry.aabb_center, dtype=float).copy(), float(geometry.aabb_radius)
+
+
+def convex_hull(mesh: coal.BVHModelBase) -> coal.ConvexBase:
+    """The convex hull of a mesh's vertices: contains the mesh, so its distances are lower bounds."""
+    points = coal.StdVec_Vec3s()
+    for vertex in np.asarray(mesh.vertices(), dtype=float):
+        points.append(vertex)
+    return coal.Convex.convexHull(points, False, "Qt")
+
+
+def joint_levers(robot: RobotModel) -> np.ndarray:
+    """(robot geometries, nq): the most any point of a geometry moves per unit motion of each joint.
+
+    Revolute joint upstream of the geometry: its joint offsets down to the geometry's joint (plus
+    the travel of prismatic joints in between, from the joint limits) plus the geometry's reach from
+    its own joint origin -- a bound on the distance from the axis valid in every configuration.
+    Prismatic: 1. Joints not upstream: 0.
+    """
+    model = robot.model
+    offset = np.zeros(model.njoints)  # longest possible distance from a joint's origin to its parent's
+    prismatic = np.zeros(model.njoints, dtype=bool)
+    for j in range(1, model.njoints):
+        kind, name, i = model.joints[j].shortname(), model.names[j], model.joints[j].idx_q
+        if kind not in REVOLUTE + PRISMATIC:
+            raise errors.InvalidRequest(f"joint {name!r} ({kind}): only revolute and prismatic joints are certified")
+        offset[j] = np.linalg.norm(model.jointPlacements[j].translation)
+        if kind in PRISMATIC:
+            travel = max(abs(robot.lower_limits[i]), abs(robot.upper_limits[i]))
+            if not math.isfinite(travel):
+                raise errors.InvalidRequest(f"prismatic joint {name!r} needs finite limits to be certified")
+            offset[j] += travel
+            prismatic[j] = True
+    geometries = robot.collision_model.geometryObjects
+    levers = np.zeros((len(geometries), model.nq))
+    for g, obj in enumerate(geometries):
+        center, radius = bounding_sphere(obj.geometry)
+        reach = float(np.linalg.norm(obj.placement.act(center))) + radius
+        j = obj.parentJoint
+        while j != 0:
+            levers[g, model.joints[j].idx_q] = 1.0 if prismatic[j] else reach
+            reach += offset[j]
+            j = model.parents[j]
+    return levers
+
+
+def chord_deviation(times: np.ndarray, acceleration_bound: np.ndarray) -> np.ndarray:
+    """Per joint, how far a curve sampled at ``times`` can leave the straight chords between its samples.
+
+    ``acceleration_bound``: per joint, the largest |acceleration| along the curve. Linear interpolation
+    error: ``a dt^2 / 8`` for the longest sample interval ``dt``. Pass it as ``deviation`` to
+    :meth:`PathCertifier.certify_path` to certify the curve itself rather than its chords.
+    """
+    dt = float(np.max(np.diff(np.asarray(times, dtype=float)), initial=0.0))
+    return np.abs(np.asarray(acceleration_bound, dtype=float)) * dt * dt / 8.0
+
+
+@dataclass
+class _Pairs:
+    """The checker's pairs as arrays, for one geometry model (rebuilt when the scene changes)."""
+
+    geom_model: pin.GeometryModel
+    geom_data: pin.GeometryData
+    hull_model: pin.GeometryModel  # the same with every mesh replaced by its convex hull
+    hull_data: pin.GeometryData
+    has_hull: np.ndarray  # (P,) bool: a mesh in the pair (its hull distance is a cheaper lower bound)
+    first: np.ndarray  # (P,) robot geometry
+    second: np.ndarray  # (P,) robot geometry, or obstacle index (into the box arrays) for obstacle pairs
+    obstacle: np.ndarray  # (P,) bool
+    rate: np.ndarray  # (P, nq): distance change per unit |dq_j|
+    gap: np.ndarray  # (P,): exact distance - bounding-volume bound is at most this
+    box_center: np.ndarray  # (K, 3) obstacle bounding boxes in the world
+    box_rot: np.ndarray  # (K, 3, 3)
+    box_half: np.ndarray  # (K, 3)
+
+
+@njit(cache=True)
+def _geometry_centers_nb(configs, parent, kind, axis, prot, ppos, idx_q, joint, local, rot, pos, out):
+    """World centres of the geometries' bounding spheres, ``out[i]`` for ``configs[i]`` (one numba call)."""
+    for i in range(configs.shape[0]):
+        joint_poses_nb(configs[i], parent, kind, axis, prot, ppos, idx_q, rot, pos)
+        sphere_centers_nb(rot, pos, joint, local, out[i])
+
+
+class _Run:
+    """The state of one :meth:`PathCertifier.certify_path` call."""
+
+    def __init__(self, path: np.ndarray, pairs: _Pairs, pair_margin: np.ndarray, deadline: float):
+        self.path, self.pairs, self.pair_margin, self.deadline = path, pairs, pair_margin, deadline
+        self.n_segments = len(path) - 1
+        self.delta = np.diff(path, axis=0)
+        self.span = np.abs(self.delta).max(axis=1, initial=0.0)
+        self.rate = np.abs(self.delta) @ pairs.rate.T  # (segments, pairs): most distance change per segment
+        self.clearance = np.full(self.n_segments, math.inf)
+        self.failed = self.n_segments  # first failing segment so far (n_segments: none)
+        self.reason, self.witness = "", None
+        n_pairs = len(pairs.first)
+        # Pending work, one row per (segment, pair, piece [a, b] of the segment not yet proven for the pair).
+        self.seg = np.repeat(np.arange(self.n_segments), n_pairs)
+        self.pair = np.tile(np.arange(n_pairs), self.n_segments)
+        self.a, self.b = np.zeros(len(self.seg)), np.ones(len(self.seg))
+
+    def fail(self, segment: int, reason: str, q: np.ndarray) -> None:
+        if segment < self.failed:
+            self.failed, self.reason, self.witness = segment, reason, q.copy()
+
+
+class PathCertifier:
+    """Certifies straight joint-space segments and paths on the exact checker's geometry (module doc).
+
+    ``scene_or_checker``: a :class:`CollisionChecker` (its scene and pairs are followed as they change)
+    or a :class:`Scene` (an exact checker is built on it). ``safety_margin`` (m, >= 0): the clearance a
+    certified path keeps from every checked pair. Not thread-safe (one Pinocchio ``Data``).
+    """
+
+    def __init__(
+        self, robot: RobotModel, scene_or_checker: CollisionChecker | Scene | None = None,
+        safety_margin: float = DEFAULT_SAFETY_MARGIN,
+    ):  # fmt: skip
+        if not (math.isfinite(safety_margin) and safety_margin >= 0.0):
+            raise errors.InvalidRequest(f"safety_margin must be a finite number >= 0 m, got {safety_margin}")
+        if isinstance(scene_or_checker, CollisionChecker):
+            self.checker = scene_or_checker
+        else:
+            self.checker = CollisionChecker(robot, scene_or_checker, broadphase="none")
+        self.robot = robot
+        self.safety_margin = float(safety_margin)
+        self._model = robot.model
+        self._data = robot.model.createData()
+        self._levers = joint_levers(robot)
+        geometries = robot.collision_model.geometryObjects
+        self._n_robot = len(geometries)
+        spheres = [bounding_sphere(obj.geometry) for obj in geometries]
+        meshes = [g for g, obj in enumerate(geometries) if isinstance(obj.geometry, coal.BVHModelBase)]
+        self._hulls = {g: convex_hull(geometries[g].geometry) for g in meshes}
+        self._joint = np.array([obj.parentJoint for obj in geometries], dtype=int)
+        self._local = np.array([obj.placement.act(c) for obj, (c, _) in zip(geometries, spheres, strict=True)])
+        self._radius = np.array([r for _, r in spheres])
+        self._chain = self._levers > 0.0
+        self._tree = tree_arrays(KinematicTree.from_pinocchio(robot.model))
+        self._rot = np.empty((self._model.njoints, 3, 3))
+        self._pos = np.empty((self._model.njoints, 3))
+        self._pairs: _Pairs | None = None
+
+    # ---------------------------------------------------------------- public --
+    def certify_segment(
+        self, q0: np.ndarray, q1: np.ndarray, deadline: float | None = None, *, margin: float | None = None
+    ) -> Certificate:
+        """Certify the straight segment ``q0 -> q1`` (full configurations)."""
+        return self.certify_path(np.array([q0, q1], dtype=float), deadline, margin=margin)
+
+    def certify_path(
+        self,
+        path: np.ndarray,
+        deadline: float | None = None,
+        *,
+        margin: float | None = None,
+        deviation: np.ndarray | None = None,
+    ) -> Certificate:
+        """Certify every segment of ``path`` (n, nq full configurations); reports the first failing one.
+
+        ``margin`` overrides ``safety_margin``. ``deviation`` (nq,): per joint, how far the real motion may
+        leave the straight segments (a sampled curve: :func:`chord_deviation`); each pair's margin grows
+        by the motion that deviation can cause. ``deadline`` (``time.monotonic()``): a certification still
+        running then fails with reason "timeout".
+        """
+        t0 = time.monotonic()
+        path = np.atleast_2d(np.asarray(path, dtype=float))
+        margin = self.safety_margin if margin is None else float(margin)
+        pairs = self._pair_table()
+        pair_margin = np.full(len(pairs.first), margin)
+        if deviation is not None:
+            pair_margin += pairs.rate @ np.abs(np.asarray(deviation, dtype=float))
+        cert = Certificate(valid=True, margin=margin)
+        run = _Run(path, pairs, pair_margin, math.inf if deadline is None else deadline)
+        while len(run.seg):
+            self._check_rows(run, cert)
+        if run.failed < run.n_segments:
+            cert.valid, cert.first_failing_segment = False, run.failed
+            cert.reason, cert.witness = run.reason, run.witness
+        cert.segment_clearance = run.clearance[: run.failed].tolist()
+        cert.min_clearance = float(run.clearance[: run.failed + 1].min(initial=math.inf))
+        cert.seconds = time.monotonic() - t0
+        return cert
+
+    def clearance(self, q: np.ndarray) -> float:
+        """Exact smallest distance over all checked pairs at ``q`` (m; <= 0 in collision, inf without pairs)."""
+        pairs = self._pair_table()
+        if not len(pairs.first):
+            return math.inf
+        pin.computeDistances(self._model, self._data, pairs.geom_model, pairs.geom_data, np.asarray(q, dtype=float))
+        return min(r.min_distance for r in pairs.geom_data.distanceResults) - DISTANCE_TOLERANCE
+
+    # ------------------------------------------------------------ internals --
+    def _check_rows(self, run: _Run, cert: Certificate) -> None:
+        """Evaluate every pending row at the middle of its piece at once; queue the parts still unproven.
+
+        At the middle ``m`` of its piece ``[a, b]`` a row's pair is proven for ``|t - m| <= (d - margin) / rate``;
+        what that radius leaves of ``[a, b]`` goes back to the queue. Rows at the same configuration share
+        its forward kinematics.
+        """
+        seg, pair = run.seg, run.pair
+        mid, half = 0.5 * (run.a + run.b), 0.5 * (run.b - run.a)
+        keys, first_row, config_of = np.unique(seg + 0.5 * mid, return_index=True, return_inverse=True)
+        configs = run.path[seg[first_row]] + mid[first_row, None] * run.delta[seg[first_row]]
+        cert.checks += len(keys)
+        margin = run.pair_margin[pair]
+        rate = run.rate[seg, pair]
+        need = margin + half * rate
+        bound = self._bounds(configs, run.pairs, config_of, pair)
+        refine = (bound < need) & (bound + run.pairs.gap[pair] >= need)
+        exact = self._refine(configs, run.pairs, config_of, pair, refine, margin, bound, cert)
+        np.minimum.at(run.clearance, seg, np.where(refine | (bound >= need), bound, math.inf))
+        slack = bound - margin
+        for row in np.flatnonzero(exact & (slack <= 0.0)):
+            reason = "collision" if bound[row] <= 0.0 else "margin"
+            run.fail(int(seg[row]), reason, configs[config_of[row]])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            reach = np.where(rate > 0.0, np.maximum(slack, 0.0) / rate, math.inf)
+        open_ = (reach < half) & (seg < run.failed)
+        stuck = open_ & ((half * run.span[seg] < MIN_INTERVAL) | (time.monotonic() > run.deadline))
+        for row in np.flatnonzero(stuck):
+            reason = "unproven" if half[row] * run.span[seg[row]] < MIN_INTERVAL else "timeout"
+            run.fail(int(seg[row]), reason, configs[config_of[row]])
+        keep = np.flatnonzero(open_ & (seg < run.failed))
+        run.seg, run.pair = np.tile(seg[keep], 2), np.tile(pair[keep], 2)
+        run.a = np.concatenate([run.a[keep], mid[keep] + reach[keep]])
+        run.b = np.concatenate([mid[keep] - reach[keep], run.b[keep]])
+
+    def _bounds(self, configs: np.ndarray, pairs: _Pairs, config_of: np.ndarray, pair: np.ndarray) -> np.ndarray:
+        """Bounding-volume lower bound of each row's pair distance at its configuration."""
+        centers = np.empty((len(configs), self._n_robot, 3))
+        _geometry_centers_nb(configs, *self._tree, self._joint, self._local, self._rot, self._pos, centers)
+        first, second, obstacle = pairs.first[pair], pairs.second[pair], pairs.obstacle[pair]
+        bound = np.empty(len(pair))
+        env = np.flatnonzero(obstacle)
+        if len(env):
+            g, k = first[env], second[env]
+            local = np.einsum("rba,rb->ra", pairs.box_rot[k], centers[config_of[env], g] - pairs.box_center[k])
+            outside = np.linalg.norm(np.maximum(np.abs(local) - pairs.box_half[k], 0.0), axis=1)
+            bound[env] = outside - self._radius[g]
+        own = np.flatnonzero(~obstacle)
+        if len(own):
+            c, g, h = config_of[own], first[own], second[own]
+            gap = np.linalg.norm(centers[c, g] - centers[c, h], axis=1)
+            bound[own] = gap - self._radius[g] - self._radius[h]
+        return bound
+
+    def _refine(self, configs, pairs: _Pairs, config_of, pair, refine, margin, bound, cert: Certificate) -> np.ndarray:
+        """Replace ``bound`` on the ``refine`` rows by a coal distance; returns where it is the exact one.
+
+        A pair with a mesh is first measured on the convex hulls (a lower bound, ~100x cheaper than the
+        mesh); the mesh itself only where the hull distance is within the margin: exact geometry decides.
+        """
+        exact = np.zeros(len(pair), dtype=bool)
+        rows = np.flatnonzero(refine)
+        rows = rows[np.argsort(config_of[rows], kind="stable")]
+        current, placed = -1, set()
+        for row in rows:
+            if config_of[row] != current:
+                current, placed = config_of[row], set()
+                pin.forwardKinematics(self._model, self._data, configs[current])
+            p = int(pair[row])
+            if pairs.has_hull[p]:
+                cert.hull_queries += 1
+                bound[row] = self._distance(pairs.hull_model, pairs.hull_data, p, placed)
+                if bound[row] > margin[row]:
+                    continue
+            cert.exact_queries += 1
+            bound[row] = self._distance(pairs.geom_model, pairs.geom_data, p, placed)
+            exact[row] = True
+        return exact
+
+    def _distance(self, model: pin.GeometryModel, data: pin.GeometryData, pair: int, placed: set) -> float:
+        """Coal distance of ``pair`` at the last forward kinematics (placements updated once per model)."""
+        if id(model) not in placed:
+            pin.updateGeometryPlacements(self._model, self._data, model, data)
+            placed.add(id(model))
+        return pin.computeDistance(model, data, pair).min_distance - DISTANCE_TOLERANCE
+
+    def _pair_table(self) -> _Pairs:
+        geom_model = self.checker.geometry_model
+        if self._pairs is None or self._pairs.geom_model is not geom_model:
+            self._pairs = self._build_pairs(geom_model)
+        return self._pairs
+
+    def _build_pairs(self, geom_model: pin.GeometryModel) -> _Pairs:
+        n = self._n_robot
+        objects = geom_model.geometryObjects
+        boxes = [_bounding_box(objects[k]) for k in range(n, geom_model.ngeoms)]
+        first, second, obstacle, rate, gap = [], [], [], [], []
+        for pair in geom_model.collisionPairs:
+            a, b = sorted((pair.first, pair.second))
+            if b >= n:
+                center, rot, half, exact_box = boxes[b - n]
+                first.append(a), second.append(b - n), obstacle.append(True)
+                rate.append(self._levers[a])
+                gap.append(2.0 * self._radius[a] + (0.0 if exact_box else 2.0 * float(np.linalg.norm(half))))
+            else:
+                only_a, only_b = self._chain[a] & ~self._chain[b], self._chain[b] & ~self._chain[a]
+                first.append(a), second.append(b), obstacle.append(False)
+                rate.append(np.where(only_a, self._levers[a], 0.0) + np.where(only_b, self._levers[b], 0.0))
+                gap.append(2.0 * (self._radius[a] + self._radius[b]))
+        hull_model = geom_model.copy()
+        meshes = [k for k, obj in enumerate(objects) if isinstance(obj.geometry, coal.BVHModelBase)]
+        for k in meshes:
+            hull = self._hulls[k] if k < n else convex_hull(objects[k].geometry)
+            hull_model.geometryObjects[k].geometry = hull
+        has_hull = [pair.first in meshes or pair.second in meshes for pair in geom_model.collisionPairs]
+        return _Pairs(
+            geom_model=geom_model,
+            geom_data=pin.GeometryData(geom_model),
+            hull_model=hull_model,
+            hull_data=pin.GeometryData(hull_model),
+            has_hull=np.array(has_hull, dtype=bool),
+            first=np.array(first, dtype=int),
+            second=np.array(second, dtype=int),
+            obstacle=np.array(obstacle, dtype=bool),
+            rate=np.array(rate, dtype=float).reshape(-1, self._model.nq),
+            gap=np.array(gap, dtype=float),
+            box_center=np.array([c for c, _, _, _ in boxes], dtype=float).reshape(-1, 3),
+            box_rot=np.array([r for _, r, _, _ in boxes], dtype=float).reshape(-1, 3, 3),
+            box_half=np.array([h for _, _, h, _ in boxes], dtype=float).reshape(-1, 3),
+        )
+
+
+def _bounding_box(obj: pin.GeometryObject) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
+    """World centre, rotation and half extents of a fixed obstacle's bounding box; True if it is the obstacle."""
+    geometry = obj.geometry
+    geometry.computeLocalAABB()
+    lo, hi = np.asarray(geometry.aabb_local.min_, dtype=float), np.asarray(geometry.aabb_local.max_, dtype=float)
+    placement = obj.placement
+    return placement.act(0.5 * (lo + hi)), placement.rotation.copy(), 0.5 * (hi - lo), isinstance(geometry, coal.Box)
+
+
+# ------------------------------------------------------------------ repair --
+LocalPlanner = Callable[[np.ndarray, np.ndarray, float, float], np.ndarray | None]
+
+
+@dataclass
+class CertifiedPath:
+    """Result of :func:`certify_and_repair`: the certified path (None if none could be made) and its cost."""
+
+    path: np.ndarray | None
+    certificate: Certificate  # the last certification; checks, exact queries and seconds summed over all
+    repairs: int = 0  # local re-plans
+
+
+def certify_and_repair(
+    certifier: PathCertifier,
+    path: np.ndarray,
+    local_planner: LocalPlanner,
+    deadline: float,
+    *,
+    max_repairs: int = 3,
+    certify_deadline: float | None = None,
+) -> CertifiedPath:
+    """Certify ``path``; re-plan each failing segment locally (``local_planner``) until certified or out of tries.
+
+    ``local_planner(qa, qb, margin, deadline)`` returns full configurations from ``qa`` to ``qb`` (None if it
+    finds none); its path is certified like the rest. A failing segment is re-planned between the nearest
+    waypoints around it that keep the margin. A start or goal closer than ``safety_margin`` lowers the
+    margin of this path to half its clearance (nothing nearer can be certified). Repairs stop at
+    ``deadline``; certification itself at ``certify_deadline`` (None: no limit).
+    """
+    path = np.atleast_2d(np.asarray(path, dtype=float))
+    margin, done, repairs, relaxed = certifier.safety_margin, 0, 0, False
+    total = Certificate(valid=False, margin=margin)
+    while True:
+        cert = certifier.certify_path(path[done:], certify_deadline, margin=margin)
+        _accumulate(total, cert, done)
+        if cert.valid:
+            return CertifiedPath(path, total, repairs)
+        if cert.reason == "margin" and not relaxed:
+            relaxed = True
+            ends = min(certifier.clearance(path[0]), certifier.clearance(path[-1]))
+            if ends <= margin:
+                margin, done = 0.5 * max(ends, 0.0), 0
+                total.margin = margin
+                continue
+        if cert.reason == "timeout" or repairs >= max_repairs or time.monotonic() >= deadline:
+            return CertifiedPath(None, total, repairs)
+        a, b = _repair_anchors(certifier, path, total.first_failing_segment, margin)
+        repairs += 1
+        local = local_planner(path[a], path[b], margin, deadline)
+        if local is None:
+            return CertifiedPath(None, total, repairs)
+        path, done = np.vstack([path[:a], np.atleast_2d(local), path[b + 1 :]]), a
+
+
+def _repair_anchors(certifier: PathCertifier, path: np.ndarray, segment: int, margin: float) -> tuple[int, int]:
+    """Waypoint indices around ``segment`` that keep more than ``margin`` (the path's ends at the latest)."""
+    a, b = segment, segment + 1
+    while a > 0 and certifier.clearance(path[a]) <= margin:
+        a -= 1
+    while b < len(path) - 1 and certifier.clearance(path[b]) <= margin:
+        b += 1
+    return a, b
+
+
+def _accumulate(total: Certificate, cert: Certificate, offset: int) -> None:
+    """Fold the certificate of ``path[offset:]`` into ``total`` (the whole path's; costs summed)."""
+    total.valid, total.reason, total.witness = cert.valid, cert.reason, cert.witness
+    total.first_failing_segment = cert.first_failing_segment + offset if not cert.valid else -1
+    total.segment_clearance = total.segment_clearance[:offset] + cert.segment_clearance
+    total.min_clearance = min(total.segment_clearance, default=math.inf) if cert.valid else cert.min_clearance
+    total.checks += cert.checks
+    total.exact_queries += cert.exact_queries
+    total.hull_queries += cert.hull_queries
+    total.seconds += cert.seconds

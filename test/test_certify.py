@@ -1,0 +1,230 @@
+"""PathCertifier: continuous validation with a proof (thin obstacles, margins, the motion bound, repair)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from maru_planner import errors
+from maru_planner.collision import CollisionChecker
+from maru_planner.collision.certify import (
+    PathCertifier,
+    certify_and_repair,
+    chord_deviation,
+    convex_hull,
+    joint_levers,
+)
+from maru_planner.collision.spheres import densify, verify_path
+from maru_planner.paths import config_path
+from maru_planner.robot import RobotModel, load_example_robot
+from maru_planner.scene import Obstacle, Scene
+
+OLD_STEP = 0.02  # rad: the discrete validator's default motion resolution
+TIP_RADIUS = 0.002  # m: the toy arm's tip ball
+REACH = 0.6  # m: joint 1 to the tip ball's centre (0.3 + 0.3)
+
+TWO_LINK_ARM = """<robot name="two_link">
+  <link name="base"/>
+  <link name="upper">
+    <collision><origin xyz="0.15 0 0"/><geometry><box size="0.3 0.02 0.02"/></geometry></collision>
+  </link>
+  <link name="fore">
+    <collision><origin xyz="0.3 0 0"/><geometry><sphere radius="{tip}"/></geometry></collision>
+  </link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="upper"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+  <joint name="j2" type="revolute"><parent link="upper"/><child link="fore"/><origin xyz="0.3 0 0"/>
+    <axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+</robot>
+"""
+
+
+@pytest.fixture(scope="module")
+def arm(tmp_path_factory) -> RobotModel:
+    """Two revolute joints about z; the forearm is a 2 mm ball at 0.6 m from joint 1 (arm stretched)."""
+    urdf = tmp_path_factory.mktemp("arm") / "two_link.urdf"
+    urdf.write_text(TWO_LINK_ARM.format(tip=TIP_RADIUS))
+    return RobotModel.from_urdf(urdf)
+
+
+def plate_at(angle: float, thickness: float = 0.002, radial: float = 0.05) -> Obstacle:
+    """A thin plate across the tip's circle at ``angle`` (rad), ``thickness`` along the circle."""
+    pose = np.eye(4)
+    pose[:3, :3] = pin.rpy.rpyToMatrix(0.0, 0.0, angle)
+    pose[:3, 3] = [REACH * np.cos(angle), REACH * np.sin(angle), 0.0]
+    return Obstacle("plate", "box", size=(radial, thickness, 0.05), pose=pose)
+
+
+def test_thin_plate_between_the_old_validators_states_is_caught(arm):
+    # States at every 0.02 rad; the plate sits half-way between two of them, out of reach of both:
+    # at 0.02 and 0.04 rad the ball is 6 mm from the plate's centre, 3 mm from its faces.
+    checker = CollisionChecker(arm, Scene([plate_at(0.03)]))
+    path = np.array([[0.0, 0.0], [0.2, 0.0]])
+    assert verify_path(checker, path, OLD_STEP).valid  # every discrete step misses it
+    certificate = PathCertifier(arm, checker, safety_margin=0.0).certify_path(path)
+    assert not certificate.valid
+    assert certificate.reason == "collision" and certificate.first_failing_segment == 0
+    assert not checker.is_valid(certificate.witness)
+    assert not verify_path(checker, path, 1e-4).valid  # and it is really there
+
+
+def test_thin_plate_off_the_path_is_certified_clear(arm):
+    checker = CollisionChecker(arm, Scene([plate_at(0.3)]))
+    certificate = PathCertifier(arm, checker, safety_margin=0.0).certify_path(np.array([[0.0, 0.0], [0.2, 0.0]]))
+    assert certificate.valid and certificate.first_failing_segment == -1
+    assert certificate.min_clearance > 0.0
+
+
+def test_margin_is_kept_and_enforced(arm):
+    # The ball passes the plate's end 20 mm away (plate radial extent ends 20 mm inside the tip circle).
+    plate = Obstacle("plate", "box", size=(0.1, 0.002, 0.05), pose=[REACH - 0.07 - TIP_RADIUS, 0.0, 0.0])
+    checker = CollisionChecker(arm, Scene([plate]))
+    path = np.array([[-0.2, 0.0], [0.2, 0.0]])
+    clearance = 0.02
+    for margin in (0.0, 0.5 * clearance):
+        certificate = PathCertifier(arm, checker, safety_margin=margin).certify_path(path)
+        assert certificate.valid
+        assert certificate.margin <= certificate.min_clearance
+    certificate = PathCertifier(arm, checker, safety_margin=1.5 * clearance).certify_path(path)
+    assert not certificate.valid and certificate.reason == "margin"
+    assert 0.0 < checker.clearance(certificate.witness) <= 1.5 * clearance
+    with pytest.raises(errors.InvalidRequest, match="safety_margin"):
+        PathCertifier(arm, checker, safety_margin=-0.01)
+
+
+def test_chord_deviation_widens_the_margin(arm):
+    assert np.allclose(chord_deviation([0.0, 0.1, 0.3], [8.0, 2.0]), [8.0 * 0.04 / 8, 2.0 * 0.04 / 8])
+    plate = Obstacle("plate", "box", size=(0.1, 0.002, 0.05), pose=[REACH - 0.07 - TIP_RADIUS, 0.0, 0.0])
+    certifier = PathCertifier(arm, Scene([plate]), safety_margin=0.0)
+    path = np.array([[-0.2, 0.0], [0.2, 0.0]])
+    # The ball moves at most 0.602 m/rad (joint 1) + 0.302 m/rad (joint 2): 9 mm, then 27 mm off the chords.
+    assert certifier.certify_path(path, deviation=[0.01, 0.01]).valid
+    assert not certifier.certify_path(path, deviation=[0.03, 0.03]).valid
+
+
+def test_scene_edits_are_followed(arm):
+    scene = Scene()
+    certifier = PathCertifier(arm, CollisionChecker(arm, scene), safety_margin=0.0)
+    path = np.array([[0.0, 0.0], [0.2, 0.0]])
+    assert certifier.certify_path(path).valid
+    scene.add(plate_at(0.1))
+    assert not certifier.certify_path(path).valid
+
+
+def test_levers_bound_the_motion_of_every_vertex():
+    """The motion bound the proof rests on: no point of a link moves farther than levers @ |dq|."""
+    robot = load_example_robot("panda")
+    levers = joint_levers(robot)
+    rng = np.random.default_rng(3)
+    data = robot.model.createData()
+    geometries = robot.collision_model.geometryObjects
+
+    def local_points(geometry) -> np.ndarray:
+        if hasattr(geometry, "vertices"):
+            return np.asarray(geometry.vertices(), dtype=float)
+        corners = np.array(np.meshgrid([-1, 1], [-1, 1], [-1, 1])).reshape(3, -1).T
+        return corners * np.asarray(geometry.halfSide)
+
+    def vertices(q):
+        pin.forwardKinematics(robot.model, data, q)
+        out = []
+        for obj in geometries:
+            placement = data.oMi[obj.parentJoint] * obj.placement
+            out.append(local_points(obj.geometry) @ placement.rotation.T + placement.translation)
+        return out
+
+    for _ in range(20):
+        q0 = robot.random_configuration(rng)
+        q1 = np.clip(q0 + rng.normal(0.0, 0.3, robot.nq), robot.lower_limits, robot.upper_limits)
+        for g, (a, b) in enumerate(zip(vertices(q0), vertices(q1), strict=True)):
+            moved = np.linalg.norm(b - a, axis=1).max()
+            assert moved <= levers[g] @ np.abs(q1 - q0) + 1e-9, geometries[g].name
+
+
+def test_prismatic_joints_need_finite_limits():
+    robot = load_example_robot("panda")
+    finger = robot.joint_indices(["panda_finger_joint1"])[0]
+    robot.upper_limits[finger] = np.inf
+    with pytest.raises(errors.InvalidRequest, match="panda_finger_joint1"):
+        joint_levers(robot)
+
+
+def test_convex_hull_contains_the_mesh():
+    mesh = load_example_robot("panda").collision_model.geometryObjects[3].geometry
+    hull = convex_hull(mesh)
+    points = np.asarray(hull.points(), dtype=float)
+    assert len(points) <= mesh.num_vertices
+    vertices = np.asarray(mesh.vertices(), dtype=float)
+    assert np.allclose(vertices.min(axis=0), points.min(axis=0))
+    assert np.allclose(vertices.max(axis=0), points.max(axis=0))
+
+
+@pytest.fixture(scope="module")
+def maru13():
+    robot = RobotModel.maru1()
+    return robot, CollisionChecker(robot, Scene.from_yaml(config_path("scenes", "maru13_desk_box.yaml")))
+
+
+def test_certified_segments_are_free_at_a_fine_independent_step(maru13):
+    robot, checker = maru13
+    margin = 0.005
+    padded = CollisionChecker(robot, checker.scene, padding=margin)  # valid: more than the margin away
+    certifier = PathCertifier(robot, checker, safety_margin=margin)
+    rng = np.random.default_rng(7)
+    outcomes = {True: 0, False: 0}
+    while min(outcomes.values()) < 4:
+        q0 = robot.random_configuration(rng)
+        q1 = np.clip(q0 + rng.normal(0.0, 2.0, robot.nq), robot.lower_limits, robot.upper_limits)
+        if not (padded.is_valid(q0) and padded.is_valid(q1)):
+            continue
+        certificate = certifier.certify_segment(q0, q1)
+        outcomes[certificate.valid] += 1
+        if certificate.valid:
+            fine, _ = densify(np.array([q0, q1]), 1e-3)
+            assert padded.first_invalid(fine) == -1
+        else:
+            assert certificate.reason in ("collision", "margin")
+            assert not padded.is_valid(certificate.witness)
+
+
+class DetourPlanner:
+    """A local planner that folds joint 2 while joint 1 sweeps, so the ball passes inside the plate."""
+
+    def __init__(self):
+        self.calls = []
+
+    def __call__(self, qa, qb, margin, deadline):
+        self.calls.append((qa.copy(), qb.copy(), margin))
+        fold = np.array([0.0, 1.2])
+        return np.array([qa, qa + fold, qb + fold, qb])
+
+
+def test_a_failing_segment_is_repaired_locally(arm):
+    # Folded by 1.2 rad the ball is 0.495 m from joint 1; unfolding, it crosses the plate's line at 0.573 m.
+    plate = Obstacle("plate", "box", size=(0.04, 0.002, 0.05), pose=[REACH + 0.01, 0.0, 0.0])
+    certifier = PathCertifier(arm, Scene([plate]), safety_margin=0.005)
+    path = np.array([[-0.4, 0.0], [-0.3, 0.0], [0.3, 0.0], [0.4, 0.0]])
+    local = DetourPlanner()
+    repaired = certify_and_repair(certifier, path, local, deadline=np.inf)
+    assert repaired.repairs == 1 and repaired.certificate.valid
+    [(qa, qb, margin)] = local.calls
+    assert np.allclose(qa, path[1]) and np.allclose(qb, path[2]) and margin == 0.005
+    assert np.allclose(repaired.path[0], path[0]) and np.allclose(repaired.path[-1], path[-1])
+    assert certifier.certify_path(repaired.path).valid
+    assert repaired.certificate.min_clearance >= 0.005
+
+
+def test_repair_gives_up_without_a_local_path(arm):
+    certifier = PathCertifier(arm, Scene([plate_at(0.0)]), safety_margin=0.0)
+    repaired = certify_and_repair(certifier, np.array([[-0.2, 0.0], [0.2, 0.0]]), lambda *_: None, deadline=np.inf)
+    assert repaired.path is None and repaired.repairs == 1
+    assert not repaired.certificate.valid and repaired.certificate.reason == "collision"
+
+
+def test_an_end_closer_than_the_margin_lowers_it_to_half_its_clearance(arm):
+    plate = Obstacle("plate", "box", size=(0.1, 0.002, 0.05), pose=[REACH - 0.05 - TIP_RADIUS - 0.004, 0.0, 0.0])
+    certifier = PathCertifier(arm, Scene([plate]), safety_margin=0.01)  # the ball starts 4 mm from it
+    repaired = certify_and_repair(certifier, np.array([[0.0, 0.0], [0.3, 0.0]]), lambda *_: None, deadline=np.inf)
+    assert repaired.certificate.valid and repaired.repairs == 0
+    assert repaired.certificate.margin == pytest.approx(0.002, abs=1e-5)
