@@ -34,6 +34,12 @@ class InvalidParameter(InvalidRequest):
     source = "parameters"
 
 
+class Busy(MaruError):
+    """A node's bounded request queue is full; the request was not started (retry later)."""
+
+    source = "node"
+
+
 class InvalidGroup(InvalidRequest):
     """The planning group does not exist."""
 

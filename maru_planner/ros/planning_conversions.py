@@ -37,6 +37,7 @@ ERROR_CODES: tuple[tuple[type[errors.MaruError], int], ...] = (
     (errors.InvalidScene, PlanningError.INVALID_SCENE),
     (errors.PlanningTimedOut, PlanningError.TIMED_OUT),
     (errors.PlanningFailed, PlanningError.PLANNING_FAILED),
+    (errors.Busy, PlanningError.BUSY),
 )
 
 # PlanStatus member name -> code (the status of a MotionResult without a typed error).
