@@ -25,7 +25,7 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from maru_planner.base.mspp import MultiStagePlanner  # noqa: E402
+from maru_planner.base.mspp import LocalMultiStagePlanner, MultiStagePlanner  # noqa: E402
 from maru_planner.base.scenes import build_all  # noqa: E402
 from maru_planner.base.se2 import SE2AStarPlanner  # noqa: E402
 
@@ -34,9 +34,8 @@ TABLE1 = ("easy", "medium", "hard", "impossible")
 
 
 def stage_summary(result) -> list[dict]:
-    return [{"name": s["name"], "time": s.get("time", 0.0), "expansions": s.get("expansions", 0),
-             "collision_checks": s.get("collision_checks", 0), "decided": s.get("decided", False)}
-            for s in result.stats.get("stages", [])]
+    return [{"name": s.name, "time": s.time, "expansions": s.expansions, "collision_checks": s.collision_checks,
+             "decided": s.decided} for s in getattr(result.stats, "stages", [])]
 
 
 def run(repeats: int) -> dict:
@@ -44,11 +43,11 @@ def run(repeats: int) -> dict:
     scenes = build_all()
     # warm-up: compile / load numba kernels
     grid, prob = scenes["medium"]
-    MultiStagePlanner(prob["footprint"], local=True).plan(grid, prob["start"], prob["goal"])
+    LocalMultiStagePlanner(prob["footprint"]).plan(grid, prob["start"], prob["goal"])
     for name, (grid, prob) in scenes.items():
         fp = prob["footprint"]
         row = {"paper": prob["paper"], "grid": [grid.width, grid.height], "resolution": grid.resolution}
-        planners = {"mspp": MultiStagePlanner(fp), "mspp_local": MultiStagePlanner(fp, local=True),
+        planners = {"mspp": MultiStagePlanner(fp), "mspp_local": LocalMultiStagePlanner(fp),
                     "full": SE2AStarPlanner(fp)}
         times = {label: [] for label in planners}
         results, excess = {}, []
@@ -57,14 +56,14 @@ def run(repeats: int) -> dict:
                 t = time.perf_counter()
                 results[label] = planner.plan(grid, prob["start"], prob["goal"])
                 times[label].append(time.perf_counter() - t)
-            pre = sum(st.get("time", 0.0) for st in results["mspp"].stats["stages"] if st["name"] in ("ECA", "BAA"))
+            pre = sum(st.time for st in results["mspp"].stats.stages if st.name in ("ECA", "BAA"))
             excess.append(times["mspp"][-1] - times["full"][-1] - pre)
         row["mspp_excess_median"] = statistics.median(excess)
         for label, result in results.items():
             row[label] = {
-                "time": statistics.median(times[label]), "time_min": min(times[label]), "status": result.status,
-                "message": result.message, "deciding_stage": result.stats.get("deciding_stage"),
-                "expansions": result.stats["expansions"], "collision_checks": result.stats["collision_checks"],
+                "time": statistics.median(times[label]), "time_min": min(times[label]), "status": result.status.value,
+                "message": result.message, "deciding_stage": result.stats.deciding_stage,
+                "expansions": result.stats.expansions, "collision_checks": result.stats.collision_checks,
                 "path_poses": len(result.path), "path_length": result.path_length(), "stages": stage_summary(result),
                 "_result": result,
             }

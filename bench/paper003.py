@@ -5,8 +5,9 @@
 For each query: planning time, expanded cells, peak memory of the planning
 call (tracemalloc, a separate run), path length / optimal (A*'s octile cost,
 or the MovingAI optimum). Both planners get the same already-grown map.
-A* runs twice: the same algorithm in pure Python (like the tunnel planner)
-and numba-compiled (what the package uses). tracemalloc does not see
+A* runs twice: the same algorithm in pure Python (like the tunnel planner;
+``python_astar`` below, the baseline of this benchmark only) and numba-compiled
+(what the package uses). tracemalloc does not see
 numba's internal allocations, so its numba memory is left out.
 Writes bench/results/paper003.{json,md,png} and paper003_house.png.
 """
@@ -14,7 +15,9 @@ Writes bench/results/paper003.{json,md,png} and paper003_house.png.
 from __future__ import annotations
 
 import argparse
+import heapq
 import json
+import math
 import sys
 import time
 import tracemalloc
@@ -29,7 +32,7 @@ sys.path.insert(0, str(ROOT / "bench"))
 from movingai import load_map, load_scenarios  # noqa: E402
 from paper003_maps import HOUSE_GOAL, HOUSE_RADIUS, HOUSE_START, far_free_pair, rooms_map  # noqa: E402
 
-from maru_planner.base.astar import astar_2d  # noqa: E402
+from maru_planner.base.astar import AStarResult, astar_2d  # noqa: E402
 from maru_planner.base.grid import OccupancyGrid  # noqa: E402
 from maru_planner.base.tunnel import TunnelPlanner  # noqa: E402
 from maru_planner.paths import benchmarks_dir  # noqa: E402
@@ -63,22 +66,62 @@ def run_tunnel(occ, s, g, memory: bool) -> dict:
     t0 = time.perf_counter()
     plan = planner.plan_cells(occ, s, g)
     elapsed = time.perf_counter() - t0
-    row = {"planner": "tunnel", "success": plan.status == "solved", "time": elapsed,
-           "expanded": plan.stats["expansions"], "length": polyline_length(plan.waypoints),
-           "attempts": plan.stats["attempts"], "big_cell": plan.attempts[-1].big_cell_size if plan.attempts else None}
+    row = {"planner": "tunnel", "success": plan.error is None, "time": elapsed,
+           "expanded": plan.stats.expansions, "length": polyline_length(plan.waypoints),
+           "attempts": plan.stats.attempts, "big_cell": plan.attempts[-1].big_cell_size if plan.attempts else None}
     if memory:
         row["peak_bytes"] = peak_memory(lambda: TunnelPlanner().plan_cells(occ, s, g))
     return row, plan
 
 
+def python_astar(blocked: np.ndarray, start, goal) -> AStarResult:
+    """The package's plain A* (8-connected, octile, no corner cutting, ties to larger g) in pure Python."""
+    height, width = blocked.shape
+    (sr, sc), (gr, gc) = (int(v) for v in start), (int(v) for v in goal)
+
+    def octile(dr: int, dc: int) -> float:
+        dr, dc = abs(dr), abs(dc)
+        return max(dr, dc) + (math.sqrt(2.0) - 1.0) * min(dr, dc)
+
+    moves = [(dr, dc, math.sqrt(2.0) if dr and dc else 1.0)
+             for dr, dc in ((0, 1), (1, 0), (0, -1), (-1, 0), (1, 1), (1, -1), (-1, 1), (-1, -1))]
+    g_best, parent, closed = {(sr, sc): 0.0}, {}, set()
+    heap = [(octile(sr - gr, sc - gc), 0.0, (sr, sc))]
+    expansions = 0
+    while heap:
+        _, neg_g, (r, c) = heapq.heappop(heap)
+        if (r, c) in closed:
+            continue
+        closed.add((r, c))
+        expansions += 1
+        if (r, c) == (gr, gc):
+            cells = [(r, c)]
+            while cells[-1] in parent:
+                cells.append(parent[cells[-1]])
+            return AStarResult(np.array(cells[::-1]), -neg_g, expansions)
+        for dr, dc, step in moves:
+            nr, nc = r + dr, c + dc
+            if not (0 <= nr < height and 0 <= nc < width) or blocked[nr, nc]:
+                continue
+            if dr and dc and (blocked[nr, c] or blocked[r, nc]):
+                continue
+            ng = -neg_g + step
+            if ng < g_best.get((nr, nc), math.inf) and (nr, nc) not in closed:
+                g_best[(nr, nc)] = ng
+                parent[(nr, nc)] = (r, c)
+                heapq.heappush(heap, (ng + octile(nr - gr, nc - gc), -ng, (nr, nc)))
+    return AStarResult(np.zeros((0, 2), dtype=int), math.inf, expansions)
+
+
 def run_astar(occ, s, g, use_numba: bool, memory: bool) -> dict:
+    search = (lambda: astar_2d(occ, s, g)) if use_numba else (lambda: python_astar(occ, s, g))
     t0 = time.perf_counter()
-    out = astar_2d(occ, s, g, use_numba=use_numba)
+    out = search()
     elapsed = time.perf_counter() - t0
     row = {"planner": "astar_numba" if use_numba else "astar_python", "success": len(out.path) > 0,
            "time": elapsed, "expanded": int(out.expansions), "length": float(out.cost) if len(out.path) else None}
     if memory and not use_numba:
-        row["peak_bytes"] = peak_memory(lambda: astar_2d(occ, s, g, use_numba=False))
+        row["peak_bytes"] = peak_memory(search)
     return row
 
 

@@ -62,7 +62,7 @@ def run_scene(path: Path, repeats: int) -> tuple[list, dict]:
         plans[name] = plan
         rows.append({"scene": world.name, "planner": name, "success": plan.success, "time": elapsed,
                      "map_time": map_time, "length": plan.path_length(), "steps": len(plan.path),
-                     "collision_checks": plan.stats.get("collision_checks"), "message": plan.message})
+                     "collision_checks": plan.stats.collision_checks, "message": plan.message})
     grid = OccupancyGrid(wheeled_map(world), world.resolution, (world.bounds[0], world.bounds[1], 0.0))
     grown = grid.inflate(world.robot.body_width / 2).occupied
     s, g = grid.world_to_cell(*world.start[:2]), grid.world_to_cell(*world.goal[:2])

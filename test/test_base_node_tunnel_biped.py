@@ -23,7 +23,7 @@ DISC_025 = [(0.25 * math.cos(a), 0.25 * math.sin(a)) for a in [k * math.pi / 4 f
 @pytest.fixture(scope="module")
 def node(node_process, tmp_path_factory):
     params = yaml.safe_load(config_path("base_planner.yaml").read_text())
-    params["base_planner_node"]["ros__parameters"]["biped_world"] = WORLD
+    params["/**"]["ros__parameters"]["biped_world"] = WORLD
     path = tmp_path_factory.mktemp("params") / "base_planner.yaml"
     path.write_text(yaml.safe_dump(params))
     return node_process(NODE_MODULE, ["--ros-args", "--params-file", str(path)])

@@ -8,8 +8,20 @@ import math
 import numpy as np
 import pytest
 
-from maru_planner.base import result as R
 from maru_planner.base.grid import OccupancyGrid
+from maru_planner.base.result import PlanStats, PlanStatus, jsonable
+from maru_planner.base.tunnel import TunnelStats
+from maru_planner.errors import (
+    GoalOccupied,
+    InvalidMap,
+    InvalidPlanner,
+    InvalidRequest,
+    NoPath,
+    NoPathProven,
+    PlanningTimedOut,
+    StartOutsideMap,
+    TooLarge,
+)
 
 conv = pytest.importorskip("maru_planner.ros.base_conversions")
 
@@ -27,7 +39,10 @@ def test_map_message_round_trip_keeps_geometry_and_unknown():
     assert back.occupied[1, 3] and back.unknown[3, 4] and back.occupied[3, 4]
     assert not conv.grid_from_msg(msg, unknown_is_occupied=False).occupied[3, 4]
     msg.info.resolution = 0.0
-    with pytest.raises(ValueError, match="resolution"):
+    with pytest.raises(InvalidMap, match="resolution"):
+        conv.grid_from_msg(msg)
+    msg.info.resolution, msg.info.width, msg.info.height = 0.05, 5000, 5000
+    with pytest.raises(TooLarge, match="5000 x 5000 cells is over the limit"):
         conv.grid_from_msg(msg)
 
 
@@ -41,9 +56,31 @@ def test_pose_and_path_messages():
 
 
 def test_every_status_has_an_error_code_and_stats_are_json():
-    assert set(conv.STATUS_TO_ERROR) == set(R.STATUSES)
-    text = conv.stats_json({"a": np.int64(3), "b": np.array([1.5]), "c": float("inf"), "d": [{"e": np.float64(2)}]})
-    assert json.loads(text) == {"a": 3, "b": [1.5], "c": None, "d": [{"e": 2.0}]}
+    assert set(conv.STATUS_TO_ERROR) == set(PlanStatus)
+    value = {"a": np.int64(3), "b": np.array([1.5]), "c": float("inf"), "d": [{"e": np.float64(2)}]}
+    assert jsonable(value) == {"a": 3, "b": [1.5], "c": None, "d": [{"e": 2.0}]}
+    stats = TunnelStats(expansions=np.int64(4), planning_time=0.5, deciding_stage="tunnel b=3", attempts=2)
+    assert json.loads(conv.stats_json(stats)) == {
+        "expansions": 4, "collision_checks": 0, "planning_time": 0.5, "deciding_stage": "tunnel b=3",
+        "tfp_expansions": 0, "lcrp_cells": 0, "pfp_expansions": 0, "attempts": 2, "virtual_obstacles": 0}
+    assert "cost" not in json.loads(conv.stats_json(PlanStats()))  # None fields are left out
     assert conv.footprint_from_param([1, 2, 3, 4, 5, 6]).shape == (3, 2)
-    with pytest.raises(ValueError, match="pairs"):
+    with pytest.raises(InvalidRequest, match="pairs"):
         conv.footprint_from_param([1, 2, 3])
+
+
+@pytest.mark.parametrize(
+    "error, code",
+    [
+        (InvalidPlanner("unknown base planner 'rrt'"), "INVALID_PLANNER"),
+        (InvalidRequest("start pose has a NaN"), "INVALID_REQUEST"),
+        (TooLarge("too big"), "INVALID_REQUEST"),
+        (StartOutsideMap("start outside"), "START_OUTSIDE_MAP"),
+        (GoalOccupied("goal in collision"), "GOAL_OCCUPIED"),
+        (NoPath("no path"), "NO_VALID_PATH"),
+        (NoPathProven("enclosed"), "NO_PATH_PROVEN"),
+        (PlanningTimedOut("timed out"), "TIMEOUT"),
+    ],
+)
+def test_errors_map_to_codes_once(error, code):
+    assert conv.error_code(error) == getattr(conv.E, code)

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 import pytest
+from scipy import ndimage
 
-from maru_planner.base import result as res
+from maru_planner.base import registry
 from maru_planner.base.astar import astar_2d
 from maru_planner.base.biped import (
     BipedRobot,
@@ -23,7 +25,10 @@ from maru_planner.base.biped import (
 )
 from maru_planner.base.biped.geometry import RectangleChecker
 from maru_planner.base.biped.mapping import side_of_line
-from maru_planner.errors import InvalidScene
+from maru_planner.base.biped.planners import biped_track, biped_wall
+from maru_planner.base.grid import OccupancyGrid
+from maru_planner.base.result import PlanStatus as res
+from maru_planner.errors import InvalidRequest, InvalidScene, TooLarge
 from maru_planner.paths import config_path
 
 ROBOT = BipedRobot(gait_length=0.4, gait_width=0.36, body_left=0.25, body_right=0.25, step_height=0.06,
@@ -132,8 +137,6 @@ def test_a_wheeled_robot_of_the_body_width_cannot_pass_the_narrow_scene():
     w = world("corridor_narrow")
     occ = wheeled_map(w)
     grid_inflated = np.asarray(occ)
-    from scipy import ndimage
-
     grown = ndimage.distance_transform_edt(~grid_inflated) * w.resolution <= w.robot.body_width / 2
     m = map_3d_to_2d(w)
     s, g = m.world_to_cell(*w.start[:2]), m.world_to_cell(*w.goal[:2])
@@ -183,30 +186,28 @@ def test_load_world_missing_file(tmp_path):
 
 
 def test_grid_planner_with_a_world_file_and_with_a_plain_grid():
-    from maru_planner.base.biped.planners import biped_track, biped_wall
-
     w = world("corridor_wide")
-    plan = biped_track(None, world="worlds/biped/corridor_wide.yaml", headings=32, time_limit=10.0).plan(
-        None, w.start, w.goal)
-    assert plan.success and plan.stats["mapping"] == "3d_world"
+    plan = biped_track(None, world="worlds/biped/corridor_wide.yaml").plan(None, w.start, w.goal, time_limit=10.0)
+    assert plan.success and plan.stats.mapping == "3d_world"
     grid = map_3d_to_2d(w).to_occupancy_grid()
     footprint = np.array([[0.2, 0.18], [-0.2, 0.18], [-0.2, -0.18], [0.2, -0.18]])
     plan = biped_wall(footprint).plan(grid, w.start, w.goal)
-    assert plan.success and plan.stats["mapping"] == "grid"
+    assert plan.success and plan.stats.mapping == "grid"
     assert biped_wall(footprint).plan(None, w.start, w.goal).status == res.INVALID_REQUEST
     with pytest.raises(InvalidScene):
         biped_track(None, world="no/such/world.yaml")
+    with pytest.raises(InvalidRequest, match="headings"):  # biped planners take no headings to ignore
+        biped_track(None, world="worlds/biped/corridor_wide.yaml", headings=32)
 
 
 def test_biped_time_limit():
     w = world("corridor_narrow")
     m = map_3d_to_2d(w)
-    assert VirtualWallPlanner(w.robot, time_limit=1e-9).plan(m, w.start, w.goal).status == res.TIMED_OUT
+    result = VirtualWallPlanner(w.robot).plan(m, w.start, w.goal, time_limit=1e-9)
+    assert result.status == res.TIMED_OUT and "timed out" in result.message
 
 
 def test_asymmetric_scene_passes_only_with_the_side_dependent_clearance():
-    import dataclasses
-
     w = world("corridor_asymmetric")
     m = map_3d_to_2d(w)
     assert m.growth["wall_north_west"] == pytest.approx(0.14) and m.growth["wall_south"] == pytest.approx(0.0)
@@ -217,9 +218,6 @@ def test_asymmetric_scene_passes_only_with_the_side_dependent_clearance():
 
 
 def test_both_planners_on_a_plain_grid_map_the_house():
-    from maru_planner.base import registry
-    from maru_planner.base.grid import OccupancyGrid
-
     house = OccupancyGrid.from_yaml(config_path("maps", "house_250.yaml"))
     footprint = np.array([[0.2, 0.18], [-0.2, 0.18], [-0.2, -0.18], [0.2, -0.18]])
     for planner_id in ("biped_track", "biped_wall"):
@@ -227,3 +225,15 @@ def test_both_planners_on_a_plain_grid_map_the_house():
         assert plan.success, (planner_id, plan.message)
         m = plan.layers["map"]
         _assert_walkable(m, BipedRobot(gait_length=0.4, gait_width=0.36, body_left=0.18, body_right=0.18), plan.path)
+
+
+@pytest.mark.parametrize("bounds", [[0, 0, 1e6, 1e6], [-1e6, 0, 0, 10]])
+def test_huge_world_bounds_are_refused_before_allocating(bounds):
+    with pytest.raises(TooLarge, match="cells is over the limit"):
+        world_from_dict({"bounds": bounds, "resolution": 0.02, "obstacles": []})
+
+
+def test_too_many_obstacles_are_refused():
+    boxes = [{"center": [0.5, 0.5], "size": [0.1, 0.1]}] * 10001
+    with pytest.raises(InvalidScene, match="10001 obstacles"):
+        world_from_dict({"bounds": [0, 0, 1, 1], "obstacles": boxes})

@@ -8,10 +8,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from maru_planner.base import result as res
 from maru_planner.base.astar import GridAStarPlanner, astar_2d
 from maru_planner.base.grid import OccupancyGrid
+from maru_planner.base.result import PlanStatus as res
 from maru_planner.base.tunnel import TunnelGridPlanner
+from maru_planner.errors import InvalidRequest
 from maru_planner.paths import config_path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "bench"))
@@ -48,8 +49,8 @@ def test_house_query_solved_on_the_grown_map(house):
     optimal = GridAStarPlanner(inflation_radius=0.25).plan(house, HOUSE_START, HOUSE_GOAL)
     assert plan.path_length() <= 1.3 * optimal.path_length()
     plain = astar_2d(grown, house.world_to_cell(*HOUSE_START[:2]), house.world_to_cell(*HOUSE_GOAL[:2]),
-                     use_numba=False)
-    assert plan.stats["expansions"] < plain.expansions  # the paper's point: far fewer cells looked at
+                     method="astar")
+    assert plan.stats.expansions < plain.expansions  # the paper's point: far fewer cells looked at
     assert {"attempts", "raw_cells", "waypoints", "grown"} <= set(plan.layers)
 
 
@@ -78,20 +79,23 @@ def test_bad_requests(house):
     assert planner.plan(house, (-5.0, 1.0, 0.0), HOUSE_GOAL).status == res.START_OUTSIDE_MAP
     assert planner.plan(house, HOUSE_START, (0.05, 0.05, 0.0)).status == res.GOAL_OCCUPIED
     assert planner.plan(house, (float("nan"), 1.0, 0.0), HOUSE_GOAL).status == res.INVALID_REQUEST
-    with pytest.raises(ValueError):
+    with pytest.raises(InvalidRequest):
         TunnelGridPlanner(robot_radius=-1.0)
 
 
 def test_time_limit_reports_timed_out():
     occ = rooms_map(400, 3, room=25)
     s, g = far_free_pair(occ)
-    from maru_planner.base.tunnel import TunnelPlanner
+    grid = OccupancyGrid(occ, 0.1)
+    start, goal = (*grid.cell_to_world(*s), 0.0), (*grid.cell_to_world(*g), 0.0)
+    planner = TunnelGridPlanner(robot_radius=0.0)
+    timed_out = planner.plan(grid, start, goal, time_limit=1e-4)
+    assert timed_out.status == res.TIMED_OUT and len(timed_out.path) == 0 and "timed out" in timed_out.message
+    assert planner.plan(grid, start, goal, time_limit=60.0).status == res.SOLVED
 
-    plan = TunnelPlanner(time_limit=1e-4).plan_cells(occ, s, g)
-    assert plan.status == res.TIMED_OUT and len(plan.raw_cells) == 0
-    assert TunnelPlanner(time_limit=60.0).plan_cells(occ, s, g).status == res.SOLVED
 
-
-def test_node_level_parameters_are_accepted():
-    planner = TunnelGridPlanner(None, headings=32, time_limit=5.0, big_cell_size=4)
-    assert planner.planner.params.time_limit == 5.0 and planner.planner.params.big_cell_size == 4
+def test_parameters_are_the_papers_and_nothing_else():
+    planner = TunnelGridPlanner(None, big_cell_size=4)
+    assert planner.planner.params.big_cell_size == 4 and planner.robot_radius == 0.25
+    with pytest.raises(InvalidRequest, match="headings"):  # nothing the tunnel planner would ignore
+        TunnelGridPlanner(None, headings=32)

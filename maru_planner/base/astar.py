@@ -1,6 +1,6 @@
 """2-D grid A*: 8-connected, octile costs, no corner cutting, optimal.
 
-API (used by ``mspp.py`` and helper-8's ``tunnel.py``)::
+API (used by ``mspp.py``, ``tunnel.py`` and the benchmarks)::
 
     path, cost, expansions = astar_2d(occupied, start_cell, goal_cell)
 
@@ -14,34 +14,30 @@ API (used by ``mspp.py`` and helper-8's ``tunnel.py``)::
 
 A diagonal move needs both side cells free (the MovingAI convention), so the
 octile heuristic is consistent and the first pop of the goal is optimal. Ties
-on f are broken towards larger g. The kernel is compiled with numba
-(``cache=True``); ``use_numba=False`` (or a missing numba) runs the pure-Python
-version of the same algorithm.
+on f are broken towards larger g. The kernels are compiled with numba
+(``cache=True``) and check the deadline every 4096 expansions.
 """
 
 from __future__ import annotations
 
-import heapq
 import math
 import threading
 from typing import NamedTuple
 
+import numba
 import numpy as np
 
-try:
-    import numba
-
-    HAVE_NUMBA = True
-except ImportError:  # pragma: no cover - numba is in requirements; keep the fallback honest
-    numba = None
-    HAVE_NUMBA = False
+from maru_planner.base.budget import Deadline, unlimited
+from maru_planner.base.common import cells_to_path
+from maru_planner.base.footprint import footprint_radii
+from maru_planner.base.grid import OccupancyGrid
+from maru_planner.base.kernels import heap_grow, heap_pop, heap_push, now
+from maru_planner.base.planner import DiscPlanner, Endpoint, PlanRun
+from maru_planner.base.result import PlanStats
+from maru_planner.errors import NoPath
 
 SQRT2 = math.sqrt(2.0)
-# (drow, dcol, cost) of the 8 moves: straight first, then diagonal.
-MOVES = np.array(
-    [[0, 1], [1, 0], [0, -1], [-1, 0], [1, 1], [1, -1], [-1, 1], [-1, -1]],
-    dtype=np.int64,
-)
+_EXHAUSTED, _TIMED_OUT = -1.0, -2.0  # kernel "costs" that are outcomes
 
 
 class AStarResult(NamedTuple):
@@ -50,72 +46,20 @@ class AStarResult(NamedTuple):
     expansions: int
 
 
-def octile(dr: float, dc: float) -> float:
-    dr, dc = abs(dr), abs(dc)
-    return max(dr, dc) + (SQRT2 - 1.0) * min(dr, dc)
-
-
-# --------------------------------------------------------------------- numba
 def _njit(func):
-    return numba.njit(cache=True, nogil=True)(func) if HAVE_NUMBA else func
+    return numba.njit(cache=True, nogil=True)(func)
 
 
 @_njit
-def _heap_push(keys, gs, ids, size, key, g, node):
-    """Binary min-heap ordered by key, then larger g first: sift the hole up, then place."""
-    i = size
-    while i > 0:
-        parent = (i - 1) >> 1
-        pk = keys[parent]
-        if pk < key or (pk == key and gs[parent] >= g):
-            break
-        keys[i] = pk
-        gs[i] = gs[parent]
-        ids[i] = ids[parent]
-        i = parent
-    keys[i] = key
-    gs[i] = g
-    ids[i] = node
-    return size + 1
-
-
-@_njit
-def _heap_pop(keys, gs, ids, size):
-    node = ids[0]
-    g = gs[0]
-    size -= 1
-    key = keys[size]
-    lg = gs[size]
-    lid = ids[size]
-    i = 0
-    while True:
-        child = 2 * i + 1
-        if child >= size:
-            break
-        right = child + 1
-        if right < size and (keys[right] < keys[child] or (keys[right] == keys[child] and gs[right] > gs[child])):
-            child = right
-        ck = keys[child]
-        if key < ck or (key == ck and lg >= gs[child]):
-            break
-        keys[i] = ck
-        gs[i] = gs[child]
-        ids[i] = ids[child]
-        i = child
-    keys[i] = key
-    gs[i] = lg
-    ids[i] = lid
-    return node, g, size
-
-
-@_njit
-def _astar_kernel(blocked, sr, sc, gr, gc, cell_cost, use_cost, g_best, parent, seen, closed, keys, gs, ids, gen):
+def _astar_kernel(blocked, sr, sc, gr, gc, cell_cost, use_cost, g_best, parent, seen, closed, keys, gs, ids, gen,
+                  deadline_at):
     """A* on a grid padded with one blocked cell on every side.
 
     ``blocked`` is the padded (height + 2, width + 2) array; cells are given in
     padded coordinates. Returns (parent array over padded cells, goal cost or
-    -1, expansions). With ``use_cost``, entering a cell adds ``cell_cost``
-    (padded, >= 0) to the move cost: the heuristic stays admissible.
+    -1 exhausted / -2 timed out, expansions, heap arrays). With ``use_cost``,
+    entering a cell adds ``cell_cost`` (padded, >= 0) to the move cost: the
+    heuristic stays admissible.
     """
     height, width = blocked.shape
     flat = blocked.ravel()
@@ -132,16 +76,18 @@ def _astar_kernel(blocked, sr, sc, gr, gc, cell_cost, use_cost, g_best, parent, 
     dr0 = abs(sr - gr)
     dc0 = abs(sc - gc)
     h0 = max(dr0, dc0) + diag_extra * min(dr0, dc0)
-    size = _heap_push(keys, gs, ids, 0, h0, 0.0, start)
+    size = heap_push(keys, gs, ids, 0, h0, 0.0, start)
     expansions = 0
     while size > 0:
-        node, g, size = _heap_pop(keys, gs, ids, size)
+        node, g, size = heap_pop(keys, gs, ids, size)
         if closed[node] == gen:
             continue
         closed[node] = gen
         expansions += 1
         if node == goal:
-            return parent, g, expansions
+            return parent, g, expansions, keys, gs, ids
+        if (expansions & 4095) == 0 and now() > deadline_at:
+            return parent, -2.0, expansions, keys, gs, ids
         r = node // width
         c = node - r * width
         for m in range(8):
@@ -167,8 +113,10 @@ def _astar_kernel(blocked, sr, sc, gr, gc, cell_cost, use_cost, g_best, parent, 
                     h = dr + diag_extra * dc
                 else:
                     h = dc + diag_extra * dr
-                size = _heap_push(keys, gs, ids, size, ng + h, ng, nb)
-    return parent, -1.0, expansions
+                if size == keys.shape[0]:
+                    keys, gs, ids = heap_grow(keys, gs, ids)
+                size = heap_push(keys, gs, ids, size, ng + h, ng, nb)
+    return parent, -1.0, expansions, keys, gs, ids
 
 
 @_njit
@@ -207,10 +155,11 @@ def _jump_diagonal(flat, node, step_r, step_c, goal):
 
 
 @_njit
-def _jps_kernel(blocked, sr, sc, gr, gc, g_best, parent, seen, closed, keys, gs, ids, gen):
+def _jps_kernel(blocked, sr, sc, gr, gc, g_best, parent, seen, closed, keys, gs, ids, gen, deadline_at):
     """Jump point search (8-connected, no corner cutting; Harabor & Grastien 2014) on a padded grid.
 
-    Returns (parent array over padded cells (jump points only), goal cost or -1, expansions).
+    Returns (parent array over padded cells (jump points only), goal cost or -1 / -2 as in
+    ``_astar_kernel``, expansions, heap arrays).
     """
     height, width = blocked.shape
     flat = blocked.ravel()
@@ -223,18 +172,20 @@ def _jps_kernel(blocked, sr, sc, gr, gc, g_best, parent, seen, closed, keys, gs,
     parent[start] = -1
     dr0 = abs(sr - gr)
     dc0 = abs(sc - gc)
-    size = _heap_push(keys, gs, ids, 0, max(dr0, dc0) + diag_extra * min(dr0, dc0), 0.0, start)
+    size = heap_push(keys, gs, ids, 0, max(dr0, dc0) + diag_extra * min(dr0, dc0), 0.0, start)
     expansions = 0
     dirs_r = np.empty(8, dtype=np.int64)
     dirs_c = np.empty(8, dtype=np.int64)
     while size > 0:
-        node, g, size = _heap_pop(keys, gs, ids, size)
+        node, g, size = heap_pop(keys, gs, ids, size)
         if closed[node] == gen:
             continue
         closed[node] = gen
         expansions += 1
         if node == goal:
-            return parent, g, expansions
+            return parent, g, expansions, keys, gs, ids
+        if (expansions & 4095) == 0 and now() > deadline_at:
+            return parent, -2.0, expansions, keys, gs, ids
         r = node // width
         c = node - r * width
         # directions to scan: all 8 at the start, else the natural + forced ones
@@ -295,8 +246,10 @@ def _jps_kernel(blocked, sr, sc, gr, gc, g_best, parent, seen, closed, keys, gs,
                 hr = abs(jr - gr)
                 hc = abs(jc - gc)
                 h = (hr if hr > hc else hc) + diag_extra * (hc if hr > hc else hr)
-                size = _heap_push(keys, gs, ids, size, ng + h, ng, jp)
-    return parent, -1.0, expansions
+                if size == keys.shape[0]:
+                    keys, gs, ids = heap_grow(keys, gs, ids)
+                size = heap_push(keys, gs, ids, size, ng + h, ng, jp)
+    return parent, -1.0, expansions, keys, gs, ids
 
 
 @_njit
@@ -340,7 +293,10 @@ def _trace_kernel(parent, start, goal, width, fill):
 
 
 class _Workspace:
-    """Per-thread search arrays reused across queries (a generation stamp replaces clearing them)."""
+    """Per-thread search arrays reused across queries (a generation stamp replaces clearing them).
+
+    The heap starts small and doubles in the kernels when full; the grown arrays are kept.
+    """
 
     _local = threading.local()
 
@@ -350,7 +306,7 @@ class _Workspace:
         self.parent = np.empty(n, dtype=np.int64)
         self.seen = np.zeros(n, dtype=np.int32)
         self.closed = np.zeros(n, dtype=np.int32)
-        capacity = 8 * n + 1
+        capacity = min(8 * n + 1, 1 << 16)
         self.keys, self.gs, self.ids = np.empty(capacity), np.empty(capacity), np.empty(capacity, dtype=np.int64)
         self.gen = 0
 
@@ -366,52 +322,15 @@ class _Workspace:
             ws.gen = 1
         return ws
 
-    def arrays(self):
+    def arrays(self) -> tuple:
         return self.g, self.parent, self.seen, self.closed, self.keys, self.gs, self.ids, self.gen
 
-
-# ----------------------------------------------------------- pure Python
-def _astar_python(blocked, sr, sc, gr, gc):
-    height, width = blocked.shape
-    g_best = {(sr, sc): 0.0}
-    parent: dict = {}
-    closed = set()
-    heap = [(octile(sr - gr, sc - gc), 0.0, (sr, sc))]
-    expansions = 0
-    moves = [(int(dr), int(dc), SQRT2 if dr and dc else 1.0) for dr, dc in MOVES]
-    while heap:
-        _, neg_g, (r, c) = heapq.heappop(heap)
-        if (r, c) in closed:
-            continue
-        closed.add((r, c))
-        expansions += 1
-        g = -neg_g
-        if (r, c) == (gr, gc):
-            return parent, g, expansions
-        for dr, dc, step in moves:
-            nr, nc = r + dr, c + dc
-            if not (0 <= nr < height and 0 <= nc < width) or blocked[nr, nc]:
-                continue
-            if dr and dc and (blocked[nr, c] or blocked[r, nc]):
-                continue
-            ng = g + step
-            if ng < g_best.get((nr, nc), math.inf) and (nr, nc) not in closed:
-                g_best[(nr, nc)] = ng
-                parent[(nr, nc)] = (r, c)
-                heapq.heappush(heap, (ng + octile(nr - gr, nc - gc), -ng, (nr, nc)))
-    return parent, -1.0, expansions
-
-
-def _trace_dict(parent: dict, goal: tuple) -> np.ndarray:
-    cells = [goal]
-    while cells[-1] in parent:
-        cells.append(parent[cells[-1]])
-    cells.reverse()
-    return np.array(cells, dtype=np.int64).reshape(-1, 2)
+    def keep_heap(self, keys: np.ndarray, gs: np.ndarray, ids: np.ndarray) -> None:
+        self.keys, self.gs, self.ids = keys, gs, ids
 
 
 def astar_2d(
-    occupied, start_cell, goal_cell, *, use_numba: bool = True, cell_cost=None, method: str = "jps"
+    occupied, start_cell, goal_cell, *, cell_cost=None, method: str = "jps", deadline: Deadline | None = None
 ) -> AStarResult:
     """Optimal 8-connected A* without corner cutting on a boolean occupancy array.
 
@@ -420,7 +339,8 @@ def astar_2d(
     (plain A*, every cell). ``cell_cost`` always uses plain A*.
 
     ``cell_cost`` (optional, float >= 0, same shape) is added when entering a
-    cell (numba kernel only), e.g. to keep a guide path away from narrow parts.
+    cell, e.g. to keep a guide path away from narrow parts. Raises
+    PlanningTimedOut when ``deadline`` passes during the search.
     """
     blocked = np.ascontiguousarray(occupied, dtype=np.bool_)
     if method not in ("jps", "astar"):
@@ -435,32 +355,30 @@ def astar_2d(
     empty = AStarResult(np.zeros((0, 2), dtype=np.int64), math.inf, 0)
     if blocked[sr, sc] or blocked[gr, gc]:
         return empty
-    if use_numba and HAVE_NUMBA:
-        padded = np.ones((height + 2, width + 2), dtype=np.bool_)
-        padded[1:-1, 1:-1] = blocked
-        args = (padded, sr + 1, sc + 1, gr + 1, gc + 1)
-        ws = _Workspace.get(padded.size).arrays()
-        jps = cell_cost is None and method == "jps"
-        if cell_cost is not None:
-            extra = np.pad(np.asarray(cell_cost, dtype=float), 1)
-            if extra.shape != padded.shape:
-                raise ValueError(f"cell_cost has shape {np.shape(cell_cost)}, occupied has {blocked.shape}")
-            parent, cost, expansions = _astar_kernel(*args, extra, True, *ws)
-        elif method == "astar":
-            parent, cost, expansions = _astar_kernel(*args, np.zeros((1, 1)), False, *ws)
-        else:
-            parent, cost, expansions = _jps_kernel(*args, *ws)
-        if cost < 0:
-            return empty._replace(expansions=int(expansions))
-        wp = width + 2
-        path = _trace_kernel(parent, (sr + 1) * wp + sc + 1, (gr + 1) * wp + gc + 1, wp, jps) - 1
-        return AStarResult(path, float(cost), int(expansions))
+    deadline = deadline or unlimited()
+    padded = np.ones((height + 2, width + 2), dtype=np.bool_)
+    padded[1:-1, 1:-1] = blocked
+    args = (padded, sr + 1, sc + 1, gr + 1, gc + 1)
+    ws = _Workspace.get(padded.size)
+    jps = cell_cost is None and method == "jps"
     if cell_cost is not None:
-        raise ValueError("cell_cost needs the numba kernel")
-    parent, cost, expansions = _astar_python(blocked, sr, sc, gr, gc)
-    if cost < 0:
-        return empty._replace(expansions=expansions)
-    return AStarResult(_trace_dict(parent, (gr, gc)), float(cost), expansions)
+        extra = np.pad(np.asarray(cell_cost, dtype=float), 1)
+        if extra.shape != padded.shape:
+            raise ValueError(f"cell_cost has shape {np.shape(cell_cost)}, occupied has {blocked.shape}")
+        out = _astar_kernel(*args, extra, True, *ws.arrays(), deadline.at)
+    elif method == "astar":
+        out = _astar_kernel(*args, np.zeros((1, 1)), False, *ws.arrays(), deadline.at)
+    else:
+        out = _jps_kernel(*args, *ws.arrays(), deadline.at)
+    parent, cost, expansions = out[:3]
+    ws.keep_heap(*out[3:])
+    if cost == _TIMED_OUT:
+        deadline.raise_timeout(f"2-D A* ({int(expansions)} expansions)")
+    if cost == _EXHAUSTED:
+        return empty._replace(expansions=int(expansions))
+    wp = width + 2
+    path = _trace_kernel(parent, (sr + 1) * wp + sc + 1, (gr + 1) * wp + gc + 1, wp, jps) - 1
+    return AStarResult(path, float(cost), int(expansions))
 
 
 def path_cost(cells: np.ndarray) -> float:
@@ -472,7 +390,7 @@ def path_cost(cells: np.ndarray) -> float:
     return float(np.sum(np.where(steps == 2, SQRT2, 1.0)))
 
 
-class GridAStarPlanner:
+class GridAStarPlanner(DiscPlanner):
     """2-D A* for a disc (or point) robot: obstacles grown by ``inflation_radius`` metres.
 
     With a polygonal footprint and no radius given, the radius is the
@@ -481,33 +399,23 @@ class GridAStarPlanner:
     """
 
     def __init__(self, footprint=None, inflation_radius: float | None = None):
-        from maru_planner.base.se2 import footprint_radii
-
         if inflation_radius is None:
             inflation_radius = footprint_radii(footprint)[1] if footprint is not None else 0.0
-        if not (math.isfinite(inflation_radius) and inflation_radius >= 0):
-            raise ValueError(f"inflation_radius must be finite and >= 0, got {inflation_radius}")
-        self.inflation_radius = float(inflation_radius)
+        super().__init__(inflation_radius)
 
-    def plan(self, grid, start, goal):
-        import time
+    @property
+    def inflation_radius(self) -> float:
+        return self.radius
 
-        from maru_planner.base import common
-        from maru_planner.base import result as R
+    def new_stats(self) -> PlanStats:
+        return PlanStats(deciding_stage="astar")
 
-        t0 = time.perf_counter()
-        stats = {"expansions": 0, "collision_checks": 0, "planning_time": 0.0, "deciding_stage": "astar"}
-        try:
-            start, goal, s_cell, g_cell, grown = common.disc_request(grid, start, goal, self.inflation_radius)
-        except common.RequestError as exc:
-            stats["planning_time"] = time.perf_counter() - t0
-            return common.failure(exc.status, str(exc), stats)
-        path, cost, expansions = astar_2d(grown.occupied, s_cell, g_cell)
-        stats.update(expansions=expansions, collision_checks=8 * expansions, planning_time=time.perf_counter() - t0)
-        layers = {"grown": grown.occupied}
+    def search(self, space: OccupancyGrid, start: Endpoint, goal: Endpoint, run: PlanRun) -> np.ndarray:
+        stats = run.stats
+        path, cost, expansions = astar_2d(space.occupied, start.cell, goal.cell, deadline=run.deadline)
+        stats.expansions, stats.collision_checks = expansions, 8 * expansions
         if len(path) == 0:
-            return common.failure(R.NO_PATH, "no path: A* exhausted the free cells of the grown map", stats, layers)
-        stats["cost"] = cost * grid.resolution
-        return R.BasePlanResult(
-            R.SOLVED, "solved by 2-D A*", common.cells_to_path(grid, path, start[2], goal[2]), stats, layers
-        )
+            raise NoPath("no path: A* exhausted the free cells of the grown map")
+        stats.cost = cost * space.resolution
+        run.message = "solved by 2-D A*"
+        return cells_to_path(space, path, start.pose[2], goal.pose[2])

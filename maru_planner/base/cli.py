@@ -10,48 +10,69 @@ The footprint is one argument: polygon vertices ``x,y`` in metres (base_link)
 separated by spaces or ``;`` (write ``--footprint=...`` if the first is negative), or
 ``rect:LENGTH:WIDTH``, or ``disc:RADIUS`` (a 16-gon). The JSON is
 ``{"success", "status", "message", "path": [[x, y, theta], ...], "stats"}``.
-Exit code 0 when solved, 1 when no path / timed out, 2 on bad input.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import math
+import os
 import sys
 import time
+from pathlib import Path
+from typing import NoReturn
 
 import numpy as np
 
 from maru_planner.base import registry
+from maru_planner.base.biped.planners import world_defaults
+from maru_planner.base.budget import DEFAULT_TIME_LIMIT
+from maru_planner.base.footprint import disc, rectangle
 from maru_planner.base.grid import OccupancyGrid
-from maru_planner.base.result import jsonable
-from maru_planner.base.se2 import rectangle
-from maru_planner.errors import MaruError
+from maru_planner.base.result import BasePlanResult, PlanStatus
+from maru_planner.errors import InvalidRequest, MaruError
+
+PROG = "maru-base-plan"
+EXIT_SOLVED, EXIT_NO_PATH, EXIT_BAD_INPUT, EXIT_OUTPUT = 0, 1, 2, 3
+EXIT_CODES = f"""exit codes:
+  {EXIT_SOLVED}  solved
+  {EXIT_NO_PATH}  no path (searched or proven), timed out, start or goal outside the map or in collision
+  {EXIT_BAD_INPUT}  bad input: arguments, map/world file, footprint, planner parameter, a size limit
+  {EXIT_OUTPUT}  the --json/--png output could not be written"""
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with a one-line error (no usage dump) and the bad-input exit code."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(EXIT_BAD_INPUT, f"{PROG}: {message}\n")
 
 
 def parse_footprint(text: str) -> np.ndarray:
+    """``x,y x,y ...`` vertices, ``rect:L:W`` or ``disc:R``; InvalidRequest naming the bad part."""
     tokens = text.replace(";", " ").split()
-    if len(tokens) == 1 and tokens[0].startswith("rect:"):
-        _, length, width = tokens[0].split(":")
-        return rectangle(float(length), float(width))
-    if len(tokens) == 1 and tokens[0].startswith("disc:"):
-        radius = float(tokens[0].split(":")[1])
-        angles = np.linspace(0.0, 2 * math.pi, 16, endpoint=False)
-        # circumscribe the disc so that the polygon contains it
-        r = radius / math.cos(math.pi / 16)
-        return np.column_stack([r * np.cos(angles), r * np.sin(angles)])
-    vertices = []
-    for token in tokens:
-        x, y = token.split(",")
-        vertices.append((float(x), float(y)))
+    try:
+        if len(tokens) == 1 and tokens[0].startswith("rect:"):
+            _, length, width = tokens[0].split(":")
+            return rectangle(float(length), float(width))
+        if len(tokens) == 1 and tokens[0].startswith("disc:"):
+            _, radius = tokens[0].split(":")
+            return disc(float(radius))
+        vertices = []
+        for token in tokens:
+            x, y = token.split(",")
+            vertices.append((float(x), float(y)))
+    except ValueError:
+        raise InvalidRequest(f"--footprint {text[:60]!r}: expected 'x,y x,y ...', rect:L:W or disc:R") from None
     return np.array(vertices)
 
 
 def _params(pairs: list[str]) -> dict:
     params = {}
     for pair in pairs:
-        key, _, value = pair.partition("=")
+        key, sep, value = pair.partition("=")
+        if not sep or not key:
+            raise InvalidRequest(f"--param {pair[:60]!r}: expected key=value")
         try:
             params[key] = json.loads(value)
         except json.JSONDecodeError:
@@ -59,78 +80,125 @@ def _params(pairs: list[str]) -> dict:
     return params
 
 
-def result_to_json(result) -> dict:
+def result_to_json(result: BasePlanResult) -> dict:
     return {
         "success": bool(result.success),
-        "status": result.status,
+        "status": result.status.value,
         "message": result.message,
         "path": result.path.tolist(),
-        "stats": jsonable(result.stats),
+        "stats": result.stats.to_dict(),
     }
 
 
+def _planners_help() -> str:
+    lines = ["planners (--planner) and their --param names:"]
+    for spec in (registry.SPECS[i] for i in registry.planner_ids()):
+        lines.append(f"  {spec.id}: {spec.description}")
+        for name, param in spec.params.items():
+            lines.append(f"      {name} (default {param.default}): {param.describe()}")
+    return "\n".join(lines)
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="maru-base-plan", description=__doc__.split("\n")[0])
+    parser = _Parser(prog=PROG, description=__doc__.split("\n")[0], epilog=_planners_help() + "\n\n" + EXIT_CODES,
+                     formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--map", help="map_server YAML (not needed with --world)")
-    parser.add_argument("--world", help="3-D world YAML for biped-track / biped-wall (start/goal default to its own)")
+    parser.add_argument("--world", help="3-D world YAML for a world_3d planner (start/goal default to its own)")
     parser.add_argument("--planner", default=registry.DEFAULT_PLANNER,
-                        help=f"one of {', '.join(registry.planner_ids())}")
+                        help=f"one of {', '.join(registry.planner_ids())} ('-' may replace '_')")
     parser.add_argument("--start", nargs=3, type=float, metavar=("X", "Y", "THETA"))
     parser.add_argument("--goal", nargs=3, type=float, metavar=("X", "Y", "THETA"))
     parser.add_argument("--footprint", default="rect:0.9:0.3",
                         help="'x,y x,y ...' vertices (use --footprint=... when the first is negative), "
                         "rect:L:W or disc:R (default rect:0.9:0.3)")
     parser.add_argument("--param", action="append", default=[], help="planner parameter key=value (JSON value)")
+    parser.add_argument("--time-limit", type=float, default=DEFAULT_TIME_LIMIT,
+                        help=f"planning budget in seconds (default {DEFAULT_TIME_LIMIT:g})")
     parser.add_argument("--unknown-free", action="store_true", help="treat unknown cells as free")
     parser.add_argument("--json", help="write the result here")
     parser.add_argument("--png", help="write a picture here")
     return parser
 
 
-def main(argv=None) -> int:
-    args = build_parser().parse_args(argv)
-    args.planner = args.planner.replace("-", "_")  # biped-track == biped_track
-    params, grid = _params(args.param), None
-    try:
-        footprint = parse_footprint(args.footprint)
-        if args.world:
-            from maru_planner.base.biped.planners import world_defaults
+def _check_writable(path: str | None, option: str) -> None:
+    """InvalidRequest unless ``path`` can be created or overwritten (checked before planning)."""
+    if path is None:
+        return
+    target = Path(path)
+    parent = target.parent if str(target.parent) else Path(".")
+    if target.is_dir():
+        raise InvalidRequest(f"{option} {path}: is a directory")
+    if not parent.is_dir():
+        raise InvalidRequest(f"{option} {path}: directory {parent} does not exist")
+    if not os.access(target if target.exists() else parent, os.W_OK):
+        raise InvalidRequest(f"{option} {path}: not writable")
 
-            args.start, args.goal, params["world"] = world_defaults(args.world, args.start, args.goal)
-        if args.map:
-            grid = OccupancyGrid.from_yaml(args.map, unknown_is_occupied=not args.unknown_free)
-        elif not args.world:
-            raise ValueError("--map is required (or --world with a biped planner)")
-        if args.start is None or args.goal is None:
-            raise ValueError("--start and --goal are required")
-    except (OSError, ValueError) as exc:
-        print(f"maru-base-plan: {exc}", file=sys.stderr)
-        return 2
-    where = f"{args.map} ({grid.width} x {grid.height} cells)" if grid is not None else args.world
-    print(f"planning with {args.planner} on {where}...", file=sys.stderr)
-    t0 = time.perf_counter()
-    try:
-        result = registry.plan(args.planner, grid, args.start, args.goal, footprint, **params)
-    except MaruError as exc:
-        print(f"maru-base-plan: {exc}", file=sys.stderr)
-        return 2
-    print(f"{result.status}: {result.message} ({time.perf_counter() - t0:.3f} s, "
-          f"{len(result.path)} poses, stage {result.stats.get('deciding_stage', '')})", file=sys.stderr)
+
+def _request(args: argparse.Namespace) -> tuple:
+    """(spec, grid or None, footprint, params) from the arguments; MaruError/OSError/ValueError when bad."""
+    spec = registry.spec(args.planner.replace("-", "_"))
+    params = _params(args.param)
+    footprint = parse_footprint(args.footprint)
+    for path, option in ((args.json, "--json"), (args.png, "--png")):
+        _check_writable(path, option)
+    if not (args.time_limit > 0):
+        raise InvalidRequest(f"--time-limit must be > 0 s, got {args.time_limit}")
+    if args.world:
+        if not spec.has(registry.WORLD_3D):
+            raise InvalidRequest(f"--world needs a world_3d planner, not {spec.id!r}")
+        args.start, args.goal, params["world"] = world_defaults(args.world, args.start, args.goal)
+    grid = None
+    if args.map:
+        grid = OccupancyGrid.from_yaml(args.map, unknown_is_occupied=not args.unknown_free)
+    elif not args.world:
+        raise InvalidRequest("--map is required (or --world with a world_3d planner)")
+    if args.start is None or args.goal is None:
+        raise InvalidRequest("--start and --goal are required")
+    return spec, grid, footprint, params
+
+
+def _write_outputs(args: argparse.Namespace, spec_id: str, grid, footprint, result: BasePlanResult) -> None:
     if args.json:
         with open(args.json, "w") as f:
             json.dump(result_to_json(result), f, indent=1)
-    if args.png and "world" in result.layers:
-        from maru_planner.viz.biped import save_result_png
+    if args.png:
+        _write_png(args, spec_id, grid, footprint, result)
 
-        save_result_png(args.png, result, args.planner)
-    elif args.png:
-        from maru_planner.viz.grids import save_plan_png
 
+def _write_png(args: argparse.Namespace, spec_id: str, grid, footprint, result: BasePlanResult) -> None:
+    # matplotlib takes about half a second to import: only --png loads it.
+    from maru_planner.viz.biped import save_result_png
+    from maru_planner.viz.grids import save_plan_png
+
+    if "world" in result.layers:
+        save_result_png(args.png, result, spec_id)
+    else:
         save_plan_png(args.png, grid, result, args.start, args.goal, footprint,
-                      f"{args.planner}: {result.status} ({result.stats.get('deciding_stage', '')})")
-    if result.status == "invalid_request":
-        return 2
-    return 0 if result.success else 1
+                      f"{spec_id}: {result.status.value} ({result.stats.deciding_stage})")
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        spec, grid, footprint, params = _request(args)
+        planner = registry.make_planner(spec.id, footprint, **params)
+    except (MaruError, OSError, ValueError) as exc:
+        print(f"{PROG}: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    where = f"{args.map} ({grid.width} x {grid.height} cells)" if grid is not None else args.world
+    print(f"planning with {spec.id} on {where}...", file=sys.stderr)
+    t0 = time.perf_counter()
+    result = planner.plan(grid, args.start, args.goal, time_limit=args.time_limit)
+    print(f"{result.status.value}: {result.message} ({time.perf_counter() - t0:.3f} s, "
+          f"{len(result.path)} poses, stage {result.stats.deciding_stage})", file=sys.stderr)
+    try:
+        _write_outputs(args, spec.id, grid, footprint, result)
+    except OSError as exc:
+        print(f"{PROG}: cannot write the output: {exc}", file=sys.stderr)
+        return EXIT_OUTPUT
+    if result.status is PlanStatus.INVALID_REQUEST:
+        return EXIT_BAD_INPUT
+    return EXIT_SOLVED if result.success else EXIT_NO_PATH
 
 
 if __name__ == "__main__":

@@ -19,6 +19,9 @@ and ``biped/``):
   (Euclidean distance transform). Space outside the map is not an obstacle.
 - ``OccupancyGrid.from_yaml(path)``, ``grid.save_yaml(path)``,
   ``OccupancyGrid(occupied, resolution, origin)``.
+
+Maps over ``budget.MAX_MAP_CELLS`` are refused (TooLarge) before their pixels are decoded;
+malformed files raise InvalidMap naming the file and the key.
 """
 
 from __future__ import annotations
@@ -29,11 +32,14 @@ from pathlib import Path
 
 import numpy as np
 import yaml
+from PIL import Image, UnidentifiedImageError
 from scipy import ndimage
 
-FREE_VALUE = 0
-OCCUPIED_VALUE = 100
-UNKNOWN_VALUE = -1
+from maru_planner.base.budget import Deadline, check_map_cells, unlimited
+from maru_planner.errors import InvalidMap, InvalidRequest
+
+# Inflation works on strips of this many rows (plus the radius on each side), checking the deadline between.
+_INFLATE_STRIP_ROWS = 256
 
 # Pixel values map_saver writes (trinary mode).
 PGM_FREE = 254
@@ -56,23 +62,24 @@ class OccupancyGrid:
     def __post_init__(self):
         occupied = np.asarray(self.occupied)
         if occupied.ndim != 2:
-            raise ValueError(f"occupied must be a 2-D array (height, width), got shape {occupied.shape}")
+            raise InvalidMap(f"occupied must be a 2-D array (height, width), got shape {occupied.shape}")
+        check_map_cells(*occupied.shape, "map")
         self.occupied = occupied.astype(bool, copy=True)
         if not (math.isfinite(self.resolution) and self.resolution > 0):
-            raise ValueError(f"resolution must be a positive number of metres per cell, got {self.resolution}")
+            raise InvalidMap(f"resolution must be a positive number of metres per cell, got {self.resolution}")
         self.resolution = float(self.resolution)
         origin = tuple(float(v) for v in self.origin)
         if len(origin) == 2:
             origin = (*origin, 0.0)
         if len(origin) != 3 or not all(math.isfinite(v) for v in origin):
-            raise ValueError(f"origin must be finite (x, y, yaw), got {self.origin}")
+            raise InvalidMap(f"origin must be finite (x, y, yaw), got {self.origin}")
         self.origin = origin
         if self.unknown is None:
             self.unknown = np.zeros_like(self.occupied)
         else:
             self.unknown = np.asarray(self.unknown, dtype=bool)
             if self.unknown.shape != self.occupied.shape:
-                raise ValueError(f"unknown has shape {self.unknown.shape}, occupied has {self.occupied.shape}")
+                raise InvalidMap(f"unknown has shape {self.unknown.shape}, occupied has {self.occupied.shape}")
         if self.unknown_is_occupied:
             self.occupied |= self.unknown
 
@@ -88,10 +95,6 @@ class OccupancyGrid:
     @property
     def shape(self) -> tuple[int, int]:
         return self.occupied.shape
-
-    @property
-    def free(self) -> np.ndarray:
-        return ~self.occupied
 
     # ------------------------------------------------------------ conversions
     def world_to_grid_frame(self, x: float, y: float) -> tuple[float, float]:
@@ -133,21 +136,27 @@ class OccupancyGrid:
     def in_bounds(self, row: int, col: int) -> bool:
         return 0 <= row < self.height and 0 <= col < self.width
 
-    def is_free_cell(self, row: int, col: int) -> bool:
-        return self.in_bounds(row, col) and not self.occupied[row, col]
-
     # --------------------------------------------------------------- inflation
-    def distance_to_obstacles(self) -> np.ndarray:
-        """Metres from each cell centre to the nearest occupied cell centre (inf when none)."""
-        if not self.occupied.any():
-            return np.full(self.shape, np.inf)
-        return ndimage.distance_transform_edt(~self.occupied) * self.resolution
+    def inflate(self, radius: float, deadline: Deadline | None = None) -> OccupancyGrid:
+        """Obstacles grown by a disc of ``radius`` metres (inclusive, exact to the cell).
 
-    def inflate(self, radius: float) -> OccupancyGrid:
-        """Obstacles grown by a disc of ``radius`` metres (inclusive, exact to the cell)."""
+        Computed in strips of rows, each with the obstacles within ``radius`` around it (farther
+        ones cannot reach), so ``deadline`` is checked between strips.
+        """
         if not (math.isfinite(radius) and radius >= 0):
-            raise ValueError(f"inflation radius must be finite and >= 0, got {radius}")
-        grown = self.distance_to_obstacles() <= radius + 1e-9 * self.resolution
+            raise InvalidRequest(f"inflation radius must be finite and >= 0, got {radius}")
+        deadline = deadline or unlimited()
+        reach = int(math.ceil(radius / self.resolution)) + 1
+        grown = np.zeros(self.shape, dtype=bool)
+        limit = radius + 1e-9 * self.resolution
+        for top in range(0, self.height, _INFLATE_STRIP_ROWS):
+            deadline.check_now("inflating the map")
+            bottom = min(top + _INFLATE_STRIP_ROWS, self.height)
+            lo, hi = max(top - reach, 0), min(bottom + reach, self.height)
+            window = self.occupied[lo:hi]
+            if window.any():
+                distance = ndimage.distance_transform_edt(~window) * self.resolution
+                grown[top:bottom] = distance[top - lo : bottom - lo] <= limit
         return self.with_occupied(grown)
 
     def with_occupied(self, occupied: np.ndarray) -> OccupancyGrid:
@@ -157,12 +166,6 @@ class OccupancyGrid:
         )
 
     # ---------------------------------------------------------- int8 values
-    def to_values(self) -> np.ndarray:
-        """nav_msgs-style int8 values (0 free, 100 occupied, -1 unknown), shape (height, width)."""
-        values = np.where(self.occupied, OCCUPIED_VALUE, FREE_VALUE).astype(np.int8)
-        values[self.unknown] = UNKNOWN_VALUE
-        return values
-
     @classmethod
     def from_values(
         cls,
@@ -179,10 +182,11 @@ class OccupancyGrid:
         """From row-major int8 data as in ``nav_msgs/OccupancyGrid`` (value >= threshold = occupied)."""
         width, height = int(width), int(height)
         if width <= 0 or height <= 0:
-            raise ValueError(f"map is empty ({width} x {height} cells)")
+            raise InvalidMap(f"map is empty ({width} x {height} cells)")
+        check_map_cells(height, width, "map")
         data = np.asarray(values, dtype=np.int16).ravel()
         if data.size != width * height:
-            raise ValueError(f"map data has {data.size} values, width x height = {width} x {height} = {width * height}")
+            raise InvalidMap(f"map data has {data.size} values, width x height = {width} x {height} = {width * height}")
         data = data.reshape(height, width)
         return cls(
             data >= occupied_threshold, resolution, origin, data < 0, unknown_is_occupied, frame_id=frame_id
@@ -202,16 +206,27 @@ class OccupancyGrid:
         mode: str = "trinary",
         unknown_is_occupied: bool = True,
     ) -> OccupancyGrid:
-        """Read a map_server image (PGM/PNG): p = (255 - v) / 255 (or v / 255 when negated)."""
-        from PIL import Image
+        """Read a map_server image (PGM/PNG): p = (255 - v) / 255 (or v / 255 when negated).
 
-        with Image.open(image_path) as img:
-            pixels = np.asarray(img.convert("L") if img.mode not in ("L", "I", "I;16") else img, dtype=float)
-        if pixels.size == 0:
-            raise ValueError(f"map image {image_path} is empty")
-        p = pixels / 255.0 if negate else (255.0 - pixels) / 255.0
+        The image size is checked against MAX_MAP_CELLS before its pixels are decoded.
+        """
         if mode not in ("trinary", "scale", "raw"):
-            raise ValueError(f"map mode must be trinary, scale or raw, got {mode!r}")
+            raise InvalidMap(f"map mode must be trinary, scale or raw, got {str(mode)[:40]!r}")
+        for name, value in (("occupied_thresh", occupied_thresh), ("free_thresh", free_thresh)):
+            if not 0.0 <= value <= 1.0:
+                raise InvalidMap(f"{name} must be in [0, 1], got {value}")
+        if free_thresh > occupied_thresh:
+            raise InvalidMap(f"free_thresh ({free_thresh}) must not exceed occupied_thresh ({occupied_thresh})")
+        try:
+            with Image.open(image_path) as img:
+                width, height = img.size
+                check_map_cells(height, width, f"map image {image_path}")
+                pixels = np.asarray(img.convert("L") if img.mode not in ("L", "I", "I;16") else img, dtype=float)
+        except (UnidentifiedImageError, Image.DecompressionBombError) as exc:
+            raise InvalidMap(f"map image {image_path}: {exc}") from None
+        if pixels.size == 0:
+            raise InvalidMap(f"map image {image_path} is empty")
+        p = pixels / 255.0 if negate else (255.0 - pixels) / 255.0
         if mode == "raw":
             occupied, unknown = pixels >= 65, (pixels < 0) | (pixels > 100)
         else:
@@ -222,28 +237,36 @@ class OccupancyGrid:
 
     @classmethod
     def from_yaml(cls, yaml_path, *, unknown_is_occupied: bool = True) -> OccupancyGrid:
-        """Load a ROS map_server map (YAML + image)."""
+        """Load a ROS map_server map (YAML + image); InvalidMap naming the file and key when malformed."""
         yaml_path = Path(yaml_path)
         with open(yaml_path) as f:
-            info = yaml.safe_load(f)
+            try:
+                info = yaml.safe_load(f)
+            except yaml.YAMLError as exc:
+                where = getattr(exc, "problem_mark", None)
+                line = f" (line {where.line + 1})" if where is not None else ""
+                raise InvalidMap(f"{yaml_path}: not valid YAML{line}") from None
         if not isinstance(info, dict):
-            raise ValueError(f"{yaml_path}: not a map_server YAML mapping")
+            raise InvalidMap(f"{yaml_path}: not a map_server YAML mapping")
         for key in ("image", "resolution", "origin"):
             if key not in info:
-                raise ValueError(f"{yaml_path}: missing key {key!r}")
-        image = Path(info["image"])
+                raise InvalidMap(f"{yaml_path}: missing key {key!r}")
+        image = Path(str(info["image"]))
         if not image.is_absolute():
             image = yaml_path.parent / image
-        grid = cls.from_image(
-            image,
-            float(info["resolution"]),
-            info["origin"],
-            negate=bool(int(info.get("negate", 0))),
-            occupied_thresh=float(info.get("occupied_thresh", 0.65)),
-            free_thresh=float(info.get("free_thresh", 0.196)),
-            mode=str(info.get("mode", "trinary")),
-            unknown_is_occupied=unknown_is_occupied,
-        )
+        try:
+            grid = cls.from_image(
+                image,
+                _number(info, "resolution", None),
+                info["origin"] if isinstance(info["origin"], list | tuple) else (),
+                negate=bool(_number(info, "negate", 0)),
+                occupied_thresh=_number(info, "occupied_thresh", 0.65),
+                free_thresh=_number(info, "free_thresh", 0.196),
+                mode=str(info.get("mode", "trinary")),
+                unknown_is_occupied=unknown_is_occupied,
+            )
+        except (InvalidMap, TypeError, ValueError) as exc:
+            raise InvalidMap(f"{yaml_path}: {exc}") from None
         grid.meta = {k: v for k, v in info.items() if k not in ("image", "resolution", "origin")}
         grid.meta["yaml_path"] = str(yaml_path)
         return grid
@@ -255,8 +278,6 @@ class OccupancyGrid:
         pixels = np.full(self.shape, PGM_FREE, dtype=np.uint8)
         pixels[self.occupied] = PGM_OCCUPIED
         pixels[self.unknown] = PGM_UNKNOWN
-        from PIL import Image
-
         Image.fromarray(np.flipud(pixels)).save(yaml_path.parent / image_name)
         info = {
             "image": image_name,
@@ -278,3 +299,11 @@ class OccupancyGrid:
         occupied = np.isin(chars, list("#@TO"))
         unknown = chars == "?"
         return cls(np.flipud(occupied), resolution, origin, np.flipud(unknown))
+
+
+def _number(info: dict, key: str, default: float | None) -> float:
+    """info[key] as a finite float (``default`` when absent); InvalidMap naming the key otherwise."""
+    value = info.get(key, default)
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        raise InvalidMap(f"{key} must be a finite number, got {str(value)[:40]}")
+    return float(value)

@@ -11,7 +11,7 @@
    path there is a valid SE(2) path with any headings along it.
 3. **full**: the complete SE(2) A* (``se2.py``).
 
-``local=True`` is the "beyond the paper" variant its last paragraph asks
+:class:`LocalMultiStagePlanner` (``mspp_local``) is the "beyond the paper" variant its last paragraph asks
 for: a guide path on the ECA map (steered away from BAA-blocked cells) is cut
 into easy stretches (every cell and diagonal side cell BAA-free: any heading
 is safe) and hard stretches; only the hard stretches get a full SE(2) A*, in a
@@ -19,153 +19,187 @@ window around them (any heading at their BAA-free ends). If a window search
 fails, its window grows; when that also fails the full search runs over the
 whole map, so the planner stays complete.
 
-Every stage is timed and counted in ``stats["stages"]``; ``result.layers``
-holds the grown maps (``eca``, ``baa``) and, for ``local``, the windows.
+Every stage is timed and counted in ``stats.stages`` (:class:`StageStats`);
+``result.layers`` holds the grown maps (``eca``, ``baa``) and, for ``local``,
+the guide and the windows.
 """
 
 from __future__ import annotations
 
 import math
 import time
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import ndimage
 
-from maru_planner.base import common
-from maru_planner.base import result as R
 from maru_planner.base.astar import astar_2d
-from maru_planner.base.se2 import (
-    SEARCH_FOUND,
-    SEARCH_TIMED_OUT,
-    SE2AStarPlanner,
-    cspace_layers,
-    search_layers,
-)
+from maru_planner.base.common import cells_to_path, states_to_path
+from maru_planner.base.grid import OccupancyGrid
+from maru_planner.base.planner import Endpoint, PlanRun
+from maru_planner.base.result import PlanStats
+from maru_planner.base.se2 import SE2AStarPlanner, cspace_layers, search_layers
+from maru_planner.errors import InvalidRequest, NoPath, NoPathProven
 
 # Keeps ECA strictly inside and BAA strictly outside the robot despite rounding.
 RADIUS_GUARD = 1e-7
 
 
+@dataclass
+class WindowStats:
+    """One windowed SE(2) search of ``mspp_local``: box (row0, col0, row1, col1) in cells."""
+
+    box: list[int]
+    cspace_cells: int
+    expansions: int
+    found: bool
+    time: float
+
+
+@dataclass
+class StageStats:
+    """One MSPP stage (ECA, BAA, full, local): what it cost and whether it decided."""
+
+    name: str
+    time: float = 0.0
+    decided: bool = False
+    expansions: int = 0
+    collision_checks: int = 0
+    radius: float | None = None
+    skipped: str | None = None
+    cost: float | None = None  # cells (full search)
+    cspace_time: float | None = None
+    cspace_cells: int | None = None
+    search_time: float | None = None
+    guide_expansions: int | None = None
+    windows: list[WindowStats] | None = None
+    fallback: str | None = None
+
+
+@dataclass
+class MultiStageStats(PlanStats):
+    """PlanStats plus the footprint radii and one entry per stage (expansions/checks are their sums)."""
+
+    headings: int = 0
+    r_min: float = 0.0
+    r_max: float = 0.0
+    stages: list[StageStats] = field(default_factory=list)
+
+    def add(self, stage: StageStats) -> StageStats:
+        self.stages.append(stage)
+        return stage
+
+    def total(self) -> None:
+        self.expansions = sum(s.expansions for s in self.stages)
+        self.collision_checks = sum(s.collision_checks for s in self.stages)
+
+
 class MultiStagePlanner(SE2AStarPlanner):
-    """ECA -> BAA -> full SE(2) A* (``local=False``) or windowed SE(2) A* (``local=True``)."""
+    """ECA -> BAA -> full SE(2) A*."""
+
+    def new_stats(self) -> PlanStats:
+        return MultiStageStats(headings=self.headings, r_min=self.r_in, r_max=self.r_out)
+
+    def search(self, space: OccupancyGrid, start: Endpoint, goal: Endpoint, run: PlanRun) -> np.ndarray:
+        try:
+            self._eca(space, start, goal, run)
+            path = self._baa(space, start, goal, run)
+            return path if path is not None else self._last_stage(space, start, goal, run)
+        finally:
+            run.stats.total()
+
+    def _last_stage(self, grid: OccupancyGrid, start: Endpoint, goal: Endpoint, run: PlanRun) -> np.ndarray:
+        return self._full(grid, start, goal, run)
+
+    # ---------------------------------------------------------------- stages
+    def _eca(self, grid: OccupancyGrid, start: Endpoint, goal: Endpoint, run: PlanRun) -> None:
+        t = time.perf_counter()
+        stage = run.stats.add(StageStats("ECA", radius=self.r_in))
+        eca = grid.inflate(max(self.r_in - RADIUS_GUARD, 0.0), run.deadline).occupied
+        labels, _ = ndimage.label(~eca, structure=np.ones((3, 3), dtype=int))
+        ls, lg = labels[start.cell], labels[goal.cell]
+        run.layers["eca"] = eca
+        stage.collision_checks = int(eca.size)
+        stage.time, stage.decided = time.perf_counter() - t, bool(ls != lg)
+        if ls != lg:
+            n_start, n_goal = int(np.sum(labels == ls)), int(np.sum(labels == lg))
+            side, cells = ("start", n_start) if n_start <= n_goal else ("goal", n_goal)
+            run.stats.deciding_stage = "ECA"
+            raise NoPathProven(f"no path: {side} enclosed (obstacles grown by R_min = {self.r_in:.3f} m "
+                               f"leave it a region of {cells} cells)")
+
+    def _baa(self, grid: OccupancyGrid, start: Endpoint, goal: Endpoint, run: PlanRun) -> np.ndarray | None:
+        t = time.perf_counter()
+        stage = run.stats.add(StageStats("BAA", radius=self.r_out))
+        baa = grid.inflate(self.r_out + RADIUS_GUARD, run.deadline).occupied
+        run.layers["baa"] = baa
+        path = None
+        if not baa[start.cell] and not baa[goal.cell]:
+            cells, _, expansions = astar_2d(baa, start.cell, goal.cell, deadline=run.deadline)
+            stage.expansions, stage.collision_checks = expansions, 8 * expansions
+            if len(cells):
+                run.stats.deciding_stage, run.message = "BAA", "solved by BAA"
+                path = cells_to_path(grid, cells, start.pose[2], goal.pose[2])
+        else:
+            stage.skipped = "start or goal within R_max of an obstacle"
+        stage.time, stage.decided = time.perf_counter() - t, path is not None
+        return path
+
+    def _full(self, grid: OccupancyGrid, start: Endpoint, goal: Endpoint, run: PlanRun) -> np.ndarray:
+        t = time.perf_counter()
+        stage = run.stats.add(StageStats("full", decided=True))
+        run.stats.deciding_stage = "full"
+        try:
+            full = self.full_search(grid, start, goal, run.deadline)
+        finally:
+            stage.time = time.perf_counter() - t
+        found = full.search
+        stage.expansions, stage.collision_checks = found.expansions, found.collision_checks
+        stage.cspace_time, stage.cspace_cells, stage.search_time = full.cspace_time, full.cspace_cells, full.search_time
+        if not found.found:
+            raise NoPath("no path: full SE(2) A* exhausted the free configurations")
+        stage.cost = found.cost
+        run.message = "solved by full search"
+        return states_to_path(grid, found.states, self.headings)
+
+
+class LocalMultiStagePlanner(MultiStagePlanner):
+    """ECA -> BAA -> SE(2) A* only in windows around the guide path's hard runs (full search as fallback)."""
 
     def __init__(
         self,
         footprint,
         headings: int = 32,
         rotation_weight: float | None = None,
-        time_limit: float = 60.0,
-        local: bool = False,
         local_margin: float | None = None,
         narrow_penalty: float = 4.0,
     ):
-        super().__init__(footprint, headings, rotation_weight, time_limit)
-        self.local = bool(local)
+        super().__init__(footprint, headings, rotation_weight)
         self.local_margin = 2.0 * self.r_out if local_margin is None else float(local_margin)
         if not (math.isfinite(self.local_margin) and self.local_margin >= 0):
-            raise ValueError(f"local_margin must be finite and >= 0, got {local_margin}")
+            raise InvalidRequest(f"local_margin must be finite and >= 0, got {local_margin}")
+        if not (math.isfinite(narrow_penalty) and narrow_penalty >= 0):
+            raise InvalidRequest(f"narrow_penalty must be finite and >= 0, got {narrow_penalty}")
         self.narrow_penalty = float(narrow_penalty)
 
-    # ------------------------------------------------------------------ plan
-    def plan(self, grid, start, goal):
-        t0 = time.perf_counter()
-        stats = {"expansions": 0, "collision_checks": 0, "planning_time": 0.0, "deciding_stage": "",
-                 "headings": self.headings, "r_min": self.r_in, "r_max": self.r_out, "stages": []}
-        layers: dict = {}
-        try:
-            s_cell, g_cell, sk, gk = self.check_endpoints(grid, start, goal)
-        except common.RequestError as exc:
-            stats["planning_time"] = time.perf_counter() - t0
-            stats["deciding_stage"] = "validation"
-            return common.failure(exc.status, str(exc), stats)
-        start, goal = common.as_pose(start, "start"), common.as_pose(goal, "goal")
-
-        decided = self._eca(grid, s_cell, g_cell, stats, layers)
-        if decided is None:
-            decided = self._baa(grid, start, goal, s_cell, g_cell, stats, layers)
-        if decided is None:
-            remaining = self.time_limit - (time.perf_counter() - t0)
-            if self.local:
-                decided = self._local(grid, start, goal, s_cell, g_cell, sk, gk, stats, layers, remaining)
-            else:
-                decided = self._full(grid, s_cell, g_cell, sk, gk, stats, remaining)
-        status, message, path = decided
-        stats["planning_time"] = time.perf_counter() - t0
-        stats["expansions"] = sum(s.get("expansions", 0) for s in stats["stages"])
-        stats["collision_checks"] = sum(s.get("collision_checks", 0) for s in stats["stages"])
-        return R.BasePlanResult(status, message, path if path is not None else np.zeros((0, 3)), stats, layers)
-
-    # ---------------------------------------------------------------- stages
-    def _eca(self, grid, s_cell, g_cell, stats, layers):
+    def _last_stage(self, grid: OccupancyGrid, start: Endpoint, goal: Endpoint, run: PlanRun) -> np.ndarray:
         t = time.perf_counter()
-        eca = grid.inflate(max(self.r_in - RADIUS_GUARD, 0.0)).occupied
-        labels, _ = ndimage.label(~eca, structure=np.ones((3, 3), dtype=int))
-        ls, lg = labels[s_cell], labels[g_cell]
-        layers["eca"] = eca
-        stage = {"name": "ECA", "radius": self.r_in, "collision_checks": int(eca.size), "expansions": 0}
-        result = None
-        if ls != lg:
-            n_start, n_goal = int(np.sum(labels == ls)), int(np.sum(labels == lg))
-            side, cells = ("start", n_start) if n_start <= n_goal else ("goal", n_goal)
-            message = (f"no path: {side} enclosed (obstacles grown by R_min = {self.r_in:.3f} m "
-                       f"leave it a region of {cells} cells)")
-            stats["deciding_stage"] = "ECA"
-            result = (R.NO_PATH_PROVEN, message, None)
-        stage.update(time=time.perf_counter() - t, decided=result is not None)
-        stats["stages"].append(stage)
-        return result
-
-    def _baa(self, grid, start, goal, s_cell, g_cell, stats, layers):
-        t = time.perf_counter()
-        baa = grid.inflate(self.r_out + RADIUS_GUARD).occupied
-        layers["baa"] = baa
-        stage = {"name": "BAA", "radius": self.r_out, "expansions": 0, "collision_checks": 0}
-        result = None
-        if not baa[s_cell] and not baa[g_cell]:
-            cells, _, expansions = astar_2d(baa, s_cell, g_cell)
-            stage.update(expansions=expansions, collision_checks=8 * expansions)
-            if len(cells):
-                stats["deciding_stage"] = "BAA"
-                result = (R.SOLVED, "solved by BAA", common.cells_to_path(grid, cells, start[2], goal[2]))
-        else:
-            stage["skipped"] = "start or goal within R_max of an obstacle"
-        stage.update(time=time.perf_counter() - t, decided=result is not None)
-        stats["stages"].append(stage)
-        return result
-
-    def _full(self, grid, s_cell, g_cell, sk, gk, stats, time_limit):
-        t = time.perf_counter()
-        out = self.search(grid, s_cell, g_cell, sk, gk, time_limit)
-        stats["deciding_stage"] = "full"
-        stage = {"name": "full", "time": time.perf_counter() - t, "decided": True,
-                 **{k: v for k, v in out.items() if k not in ("states", "status")}}
-        stats["stages"].append(stage)
-        if out["status"] == SEARCH_FOUND:
-            return R.SOLVED, "solved by full search", common.states_to_path(grid, out["states"], self.headings)
-        if out["status"] == SEARCH_TIMED_OUT:
-            return R.TIMED_OUT, f"full SE(2) A* timed out after {stage['time']:.3f} s", None
-        return R.NO_PATH, "no path: full SE(2) A* exhausted the free configurations", None
-
-    # ------------------------------------------------------ local (beyond)
-    def _local(self, grid, start, goal, s_cell, g_cell, sk, gk, stats, layers, time_limit):
-        t = time.perf_counter()
-        eca, baa = layers["eca"], layers["baa"]
-        stage = {"name": "local", "expansions": 0, "collision_checks": 0, "windows": []}
-        stats["stages"].append(stage)
-        guide, _, guide_exp = astar_2d(eca, s_cell, g_cell, cell_cost=baa * self.narrow_penalty)
-        stage["guide_expansions"] = guide_exp
+        eca, baa = run.layers["eca"], run.layers["baa"]
+        stage = run.stats.add(StageStats("local", windows=[]))
+        guide, _, guide_exp = astar_2d(eca, start.cell, goal.cell, cell_cost=baa * self.narrow_penalty,
+                                       deadline=run.deadline)
+        stage.guide_expansions = guide_exp
         pieces = None
         if len(guide):
-            layers["guide"] = guide
-            pieces = self._solve_hard_runs(grid, guide, baa, sk, gk, stage, layers, t + time_limit)
-        stage["time"] = time.perf_counter() - t
+            run.layers["guide"] = guide
+            pieces = self._solve_hard_runs(grid, guide, baa, start, goal, stage, run)
+        stage.time = time.perf_counter() - t
         if pieces is None:
-            stage["decided"] = False
-            stage["fallback"] = "full search over the whole map"
-            return self._full(grid, s_cell, g_cell, sk, gk, stats, time_limit - stage["time"])
-        stage["decided"] = True
-        stats["deciding_stage"] = "local"
-        return R.SOLVED, "solved by BAA + local full search", self._assemble(grid, pieces, start, goal)
+            stage.fallback = "full search over the whole map"
+            return self._full(grid, start, goal, run)
+        stage.decided = True
+        run.stats.deciding_stage, run.message = "local", "solved by BAA + local full search"
+        return self._assemble(grid, pieces, start.pose, goal.pose)
 
     def _hard_runs(self, guide: np.ndarray, baa: np.ndarray) -> list[tuple[int, int]]:
         """Index ranges [a, b] of the guide whose steps are not safe at every heading."""
@@ -185,8 +219,9 @@ class MultiStagePlanner(SE2AStarPlanner):
             i = j
         return runs
 
-    def _solve_hard_runs(self, grid, guide, baa, sk, gk, stage, layers, deadline):
+    def _solve_hard_runs(self, grid, guide, baa, start: Endpoint, goal: Endpoint, stage: StageStats, run: PlanRun):
         """SE(2) A* in a window around each hard run; None when a run cannot be solved locally."""
+        sk, gk = self.heading_of(grid, start.pose), self.heading_of(grid, goal.pose)
         runs = self._merge_runs(self._hard_runs(guide, baa), guide, grid)
         pieces, last = [], 0
         windows = []
@@ -197,7 +232,7 @@ class MultiStagePlanner(SE2AStarPlanner):
                 margin = int(math.ceil(grow * self.local_margin / grid.resolution))
                 box = self._window(guide[a : b + 1], margin, grid.shape)
                 states = self._window_search(grid, box, guide[a], guide[b], sk if a == 0 else -1,
-                                             gk if b == len(guide) - 1 else -1, baa, stage, deadline)
+                                             gk if b == len(guide) - 1 else -1, baa, stage, run)
                 windows.append(box)
                 if states is not None:
                     break
@@ -206,7 +241,7 @@ class MultiStagePlanner(SE2AStarPlanner):
             pieces.append(("hard", states))
             last = b
         pieces.append(("easy", guide[last:]))
-        layers["windows"] = np.array(windows, dtype=int).reshape(-1, 4)
+        run.layers["windows"] = np.array(windows, dtype=int).reshape(-1, 4)
         return pieces
 
     def _merge_runs(self, runs, guide, grid):
@@ -230,10 +265,10 @@ class MultiStagePlanner(SE2AStarPlanner):
         r1, c1 = cells.max(axis=0) + margin + 1
         return max(r0, 0), max(c0, 0), min(r1, shape[0]), min(c1, shape[1])
 
-    def _window_search(self, grid, box, entry, exit_, sk, gk, baa, stage, deadline):
+    def _window_search(self, grid, box, entry, exit_, sk, gk, baa, stage: StageStats, run: PlanRun):
         r0, c0, r1, c1 = box
         t = time.perf_counter()
-        window_layers = self._window_layers(grid, box)
+        window_layers = self._window_layers(grid, box, run)
         # A BAA-free end is safe at every heading (turning in place there is safe too).
         if sk >= 0 and baa[tuple(entry)]:
             starts = [(sk, entry[0] - r0, entry[1] - c0)]
@@ -242,32 +277,31 @@ class MultiStagePlanner(SE2AStarPlanner):
         if gk >= 0 and not baa[tuple(exit_)]:
             gk = -1
         out = search_layers(window_layers, starts, (exit_[0] - r0, exit_[1] - c0), gk,
-                            self.rot_cost_cells(grid.resolution), time_limit=max(deadline - time.perf_counter(), 1e-3))
-        stage["expansions"] += out["expansions"]
-        stage["collision_checks"] += out["collision_checks"]
-        stage["windows"].append({"box": [int(v) for v in box], "cspace_cells": int(window_layers.size),
-                                 "expansions": out["expansions"], "found": out["status"] == SEARCH_FOUND,
-                                 "time": time.perf_counter() - t})
-        if out["status"] != SEARCH_FOUND:
+                            self.rot_cost_cells(grid.resolution), deadline=run.deadline)
+        stage.expansions += out.expansions
+        stage.collision_checks += out.collision_checks
+        stage.windows.append(WindowStats([int(v) for v in box], int(window_layers.size), out.expansions, out.found,
+                                         time.perf_counter() - t))
+        if not out.found:
             return None
-        states = out["states"].copy()
+        states = out.states.copy()
         states[:, 1] += r0
         states[:, 2] += c0
         return states
 
-    def _window_layers(self, grid, box):
+    def _window_layers(self, grid, box, run: PlanRun):
         """C-space layers of a window, seeing the obstacles just outside it."""
         r0, c0, r1, c1 = box
-        offsets = self.offsets(grid.resolution)
+        offsets = self.offsets(grid, run.deadline)
         reach = max(int(np.max(np.abs(o))) if len(o) else 0 for o in offsets)
         R0, C0 = max(r0 - reach, 0), max(c0 - reach, 0)
         crop = grid.occupied[R0 : min(r1 + reach, grid.height), C0 : min(c1 + reach, grid.width)]
-        layers = cspace_layers(crop, self.footprint, grid.resolution, self.headings, offsets)
+        layers = cspace_layers(crop, self.footprint, grid.resolution, self.headings, offsets, run.deadline)
         return np.ascontiguousarray(layers[:, r0 - R0 : r1 - R0, c0 - C0 : c1 - C0])
 
     def _assemble(self, grid, pieces, start, goal) -> np.ndarray:
         """Concatenate easy stretches (headings interpolated) and hard SE(2) stretches."""
-        hard_paths = [common.states_to_path(grid, p, self.headings) if kind == "hard" else None
+        hard_paths = [states_to_path(grid, p, self.headings) if kind == "hard" else None
                       for kind, p in pieces]
         out = []
         for i, (kind, cells) in enumerate(pieces):
@@ -276,7 +310,7 @@ class MultiStagePlanner(SE2AStarPlanner):
             else:
                 theta0 = start[2] if i == 0 else hard_paths[i - 1][-1, 2]
                 theta1 = goal[2] if i == len(pieces) - 1 else hard_paths[i + 1][0, 2]
-                path = common.cells_to_path(grid, cells, theta0, theta1)
+                path = cells_to_path(grid, cells, theta0, theta1)
             if out and len(path) and np.allclose(out[-1][-1, :2], path[0, :2]):
                 # the shared cell: keep both headings (a turn in place, safe there)
                 if np.isclose(out[-1][-1, 2], path[0, 2]):

@@ -29,8 +29,9 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from maru_planner.base.footprint import rectangle
 from maru_planner.base.grid import OccupancyGrid
-from maru_planner.base.se2 import rectangle
+from maru_planner.paths import config_path
 
 TABLE1_SIZE = (40, 60)  # rows (y), cols (x)
 TABLE1_RESOLUTION = 0.1
@@ -134,7 +135,5 @@ def write_maps(directory) -> list[Path]:
 
 
 if __name__ == "__main__":  # regenerate config/maps/
-    from maru_planner.paths import config_path
-
     for p in write_maps(config_path("maps")):
         print(p)

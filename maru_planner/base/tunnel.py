@@ -35,6 +35,7 @@ shortcuts between its cells (the paper's "turning points").
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from array import array
@@ -42,7 +43,21 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from maru_planner.base import result as res
+from maru_planner.base.budget import Deadline, unlimited
+from maru_planner.base.footprint import footprint_radii
+from maru_planner.base.grid import OccupancyGrid
+from maru_planner.base.planner import DiscPlanner, Endpoint, PlanRun
+from maru_planner.base.result import PlanStats, PlanStatus, status_of
+from maru_planner.errors import (
+    GoalOccupied,
+    GoalOutsideMap,
+    InvalidRequest,
+    MaruError,
+    NoPath,
+    StartOccupied,
+    StartOutsideMap,
+)
+from maru_planner.params import param
 
 SIGMA = ((-1, 0), (0, 1), (1, 0), (0, -1))  # Σ(β): 4-neighbours (row, col)
 GAMMA = ((-1, 0), (0, 1), (1, 0), (0, -1), (-1, -1), (-1, 1), (1, 1), (1, -1))  # Γ(α)
@@ -50,19 +65,17 @@ GAMMA = ((-1, 0), (0, 1), (1, 0), (0, -1), (-1, -1), (-1, 1), (1, 1), (1, -1))  
 
 @dataclass
 class TunnelParams:
-    """Named parameters of the tunnel planner (paper's signs enforced)."""
+    """Named parameters of the tunnel planner (the paper's signs enforced by ``validate``)."""
 
-    big_cell_size: int = 3
-    min_big_cell_size: int = 1
-    k1: float = 1.0  # TFP/LCRP: weight of the distance to the goal (> 0)
-    k2: float = -0.2  # TFP/LCRP: weight of the distance from the start (< 0)
-    k3: float = 0.05  # TFP: weight of the obstacle fraction of β (> 0)
-    k4: float = 1.0  # PFP: weight of the distance to the next subgoal (> 0)
-    k5: float = -0.2  # PFP: weight of the distance from the last subgoal (< 0)
-    maximum_value: float = 1.0e6
-    max_virtual_obstacles: int = 200
-    shortcut: bool = True
-    time_limit: float = 0.0  # seconds; 0 = no limit
+    big_cell_size: int = param(3, "side of a big cell β in small cells (the paper: 3)", lower=1, upper=64)
+    min_big_cell_size: int = param(1, "smallest β side before virtual obstacles (1 = complete)", lower=1, upper=64)
+    k1: float = param(1.0, "TFP/LCRP weight of the distance to the goal (> 0)", lower=0.0)
+    k2: float = param(-0.2, "TFP/LCRP weight of the distance from the start (< 0)", upper=0.0)
+    k3: float = param(0.05, "TFP weight of the obstacle fraction of β (> 0)", lower=0.0)
+    k4: float = param(1.0, "PFP weight of the distance to the next subgoal (> 0)", lower=0.0)
+    k5: float = param(-0.2, "PFP weight of the distance from the last subgoal (< 0)", upper=0.0)
+    max_virtual_obstacles: int = param(200, "blocked β edges tried at the smallest size", lower=0, upper=100000)
+    shortcut: bool = param(True, "keep only the turning points (line-of-sight shortcuts)")
 
     def validate(self) -> None:
         checks = [
@@ -73,13 +86,22 @@ class TunnelParams:
             (self.k3 > 0, "k3 must be > 0 (paper: K3 positive)"),
             (self.k4 > 0, "k4 must be > 0 (paper: K4 positive)"),
             (self.k5 < 0, "k5 must be < 0 (paper: K5 negative)"),
-            (self.maximum_value > 0, "maximum_value must be > 0"),
             (self.max_virtual_obstacles >= 0, "max_virtual_obstacles must be >= 0"),
-            (math.isfinite(self.time_limit) and self.time_limit >= 0, "time_limit must be >= 0 s (0 = none)"),
         ]
         for ok, message in checks:
             if not ok:
-                raise ValueError(message)
+                raise InvalidRequest(message)
+
+
+@dataclass
+class TunnelStats(PlanStats):
+    """PlanStats plus the tunnel planner's counters (``expansions`` = TFP + PFP)."""
+
+    tfp_expansions: int = 0
+    lcrp_cells: int = 0
+    pfp_expansions: int = 0
+    attempts: int = 0
+    virtual_obstacles: int = 0
 
 
 @dataclass
@@ -98,14 +120,18 @@ class Attempt:
 
 @dataclass
 class CellPlan:
-    """Tunnel planner answer in cell coordinates (row, col)."""
+    """Tunnel planner answer in cell coordinates (row, col); ``error`` says why there is no path."""
 
-    status: str
+    error: MaruError | None
     message: str
     raw_cells: np.ndarray  # PFP chain of small cells
     waypoints: np.ndarray  # shortcut turning points (row, col)
     attempts: list
-    stats: dict
+    stats: TunnelStats
+
+    @property
+    def status(self) -> PlanStatus:
+        return PlanStatus.SOLVED if self.error is None else status_of(self.error)
 
 
 class BigCellGrid:
@@ -167,27 +193,6 @@ class BigCellGrid:
         return out
 
 
-class TimedOut(Exception):
-    """The planner's time budget ran out."""
-
-
-class Deadline:
-    """Checks the clock every ``every`` calls (cheap enough for the inner loops)."""
-
-    def __init__(self, seconds: float, every: int = 512):
-        self.at = time.perf_counter() + seconds if seconds > 0 else math.inf
-        self.every = every
-        self.calls = 0
-
-    def check(self) -> None:
-        self.calls += 1
-        if self.calls % self.every == 0 and time.perf_counter() > self.at:
-            raise TimedOut
-
-
-NO_DEADLINE = Deadline(0.0)
-
-
 def _edge(a: int, b: int) -> tuple:
     return (a, b) if a <= b else (b, a)
 
@@ -200,7 +205,7 @@ def _dist(a, b) -> float:
 
 
 def tunnel_finding(bg: BigCellGrid, start: int, goal: int, p: TunnelParams, blocked: set,
-                   deadline: Deadline = NO_DEADLINE) -> tuple[array, bytearray, bool]:
+                   deadline: Deadline) -> tuple[array, bytearray, bool]:
     """TFP: greedy walk over Σ(β) minimising f_T, backtracking at dead ends.
 
     Returns (T in visiting order, T as a flat mask, reached_goal).
@@ -323,7 +328,7 @@ def lumped_cell_removal(bg: BigCellGrid, members: bytearray, start: int, goal: i
 
 
 def path_finding(occupied: np.ndarray, bg: BigCellGrid, thin: list, start: tuple, goal: tuple, p: TunnelParams,
-                 deadline: Deadline = NO_DEADLINE):
+                 deadline: Deadline):
     """PFP: greedy depth-first 8-neighbour walk of small cells inside B.
 
     Returns (cells or None, index in B of the β where the walk got stuck, expansions).
@@ -414,43 +419,38 @@ def _as_array(items) -> np.ndarray:
     return np.asarray(list(items), dtype=int).reshape(-1, 2)
 
 
-def _check_endpoint(occupied: np.ndarray, cell, name: str):
+def _check_endpoint(occupied: np.ndarray, cell, name: str) -> None:
     h, w = occupied.shape
     if not (0 <= cell[0] < h and 0 <= cell[1] < w):
-        return (res.START_OUTSIDE_MAP if name == "start" else res.GOAL_OUTSIDE_MAP), f"{name} cell {cell} outside map"
+        raise (StartOutsideMap if name == "start" else GoalOutsideMap)(f"{name} cell {cell} outside map")
     if occupied[cell]:
-        return (res.START_OCCUPIED if name == "start" else res.GOAL_OCCUPIED), f"{name} cell {cell} is occupied"
-    return None
+        raise (StartOccupied if name == "start" else GoalOccupied)(f"{name} cell {cell} is occupied")
 
 
 class TunnelPlanner:
     """Plans on a bool occupancy array (True = occupied, already grown by the robot radius)."""
 
     def __init__(self, params: TunnelParams | None = None, **overrides):
-        self.params = params or TunnelParams()
-        for key, value in overrides.items():
-            if not hasattr(self.params, key):
-                raise ValueError(f"unknown tunnel parameter {key!r}")
-            setattr(self.params, key, value)
+        unknown = set(overrides) - {f.name for f in dataclasses.fields(TunnelParams)}
+        if unknown:
+            raise InvalidRequest(f"unknown tunnel parameter(s) {sorted(unknown)}")
+        self.params = dataclasses.replace(params or TunnelParams(), **overrides)
         self.params.validate()
 
-    def plan_cells(self, occupied: np.ndarray, start, goal) -> CellPlan:
+    def plan_cells(self, occupied: np.ndarray, start, goal, deadline: Deadline | None = None,
+                   stats: TunnelStats | None = None) -> CellPlan:
+        """Plan from cell ``start`` to ``goal``; fills ``stats`` (a fresh TunnelStats by default)."""
         occupied = np.asarray(occupied, dtype=bool)
         start, goal = (int(start[0]), int(start[1])), (int(goal[0]), int(goal[1]))
         t0 = time.perf_counter()
-        stats = {"tfp_expansions": 0, "lcrp_cells": 0, "pfp_expansions": 0, "attempts": 0, "virtual_obstacles": 0}
-        for cell, name in ((start, "start"), (goal, "goal")):
-            bad = _check_endpoint(occupied, cell, name)
-            if bad:
-                return self._finish(bad[0], bad[1], [], [], [], stats, t0)
-        p = self.params
+        stats = stats if stats is not None else TunnelStats()
         attempts: list[Attempt] = []
-        deadline = Deadline(p.time_limit)
         try:
-            return self._search(occupied, start, goal, attempts, stats, deadline, t0)
-        except TimedOut:
-            return self._finish(res.TIMED_OUT, f"time limit of {p.time_limit} s reached", [], attempts, occupied,
-                                stats, t0)
+            for cell, name in ((start, "start"), (goal, "goal")):
+                _check_endpoint(occupied, cell, name)
+            return self._search(occupied, start, goal, attempts, stats, deadline or unlimited(), t0)
+        except MaruError as error:
+            return self._finish(error, str(error), [], attempts, occupied, stats, t0)
 
     def _search(self, occupied, start, goal, attempts, stats, deadline, t0) -> CellPlan:
         p = self.params
@@ -461,33 +461,33 @@ class TunnelPlanner:
                 attempt, cells = self._round(occupied, bg, start, goal, blocked, stats, deadline)
                 attempts.append(attempt)
                 if cells is not None:
-                    return self._finish(res.SOLVED, f"path found with big cells of {size}×{size}",
+                    return self._finish(None, f"path found with big cells of {size}×{size}",
                                         cells, attempts, occupied, stats, t0)
                 if attempt.failed_stage == "TFP" or size > p.min_big_cell_size:
                     break
                 if len(blocked) >= p.max_virtual_obstacles:
                     break
                 blocked.add(attempt.failing_edge)
-                stats["virtual_obstacles"] = len(blocked)
+                stats.virtual_obstacles = len(blocked)
         last = attempts[-1] if attempts else None
         reason = f"{last.failed_stage} failed at big-cell size {last.big_cell_size}" if last else "no attempt"
-        return self._finish(res.NO_PATH, f"no path: {reason}", [], attempts, occupied, stats, t0)
+        raise NoPath(f"no path: {reason}")
 
-    def _round(self, occupied, bg: BigCellGrid, start, goal, blocked: set, stats: dict, deadline: Deadline):
+    def _round(self, occupied, bg: BigCellGrid, start, goal, blocked: set, stats: TunnelStats, deadline: Deadline):
         p = self.params
-        stats["attempts"] += 1
+        stats.attempts += 1
         b_start, b_goal = bg.of(start), bg.of(goal)
         tunnel, members, reached = tunnel_finding(bg, b_start, b_goal, p, blocked, deadline)
-        stats["tfp_expansions"] += len(tunnel)
+        stats.tfp_expansions += len(tunnel)
         empty = np.zeros((0, 2), dtype=int)
         virtual = [tuple(map(bg.rc, e)) for e in sorted(blocked)]
         if not reached:
             return Attempt(bg.size, "TFP", bg.to_rc(tunnel), empty, empty, empty, virtual), None
         thin, lumped = lumped_cell_removal(bg, members, b_start, b_goal, p, blocked)
         del members
-        stats["lcrp_cells"] += len(thin)
+        stats.lcrp_cells += len(thin)
         cells, stuck, expansions = path_finding(occupied, bg, thin, start, goal, p, deadline)
-        stats["pfp_expansions"] += expansions
+        stats.pfp_expansions += expansions
         if cells is None:
             failing = _edge(thin[stuck], thin[min(stuck + 1, len(thin) - 1)])
             attempt = Attempt(bg.size, "PFP", bg.to_rc(tunnel), lumped, bg.to_rc(thin), empty,
@@ -497,14 +497,13 @@ class TunnelPlanner:
         attempt = Attempt(bg.size, None, bg.to_rc(tunnel), lumped, bg.to_rc(thin), _as_array(cells), virtual)
         return attempt, cells
 
-    def _finish(self, status, message, cells, attempts, occupied, stats, t0) -> CellPlan:
+    def _finish(self, error, message, cells, attempts, occupied, stats: TunnelStats, t0) -> CellPlan:
         waypoints = cells
         if cells and self.params.shortcut:
             waypoints = shortcut_cells(occupied, cells)
-        stats = dict(stats)
-        stats["expansions"] = stats["tfp_expansions"] + stats["pfp_expansions"]
-        stats["planning_time"] = time.perf_counter() - t0
-        return CellPlan(status, message, _as_array(cells), _as_array(waypoints), attempts, stats)
+        stats.expansions = stats.tfp_expansions + stats.pfp_expansions
+        stats.planning_time = time.perf_counter() - t0
+        return CellPlan(error, message, _as_array(cells), _as_array(waypoints), attempts, stats)
 
 
 # ----------------------------------------------------------------- world frame
@@ -524,49 +523,38 @@ def cells_to_path(grid, cells: np.ndarray, start_theta: float, goal_theta: float
     return np.column_stack([xy, theta])
 
 
-class TunnelGridPlanner:
+class TunnelGridPlanner(DiscPlanner):
     """Registry entry ``tunnel``: the tunnel planner on an ``OccupancyGrid`` for a disc robot.
 
     Obstacles are grown by ``robot_radius`` metres (default: the footprint's
     circumradius, 0.25 m without a footprint — the paper's robot). Other
-    keyword arguments are :class:`TunnelParams` fields (``time_limit`` among
-    them); ``headings`` is accepted and unused, so that the node can pass the
-    parameters common to all base planners.
+    keyword arguments are :class:`TunnelParams` fields.
     """
 
-    def __init__(self, footprint=None, robot_radius: float | None = None, headings=None, **params):
+    def __init__(self, footprint=None, robot_radius: float | None = None, **params):
         if robot_radius is None:
-            robot_radius = 0.25
-            if footprint is not None and len(np.asarray(footprint)):
-                robot_radius = float(np.max(np.linalg.norm(np.asarray(footprint, dtype=float)[:, :2], axis=1)))
-        if not (math.isfinite(robot_radius) and robot_radius >= 0):
-            raise ValueError(f"robot_radius must be finite and >= 0, got {robot_radius}")
-        self.robot_radius = float(robot_radius)
+            robot_radius = footprint_radii(footprint)[1] if footprint is not None else 0.25
+        super().__init__(robot_radius)
         self.planner = TunnelPlanner(**params)
 
-    def plan(self, grid, start, goal) -> res.BasePlanResult:
-        from maru_planner.base import common
+    @property
+    def robot_radius(self) -> float:
+        return self.radius
 
-        t0 = time.perf_counter()
-        stats = {"expansions": 0, "collision_checks": 0, "planning_time": 0.0, "deciding_stage": "tunnel"}
-        try:
-            start, goal, s_cell, g_cell, grown = common.disc_request(grid, start, goal, self.robot_radius)
-        except common.RequestError as exc:
-            stats["planning_time"] = time.perf_counter() - t0
-            return common.failure(exc.status, str(exc), stats)
-        plan = self.planner.plan_cells(grown.occupied, s_cell, g_cell)
-        path = cells_to_path(grid, plan.waypoints, start[2], goal[2])
-        if len(path):
-            path[0, :2] = start[:2]
-            path[-1, :2] = goal[:2]
-        stats.update(plan.stats)
-        stats["planning_time"] = time.perf_counter() - t0
-        stats["collision_checks"] = stats["expansions"]
+    def new_stats(self) -> PlanStats:
+        return TunnelStats(deciding_stage="tunnel")
+
+    def search(self, space: OccupancyGrid, start: Endpoint, goal: Endpoint, run: PlanRun) -> np.ndarray:
+        plan = self.planner.plan_cells(space.occupied, start.cell, goal.cell, run.deadline, run.stats)
+        run.stats.collision_checks = run.stats.expansions
         last = plan.attempts[-1] if plan.attempts else None
-        stats["deciding_stage"] = f"tunnel b={last.big_cell_size}" if last else "tunnel"
-        layers = {"grown": grown.occupied, "attempts": plan.attempts, "raw_cells": plan.raw_cells,
-                  "waypoints": plan.waypoints}
-        result = res.BasePlanResult(plan.status, plan.message, path, stats, layers)
-        if len(path) > 1:
-            stats["cost"] = result.path_length()
-        return result
+        run.stats.deciding_stage = f"tunnel b={last.big_cell_size}" if last else "tunnel"
+        run.layers.update(attempts=plan.attempts, raw_cells=plan.raw_cells, waypoints=plan.waypoints)
+        if plan.error is not None:
+            raise plan.error
+        path = cells_to_path(space, plan.waypoints, start.pose[2], goal.pose[2])
+        path[0, :2] = start.pose[:2]
+        path[-1, :2] = goal.pose[:2]
+        run.stats.cost = float(np.sum(np.linalg.norm(np.diff(path[:, :2], axis=0), axis=1)))
+        run.message = plan.message
+        return path

@@ -10,22 +10,29 @@ from geometry_msgs.msg import Point32, PoseStamped
 from nav_msgs.msg import OccupancyGrid as OccupancyGridMsg
 from nav_msgs.msg import Path
 
-from maru_planner.base import result as R
 from maru_planner.base.grid import OccupancyGrid
+from maru_planner.base.result import PlanStats, PlanStatus, status_of
+from maru_planner.errors import InvalidMap, InvalidPlanner, InvalidRequest, MaruError
 from maru_planner_interfaces.srv import PlanBasePath
 
 E = PlanBasePath.Response
+# The one place base-planning statuses become PlanBasePath error codes.
 STATUS_TO_ERROR = {
-    R.SOLVED: E.NONE,
-    R.NO_PATH: E.NO_VALID_PATH,
-    R.NO_PATH_PROVEN: E.NO_PATH_PROVEN,
-    R.START_OCCUPIED: E.START_OCCUPIED,
-    R.GOAL_OCCUPIED: E.GOAL_OCCUPIED,
-    R.START_OUTSIDE_MAP: E.START_OUTSIDE_MAP,
-    R.GOAL_OUTSIDE_MAP: E.GOAL_OUTSIDE_MAP,
-    R.TIMED_OUT: E.TIMEOUT,
-    R.INVALID_REQUEST: E.INVALID_REQUEST,
+    PlanStatus.SOLVED: E.NONE,
+    PlanStatus.NO_PATH: E.NO_VALID_PATH,
+    PlanStatus.NO_PATH_PROVEN: E.NO_PATH_PROVEN,
+    PlanStatus.START_OCCUPIED: E.START_OCCUPIED,
+    PlanStatus.GOAL_OCCUPIED: E.GOAL_OCCUPIED,
+    PlanStatus.START_OUTSIDE_MAP: E.START_OUTSIDE_MAP,
+    PlanStatus.GOAL_OUTSIDE_MAP: E.GOAL_OUTSIDE_MAP,
+    PlanStatus.TIMED_OUT: E.TIMEOUT,
+    PlanStatus.INVALID_REQUEST: E.INVALID_REQUEST,
 }
+
+
+def error_code(error: MaruError) -> int:
+    """The code of a request refused before planning: INVALID_PLANNER, else the code of its status."""
+    return E.INVALID_PLANNER if isinstance(error, InvalidPlanner) else STATUS_TO_ERROR[status_of(error)]
 
 
 def yaw_from_quaternion(q) -> float:
@@ -37,14 +44,14 @@ def set_yaw(q, yaw: float) -> None:
 
 
 def grid_from_msg(msg: OccupancyGridMsg, *, occupied_threshold: int = 65, unknown_is_occupied: bool = True):
-    """nav_msgs/OccupancyGrid -> OccupancyGrid; ValueError naming what is wrong."""
+    """nav_msgs/OccupancyGrid -> OccupancyGrid; InvalidMap (or TooLarge) naming what is wrong."""
     info = msg.info
     if not (math.isfinite(info.resolution) and info.resolution > 0):
-        raise ValueError(f"map resolution must be > 0, got {info.resolution}")
+        raise InvalidMap(f"map resolution must be > 0, got {info.resolution}")
     p = info.origin.position
     origin = (p.x, p.y, yaw_from_quaternion(info.origin.orientation))
     if not all(math.isfinite(v) for v in origin):
-        raise ValueError(f"map origin is not finite: {origin}")
+        raise InvalidMap(f"map origin is not finite: {origin}")
     # resolution is a float32 in the message: recover the decimal map_server wrote (0.1, not 0.100000001)
     resolution = float(f"{info.resolution:.7g}")
     return OccupancyGrid.from_values(
@@ -99,9 +106,9 @@ def footprint_from_points(points: list[Point32]) -> np.ndarray:
 def footprint_from_param(values) -> np.ndarray:
     values = [float(v) for v in values]
     if len(values) % 2:
-        raise ValueError(f"footprint parameter needs x, y pairs, got {len(values)} numbers")
+        raise InvalidRequest(f"footprint parameter needs x, y pairs, got {len(values)} numbers")
     return np.array(values).reshape(-1, 2)
 
 
-def stats_json(stats: dict) -> str:
-    return json.dumps(R.jsonable(stats))
+def stats_json(stats: PlanStats) -> str:
+    return json.dumps(stats.to_dict())

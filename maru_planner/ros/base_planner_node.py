@@ -10,18 +10,22 @@
   subscribes, the grown maps on ``~/eca_map``, ``~/baa_map`` and
   ``~/grown_map`` (nav_msgs/OccupancyGrid).
 
-Parameters (``config/base_planner.yaml``): ``planner_id``, ``footprint``
-(flat x, y list in base_link), ``headings``, ``allowed_planning_time``,
-``unknown_is_occupied``, ``occupied_threshold``, ``map_topic``, ``biped_world``
-(3-D world YAML for ``biped_track`` / ``biped_wall``; empty = plan on /map).
-Poses are in the map frame (an empty frame_id is taken as the map's).
+Parameters: the fields of :class:`BaseNodeConfig` (descriptors with ranges; ``config/base_planner.yaml``).
+Run-time changes apply to the next request (``unknown_is_occupied`` and ``occupied_threshold``
+re-read the last map); a bad value is rejected with the reason. Any planner of
+``maru_planner.base.registry`` is served; it gets the ``headings`` and ``biped_world`` parameters
+only when its capabilities ask for them. Poses are in the map frame (an empty frame_id is taken
+as the map's).
 """
 
 from __future__ import annotations
 
-import inspect
+import dataclasses
 import math
+import sys
+from typing import Any
 
+import numpy as np
 import rclpy
 from nav_msgs.msg import OccupancyGrid as OccupancyGridMsg
 from nav_msgs.msg import Path
@@ -31,36 +35,67 @@ from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
 from maru_planner.base import registry
-from maru_planner.errors import InvalidPlanner, MaruError
+from maru_planner.base.biped.planners import resolve_world_path
+from maru_planner.base.biped.world import load_world
+from maru_planner.base.footprint import as_polygon
+from maru_planner.base.grid import OccupancyGrid
+from maru_planner.base.planner import BasePlanner
+from maru_planner.base.result import BasePlanResult
+from maru_planner.errors import InvalidRequest, MaruError
+from maru_planner.params import dataclass_params, param
 from maru_planner.ros import base_conversions as conv
+from maru_planner.ros import parameters
 from maru_planner.ros.env import network_from_environment
 from maru_planner_interfaces.srv import PlanBasePath
 
 E = PlanBasePath.Response
+_PLANNER_CACHE_SIZE = 16  # built planners kept (their rasterised footprints survive between requests)
 
-NODE_PARAMETERS = {
-    "planner_id": "mspp",
-    "footprint": [0.45, 0.15, -0.45, 0.15, -0.45, -0.15, 0.45, -0.15],
-    "headings": 32,
-    "allowed_planning_time": 10.0,
-    "unknown_is_occupied": True,
-    "occupied_threshold": 65,
-    "map_topic": "map",
-    "biped_world": "",
-}
+
+@dataclasses.dataclass
+class BaseNodeConfig:
+    """base_planner_node's parameters."""
+
+    planner_id: str = param("mspp", "planner used when a request names none (a base registry id)")
+    footprint: list = param(
+        default_factory=lambda: [0.45, 0.15, -0.45, 0.15, -0.45, -0.15, 0.45, -0.15],
+        description="robot footprint in base_link, flat x, y list (m), used when a request gives none",
+    )
+    headings: int = param(32, "SE(2) heading discretisation for planners that need headings", lower=1, upper=3600)
+    allowed_planning_time: float = param(10.0, "planning budget (s) when a request gives 0", lower=1e-3, upper=3600.0)
+    unknown_is_occupied: bool = param(True, "unknown (-1) map cells block the robot")
+    occupied_threshold: int = param(65, "map values >= this are obstacles", lower=1, upper=100)
+    map_topic: str = param("map", "nav_msgs/OccupancyGrid topic (transient local)", read_only=True)
+    biped_world: str = param("", "3-D world YAML for world_3d planners (biped_*); empty = plan on the map")
+
+
+NODE_SPECS = dataclass_params(BaseNodeConfig)
+
+
+def check_config(config: BaseNodeConfig) -> None:
+    """InvalidRequest naming the parameter when the values cannot serve requests."""
+    registry.spec(config.planner_id)
+    try:
+        as_polygon(conv.footprint_from_param(config.footprint))
+    except (MaruError, ValueError) as exc:
+        raise InvalidRequest(f"parameter 'footprint': {exc}") from None
+    if config.biped_world:
+        load_world(resolve_world_path(config.biped_world))
 
 
 class BasePlannerNode(Node):
-    def __init__(self):
-        super().__init__("base_planner_node")
-        for name, default in NODE_PARAMETERS.items():
-            self.declare_parameter(name, default)
-        self.grid = None
-        self.map_error = "no map received yet on " + self._param("map_topic")
+    def __init__(self, **kwargs: Any):
+        super().__init__("base_planner_node", **kwargs)
+        self.config = BaseNodeConfig(**parameters.declare_parameters(self, NODE_SPECS))
+        check_config(self.config)
+        self.grid: OccupancyGrid | None = None
+        self.map_msg: OccupancyGridMsg | None = None
+        self.map_error = "no map received yet on " + self.config.map_topic
+        self.planners: dict[tuple, BasePlanner] = {}
         latched = QoSProfile(
             depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL, reliability=ReliabilityPolicy.RELIABLE
         )
-        self.create_subscription(OccupancyGridMsg, self._param("map_topic"), self._on_map, latched)
+        self.create_subscription(OccupancyGridMsg, self.config.map_topic, self._on_map, latched)
         self.path_pub = self.create_publisher(Path, "plan", latched)
         self.layer_pubs = {
             name: self.create_publisher(OccupancyGridMsg, f"~/{name}_map", latched) for name in ("eca", "baa", "grown")
@@ -68,72 +103,82 @@ class BasePlannerNode(Node):
         self.create_service(PlanBasePath, "plan_base_path", self._on_plan_base_path)
         self.create_service(GetPlan, "make_plan", self._on_get_plan)
         self.requests = 0
+        parameters.add_on_set_parameters_callback(self, NODE_SPECS, self.apply_parameters)
         self.get_logger().info(
-            f"base planner ready (default planner {self._param('planner_id')!r}, planners {registry.planner_ids()})"
+            f"base planner ready (default planner {self.config.planner_id!r}, planners {registry.planner_ids()})"
         )
 
-    def _param(self, name):
-        return self.get_parameter(name).value
+    # ------------------------------------------------------------- parameters
+    def apply_parameters(self, changes: dict[str, Any]) -> None:
+        """Check the changed configuration as a whole, then use it (raises to reject with the reason)."""
+        config = dataclasses.replace(self.config, **changes)
+        check_config(config)
+        self.config = config
+        self.planners.clear()
+        if self.map_msg is not None and {"unknown_is_occupied", "occupied_threshold"} & set(changes):
+            self._on_map(self.map_msg)
 
     # -------------------------------------------------------------------- map
-    def _on_map(self, msg: OccupancyGridMsg):
+    def _on_map(self, msg: OccupancyGridMsg) -> None:
         try:
             self.grid = conv.grid_from_msg(
                 msg,
-                occupied_threshold=int(self._param("occupied_threshold")),
-                unknown_is_occupied=bool(self._param("unknown_is_occupied")),
+                occupied_threshold=self.config.occupied_threshold,
+                unknown_is_occupied=self.config.unknown_is_occupied,
             )
+            self.map_msg = msg
             self.map_error = ""
             self.get_logger().info(f"map {self.grid.width} x {self.grid.height} cells of {self.grid.resolution} m")
-        except ValueError as exc:
-            self.grid = None
+        except (MaruError, ValueError) as exc:
+            self.grid, self.map_msg = None, None
             self.map_error = f"the last map was rejected: {exc}"
             self.get_logger().warning(self.map_error)
 
     # --------------------------------------------------------------- planning
-    def plan(self, planner_id: str, footprint, start_msg, goal_msg, time_limit: float):
+    def plan(self, planner_id: str, footprint: np.ndarray, start_msg, goal_msg, time_limit: float):
         """Returns (error_code, message, result or None, nav_msgs/Path of the result or None)."""
         self.requests += 1
         if self.grid is None:
             return E.NO_MAP, f"no map: {self.map_error}", None, None
+        try:
+            self._check_request(start_msg, goal_msg, time_limit)
+            planner = self._planner(planner_id or self.config.planner_id, footprint)
+            result = planner.plan(
+                self.grid, conv.pose_from_msg(start_msg), conv.pose_from_msg(goal_msg),
+                time_limit=time_limit or self.config.allowed_planning_time,
+            )
+        except MaruError as exc:
+            return conv.error_code(exc), str(exc), None, None
+        return conv.STATUS_TO_ERROR[result.status], result.message, result, self._publish(result)
+
+    def _check_request(self, start_msg, goal_msg, time_limit: float) -> None:
         for name, pose in (("start", start_msg), ("goal", goal_msg)):
             frame = pose.header.frame_id
             if frame and frame != self.grid.frame_id:
-                return (
-                    E.INVALID_REQUEST,
-                    (f"{name} is in frame {frame!r}; poses must be in the map frame {self.grid.frame_id!r}"),
-                    None,
-                    None,
+                raise InvalidRequest(
+                    f"{name} is in frame {frame[:40]!r}; poses must be in the map frame {self.grid.frame_id!r}"
                 )
-        if not (math.isfinite(time_limit) and time_limit >= 0):
-            return E.INVALID_REQUEST, f"allowed_planning_time must be >= 0 s, got {time_limit}", None, None
-        planner_id = planner_id or self._param("planner_id")
-        if len(footprint) == 0:
-            footprint = conv.footprint_from_param(self._param("footprint"))
-        params = {
-            "headings": int(self._param("headings")),
-            "time_limit": time_limit or float(self._param("allowed_planning_time")),
-        }
-        if planner_id.startswith("biped_") and self._param("biped_world"):
-            params["world"] = str(self._param("biped_world"))
-        try:
-            if planner_id not in registry.PLANNERS:
-                raise InvalidPlanner(f"unknown base planner {planner_id!r}; known: {', '.join(registry.planner_ids())}")
-            params = _accepted(registry.PLANNERS[planner_id], params)
-            result = registry.plan(
-                planner_id, self.grid, conv.pose_from_msg(start_msg), conv.pose_from_msg(goal_msg), footprint, **params
-            )
-        except InvalidPlanner as exc:
-            return E.INVALID_PLANNER, str(exc), None, None
-        except MaruError as exc:
-            return E.INVALID_REQUEST, str(exc), None, None
-        except Exception as exc:  # keep serving; say what broke
-            self.get_logger().error(f"planner {planner_id!r} raised {type(exc).__name__}: {exc}")
-            return E.UNKNOWN, f"planner {planner_id!r} failed: {type(exc).__name__}: {exc}", None, None
-        path_msg = self._publish(result)
-        return conv.STATUS_TO_ERROR[result.status], result.message, result, path_msg
+        if not (math.isfinite(time_limit) and 0 <= time_limit <= 3600):
+            raise InvalidRequest(f"allowed_planning_time must be in [0, 3600] s, got {time_limit}")
 
-    def _publish(self, result) -> Path:
+    def _planner(self, planner_id: str, footprint: np.ndarray) -> BasePlanner:
+        """The planner for this request, built from the registry (kept for later requests)."""
+        spec = registry.spec(planner_id)
+        if len(footprint) == 0:
+            footprint = conv.footprint_from_param(self.config.footprint)
+        params: dict[str, Any] = {}
+        if spec.has(registry.NEEDS_HEADINGS):
+            params["headings"] = self.config.headings
+        if spec.has(registry.WORLD_3D) and self.config.biped_world:
+            params["world"] = self.config.biped_world
+        key = (spec.id, np.asarray(footprint, dtype=float).tobytes(), tuple(sorted(params.items())))
+        if key not in self.planners:
+            if len(self.planners) >= _PLANNER_CACHE_SIZE:
+                self.planners.clear()
+            self.planners[key] = registry.make_planner(spec.id, footprint, **params)
+        return self.planners[key]
+
+    def _publish(self, result: BasePlanResult) -> Path:
         """Publish the path (when solved) and the watched layers; returns the path message for the response."""
         stamp = self.get_clock().now().to_msg()
         frame = self.grid.frame_id
@@ -159,16 +204,16 @@ class BasePlannerNode(Node):
         if result is not None:
             response.path = path_msg
             stats = result.stats
-            response.deciding_stage = str(stats.get("deciding_stage", ""))
-            response.planning_time = float(stats.get("planning_time", 0.0))
-            response.expansions = int(stats.get("expansions", 0))
-            response.collision_checks = int(stats.get("collision_checks", 0))
+            response.deciding_stage = stats.deciding_stage
+            response.planning_time = float(stats.planning_time)
+            response.expansions = int(stats.expansions)
+            response.collision_checks = int(stats.collision_checks)
             response.stats_json = conv.stats_json(stats)
         self._log_outcome("plan_base_path", code, message)
         return response
 
     def _on_get_plan(self, request, response):
-        code, message, result, path_msg = self.plan("", [], request.start, request.goal, 0.0)
+        code, message, result, path_msg = self.plan("", np.zeros((0, 2)), request.start, request.goal, 0.0)
         if result is not None and result.success:
             response.plan = path_msg
         else:
@@ -176,25 +221,26 @@ class BasePlannerNode(Node):
         self._log_outcome("make_plan", code, message)
         return response
 
-    def _log_outcome(self, service, code, message):
+    def _log_outcome(self, service: str, code: int, message: str) -> None:
         if code == E.NONE:
             self.get_logger().info(f"{service}: {message}")
         else:
             self.get_logger().warning(f"{service}: error {code}: {message}")
 
 
-def _accepted(factory, params: dict) -> dict:
-    """Only the node-level parameters a planner factory takes (all of them for **kwargs factories)."""
-    signature = inspect.signature(factory)
-    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in signature.parameters.values()):
-        return params
-    return {k: v for k, v in params.items() if k in signature.parameters}
-
-
-def main(args=None):
+def main(args: list[str] | None = None) -> int:
     network = network_from_environment()
-    rclpy.init(args=args)
-    node = BasePlannerNode()
+    try:
+        rclpy.init(args=args)
+    except RuntimeError as exc:  # rcl's RCLError, e.g. a params file that is not valid YAML
+        print(f"base_planner_node: cannot start: {' '.join(str(exc).split())[:200]}", file=sys.stderr)
+        return 2
+    try:
+        node = BasePlannerNode()
+    except (MaruError, ValueError) as exc:
+        print(f"base_planner_node: bad parameters: {exc}", file=sys.stderr)
+        rclpy.try_shutdown()
+        return 2
     node.get_logger().info(network)
     try:
         rclpy.spin(node)
@@ -203,9 +249,9 @@ def main(args=None):
     finally:
         node.get_logger().info(f"served {node.requests} requests")
         node.destroy_node()
-        if rclpy.ok():
-            rclpy.shutdown()
+        rclpy.try_shutdown()
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

@@ -85,7 +85,7 @@ def draw_scene_figure(world, m, plans: dict, title: str = ""):
         if world.start is not None:
             ax.plot(*world.start[:2], "bo")
             ax.plot(*world.goal[:2], "o", color="limegreen")
-        ax.set_title(f"{name}: {plan.status} ({plan.stats.get('planning_time', 0):.3f} s)\n{plan.message[:70]}",
+        ax.set_title(f"{name}: {plan.status.value} ({plan.stats.planning_time:.3f} s)\n{plan.message[:70]}",
                      fontsize=8)
     if title:
         fig.suptitle(title)
@@ -104,4 +104,4 @@ def save_result_png(path, result, planner_id: str) -> None:
     world, m = result.layers.get("world"), result.layers.get("map")
     if world is None or m is None:
         raise ValueError("the result carries no 3-D world (plan with --world)")
-    save_scene_png(path, world, m, {planner_id: result}, f"{world.name}: {planner_id} {result.status}")
+    save_scene_png(path, world, m, {planner_id: result}, f"{world.name}: {planner_id} {result.status.value}")

@@ -4,15 +4,15 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.patches import Polygon, Rectangle  # noqa: E402
 
 
 def _axes(ax=None, figsize=(7, 5)):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     if ax is None:
         fig, ax = plt.subplots(figsize=figsize)
     return ax.figure, ax
@@ -41,8 +41,6 @@ def draw_grid(ax, grid, layers: dict | None = None):
 
 
 def draw_footprint(ax, footprint, pose, **kw):
-    from matplotlib.patches import Polygon
-
     c, s = math.cos(pose[2]), math.sin(pose[2])
     pts = np.asarray(footprint) @ np.array([[c, s], [-s, c]]) + np.asarray(pose[:2])
     ax.add_patch(Polygon(pts, closed=True, fill=False, **kw))
@@ -61,8 +59,6 @@ def draw_path(ax, grid, path, footprint=None, every: int | None = None, color="t
 
 
 def draw_windows(ax, grid, windows):
-    from matplotlib.patches import Rectangle
-
     for r0, c0, r1, c1 in np.asarray(windows).reshape(-1, 4):
         x0, y0 = grid.origin[0] + c0 * grid.resolution, grid.origin[1] + r0 * grid.resolution
         ax.add_patch(Rectangle((x0, y0), (c1 - c0) * grid.resolution, (r1 - r0) * grid.resolution, fill=False,
@@ -88,8 +84,6 @@ def plot_plan(grid, result, start=None, goal=None, footprint=None, title: str = 
 
 
 def save_plan_png(path, grid, result, start=None, goal=None, footprint=None, title: str = ""):
-    import matplotlib.pyplot as plt
-
     fig = plot_plan(grid, result, start, goal, footprint, title)
     fig.tight_layout()
     fig.savefig(path, dpi=110)

@@ -23,7 +23,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import ndimage
 
-from maru_planner.base.biped.world import BipedRobot, BipedWorld, Box3D
+from maru_planner.base.biped.world import BipedRobot, BipedWorld, Box3D, grid_shape
+from maru_planner.base.grid import OccupancyGrid
 
 STEPPABLE, LINE, VIRTUAL, LINE_AND_VIRTUAL, OVERHEAD = "steppable", "line", "virtual", "line+virtual", "overhead"
 
@@ -76,22 +77,27 @@ class BipedMap2D:
 
     def to_occupancy_grid(self):
         """As a ``maru_planner.base.grid.OccupancyGrid`` (for the CLI, the node and A*)."""
-        from maru_planner.base.grid import OccupancyGrid
-
         return OccupancyGrid(self.occupied, self.resolution, (self.origin[0], self.origin[1], 0.0))
 
 
-def _rasterize(box: Box3D, shape, resolution: float, origin) -> np.ndarray:
-    """Cells whose centre lies inside the box footprint."""
-    rows, cols = shape
-    xs = origin[0] + (np.arange(cols) + 0.5) * resolution
-    ys = origin[1] + (np.arange(rows) + 0.5) * resolution
+def _stamp_box(box: Box3D, target: np.ndarray, resolution: float, origin) -> None:
+    """Mark in ``target`` the cells whose centre lies inside the box footprint (only its bounding window is read)."""
+    rows, cols = target.shape
+    reach = math.hypot(*box.size) / 2 + resolution
+    c0 = max(int(math.floor((box.center[0] - reach - origin[0]) / resolution)), 0)
+    c1 = min(int(math.ceil((box.center[0] + reach - origin[0]) / resolution)) + 1, cols)
+    r0 = max(int(math.floor((box.center[1] - reach - origin[1]) / resolution)), 0)
+    r1 = min(int(math.ceil((box.center[1] + reach - origin[1]) / resolution)) + 1, rows)
+    if c0 >= c1 or r0 >= r1:
+        return
+    xs = origin[0] + (np.arange(c0, c1) + 0.5) * resolution
+    ys = origin[1] + (np.arange(r0, r1) + 0.5) * resolution
     gx, gy = np.meshgrid(xs, ys)
     c, s = math.cos(box.yaw), math.sin(box.yaw)
     dx, dy = gx - box.center[0], gy - box.center[1]
     u, v = c * dx + s * dy, -s * dx + c * dy
     tol = 1e-9
-    return (np.abs(u) <= box.size[0] / 2 + tol) & (np.abs(v) <= box.size[1] / 2 + tol)
+    target[r0:r1, c0:c1] |= (np.abs(u) <= box.size[0] / 2 + tol) & (np.abs(v) <= box.size[1] / 2 + tol)
 
 
 def side_of_line(points: np.ndarray, line: np.ndarray) -> np.ndarray:
@@ -119,9 +125,8 @@ def map_3d_to_2d(world: BipedWorld, reference_line: np.ndarray | None = None) ->
     """The 2-D map of line and virtual obstacles for ``world.robot`` (eq. 1–3)."""
     robot = world.robot
     res = world.resolution
-    xmin, ymin, xmax, ymax = world.bounds
-    shape = (int(math.ceil((ymax - ymin) / res - 1e-9)), int(math.ceil((xmax - xmin) / res - 1e-9)))
-    origin = (xmin, ymin)
+    shape = grid_shape(world.bounds, res)
+    origin = (world.bounds[0], world.bounds[1])
     line = np.zeros(shape, dtype=bool)
     body_left = np.zeros(shape, dtype=bool)
     body_right = np.zeros(shape, dtype=bool)
@@ -133,9 +138,8 @@ def map_3d_to_2d(world: BipedWorld, reference_line: np.ndarray | None = None) ->
     for box in world.obstacles:
         kind = classify(box, robot)
         classes[box.name] = kind
-        footprint = _rasterize(box, shape, res, origin)
         if kind in (LINE, LINE_AND_VIRTUAL):
-            line |= footprint
+            _stamp_box(box, line, res, origin)
         if kind not in (VIRTUAL, LINE_AND_VIRTUAL):
             continue
         if robot.symmetric or reference_line is None:
@@ -145,7 +149,7 @@ def map_3d_to_2d(world: BipedWorld, reference_line: np.ndarray | None = None) ->
             side = int(side_of_line(np.asarray(box.center)[None], np.asarray(reference_line, dtype=float))[0])
             grow = robot.overhang_left if side > 0 else robot.overhang_right
         growth[box.name] = grow
-        (body_left if side > 0 else body_right)[...] |= footprint
+        _stamp_box(box, body_left if side > 0 else body_right, res, origin)
     virtual = np.zeros(shape, dtype=bool)
     if robot.symmetric or reference_line is None:
         virtual |= _grow(body_left | body_right, max(robot.overhang_left, robot.overhang_right), res)
@@ -158,10 +162,8 @@ def wheeled_map(world: BipedWorld) -> np.ndarray:
     """What a wheeled robot of the same body would see: every box under ``height`` is an obstacle."""
     robot = world.robot
     res = world.resolution
-    xmin, ymin, xmax, ymax = world.bounds
-    shape = (int(math.ceil((ymax - ymin) / res - 1e-9)), int(math.ceil((xmax - xmin) / res - 1e-9)))
-    occ = np.zeros(shape, dtype=bool)
+    occ = np.zeros(grid_shape(world.bounds, res), dtype=bool)
     for box in world.obstacles:
         if box.z[0] < robot.height:
-            occ |= _rasterize(box, shape, res, (xmin, ymin))
+            _stamp_box(box, occ, res, world.bounds[:2])
     return occ

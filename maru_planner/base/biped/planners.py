@@ -1,4 +1,4 @@
-"""Registry entries ``biped_track`` and ``biped_wall``: the biped planners behind the common interface.
+"""Registry entries ``biped_track`` and ``biped_wall``: the biped planners on a 3-D world or on the node's grid.
 
 ``factory(footprint, world=None, **params).plan(grid, start, goal)``:
 
@@ -9,37 +9,41 @@
   cell a line obstacle) and the gait rectangle is the footprint's bounding box
   (length along x, width along y; no body overhang).
 
-Other keyword arguments are :class:`TrackParams` / :class:`WallParams` fields
-(``time_limit`` among them); ``headings`` is accepted and unused (the node
-passes the parameters common to all base planners). A relative ``world``
-path that does not exist is looked up under the package's ``config/``.
+Other keyword arguments are :class:`TrackParams` / :class:`WallParams` fields. A relative
+``world`` path that does not exist is looked up under the package's ``config/``.
 """
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 
 import numpy as np
 
-from maru_planner.base import result as res
 from maru_planner.base.biped.mapping import BipedMap2D, map_3d_to_2d
+from maru_planner.base.biped.space import BipedPlanner, BipedSpace
 from maru_planner.base.biped.track import TrackFollowingPlanner
 from maru_planner.base.biped.wall import VirtualWallPlanner
 from maru_planner.base.biped.world import BipedRobot, BipedWorld, load_world
+from maru_planner.base.grid import OccupancyGrid
+from maru_planner.base.planner import Cell, Endpoint, GridPlanner, PlanRun, Pose, require_grid
+from maru_planner.base.result import PlanStats
+from maru_planner.errors import InvalidRequest
+from maru_planner.paths import config_path
 
 
 def robot_from_footprint(footprint) -> BipedRobot:
     pts = np.asarray(footprint, dtype=float).reshape(-1, 2)
     if len(pts) < 3:
-        raise ValueError("a biped planner needs a footprint polygon (its bounding box is the gait rectangle)")
+        raise InvalidRequest("a biped planner needs a footprint polygon (its bounding box is the gait rectangle)")
     length, width = float(np.ptp(pts[:, 0])), float(np.ptp(pts[:, 1]))
+    if not (np.isfinite([length, width]).all() and length > 0 and width > 0):
+        raise InvalidRequest(f"the footprint's bounding box must have a positive finite size, got {length} x {width}")
     return BipedRobot(gait_length=length, gait_width=width, body_left=width / 2, body_right=width / 2)
 
 
-def map_from_grid(grid) -> BipedMap2D:
+def map_from_grid(grid: OccupancyGrid) -> BipedMap2D:
     if abs(grid.origin[2]) > 1e-9:
-        raise ValueError("biped planners need a map whose origin yaw is 0")
+        raise InvalidRequest("biped planners need a map whose origin yaw is 0")
     occupied = np.asarray(grid.occupied, dtype=bool)
     return BipedMap2D(occupied.copy(), np.zeros_like(occupied), grid.resolution, (grid.origin[0], grid.origin[1]))
 
@@ -47,54 +51,47 @@ def map_from_grid(grid) -> BipedMap2D:
 def resolve_world_path(world) -> Path:
     path = Path(world)
     if not path.is_absolute() and not path.exists():
-        from maru_planner.paths import config_path
-
         candidate = config_path(*path.parts[1:]) if path.parts[0] == "config" else config_path(*path.parts)
         if candidate.exists():
             return candidate
     return path
 
 
-class BipedGridPlanner:
-    """One of the two biped planners, on a 3-D world or on a plain grid."""
+class BipedGridPlanner(GridPlanner[BipedSpace]):
+    """One of the two biped planners, on a 3-D world or on a plain grid (the skeleton steps delegate to it)."""
 
-    KINDS = {"track": TrackFollowingPlanner, "wall": VirtualWallPlanner}
+    KINDS: dict[str, type[BipedPlanner]] = {"track": TrackFollowingPlanner, "wall": VirtualWallPlanner}
 
-    def __init__(self, kind: str, footprint=None, world=None, headings=None, **params):
+    def __init__(self, kind: str, footprint=None, world: str | Path | BipedWorld | None = None, **params):
         if kind not in self.KINDS:
-            raise ValueError(f"unknown biped planner kind {kind!r}")
+            raise InvalidRequest(f"unknown biped planner kind {kind!r}")
         self.kind = kind
         if isinstance(world, str | Path) and str(world):
             world = load_world(resolve_world_path(world))
         self.world: BipedWorld | None = world if isinstance(world, BipedWorld) else None
         self.map2d = map_3d_to_2d(self.world) if self.world is not None else None
-        self.robot = self.world.robot if self.world is not None else (
-            robot_from_footprint(footprint) if footprint is not None else BipedRobot())
-        self.planner = self.KINDS[kind](self.robot, **params)
-
-    def plan(self, grid, start, goal) -> res.BasePlanResult:
-        from maru_planner.base import common
-
-        t0 = time.perf_counter()
-        stats = {"expansions": 0, "collision_checks": 0, "planning_time": 0.0, "deciding_stage": f"biped_{self.kind}"}
-        try:
-            start, goal = common.as_pose(start, "start"), common.as_pose(goal, "goal")
-            if self.map2d is not None:
-                m = self.map2d
-            else:
-                common.check_grid(grid)
-                m = map_from_grid(grid)
-        except common.RequestError as exc:
-            stats["planning_time"] = time.perf_counter() - t0
-            return common.failure(exc.status, str(exc), stats)
-        except ValueError as exc:
-            return common.failure(res.INVALID_REQUEST, str(exc), stats)
-        result = self.planner.plan(m, start, goal)
-        result.stats["planning_time"] = time.perf_counter() - t0
-        result.stats["mapping"] = "3d_world" if self.world is not None else "grid"
         if self.world is not None:
-            result.layers["world"] = self.world
-        return result
+            robot = self.world.robot
+        else:
+            robot = robot_from_footprint(footprint) if footprint is not None else BipedRobot()
+        self.planner = self.KINDS[kind](robot, **params)
+
+    def new_stats(self) -> PlanStats:
+        stats = self.planner.new_stats()
+        stats.mapping = "3d_world" if self.world is not None else "grid"
+        return stats
+
+    def prepare(self, grid: OccupancyGrid | None, run: PlanRun) -> BipedSpace:
+        if self.world is not None:
+            run.layers["world"] = self.world
+        m = self.map2d if self.map2d is not None else map_from_grid(require_grid(grid))
+        return self.planner.prepare(m, run)
+
+    def collision(self, space: BipedSpace, pose: Pose, cell: Cell) -> str | None:
+        return self.planner.collision(space, pose, cell)
+
+    def search(self, space: BipedSpace, start: Endpoint, goal: Endpoint, run: PlanRun) -> np.ndarray:
+        return self.planner.search(space, start, goal, run)
 
 
 def biped_track(footprint=None, **params) -> BipedGridPlanner:
@@ -112,5 +109,5 @@ def world_defaults(world_path, start=None, goal=None):
     start = start if start is not None else world.start
     goal = goal if goal is not None else world.goal
     if start is None or goal is None:
-        raise ValueError(f"{path}: give --start/--goal, the world has none")
+        raise InvalidRequest(f"{path}: give --start/--goal, the world has none")
     return tuple(start), tuple(goal), str(path)

@@ -20,33 +20,43 @@ rectangle as a safety check.
 
 from __future__ import annotations
 
+import dataclasses
 import heapq
 import math
-import time
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.spatial import Voronoi, cKDTree
 
-from maru_planner.base import result as res
-from maru_planner.base.biped.geometry import RectangleChecker
 from maru_planner.base.biped.mapping import BipedMap2D
+from maru_planner.base.biped.space import BipedPlanner, BipedSpace, BipedStats
 from maru_planner.base.biped.world import BipedRobot
+from maru_planner.base.budget import Deadline
 from maru_planner.base.common import wrap_angle
+from maru_planner.base.planner import Endpoint, PlanRun
+from maru_planner.errors import InvalidRequest, NoPath, TooLarge
+from maru_planner.params import param
+
+# Qhull cannot be interrupted: more obstacle-boundary points than this are refused up front.
+MAX_VORONOI_POINTS = 200_000
 
 
 @dataclass
 class TrackParams:
-    max_reroutes: int = 20
-    connect_radius: float = 3.0  # metres: how far start/goal look for the track
-    simplify_tolerance: float | None = None  # metres, default one cell
-    time_limit: float = 0.0  # seconds, checked between reroutes; 0 = no limit
+    max_reroutes: int = param(20, "other tracks tried after a refused turn", lower=0, upper=10000)
+    connect_radius: float = param(3.0, "how far start and goal look for the track (m)", lower=1e-3)
+    simplify_tolerance: float | None = param(None, "Douglas-Peucker tolerance (m); default one cell", lower=0.0)
 
-    def validate(self):
-        if self.max_reroutes < 0 or self.connect_radius <= 0:
-            raise ValueError("max_reroutes must be >= 0 and connect_radius > 0")
-        if not (math.isfinite(self.time_limit) and self.time_limit >= 0):
-            raise ValueError("time_limit must be >= 0 s (0 = none)")
+    def validate(self) -> None:
+        if self.max_reroutes < 0 or not self.connect_radius > 0:
+            raise InvalidRequest("max_reroutes must be >= 0 and connect_radius > 0")
+        if self.simplify_tolerance is not None and not self.simplify_tolerance >= 0:
+            raise InvalidRequest("simplify_tolerance must be >= 0 m")
+
+
+@dataclass
+class TrackStats(BipedStats):
+    reroutes: int = 0
 
 
 def turn_allowed(phi: float, robot: BipedRobot, half_width: float) -> tuple[bool, float]:
@@ -93,17 +103,21 @@ class ClearanceLookup:
         return float(self.at(np.asarray(a) + t * (np.asarray(b) - np.asarray(a))).min())
 
 
-def build_track_graph(m: BipedMap2D, robot: BipedRobot, clearance: ClearanceLookup):
+def build_track_graph(m: BipedMap2D, robot: BipedRobot, clearance: ClearanceLookup, deadline: Deadline):
     """Pruned Voronoi mid-lines: (vertices (n, 2), adjacency dict i -> {j: length})."""
     pts = _boundary_points(m)
     half = robot.gait_width / 2
     if len(pts) < 4:
         return np.zeros((0, 2)), {}
+    if len(pts) > MAX_VORONOI_POINTS:
+        raise TooLarge(f"the map has {len(pts)} obstacle-boundary points, over the track planner's limit of "
+                       f"{MAX_VORONOI_POINTS}: use a coarser map")
     vor = Voronoi(pts)
     verts = vor.vertices
     vclear = clearance.at(verts)
     adjacency: dict = {}
     for (pi, pj), (va, vb) in zip(vor.ridge_points, vor.ridge_vertices):
+        deadline.check("building the track graph")
         if va < 0 or vb < 0 or va == vb:
             continue
         if np.linalg.norm(pts[pi] - pts[pj]) < robot.gait_width + m.resolution:
@@ -161,30 +175,30 @@ def douglas_peucker(points: np.ndarray, tol: float) -> np.ndarray:
     return np.vstack([left[:-1], right])
 
 
-class TrackFollowingPlanner:
+class TrackFollowingPlanner(BipedPlanner):
     """Track following on a :class:`BipedMap2D` for a :class:`BipedRobot`."""
 
     def __init__(self, robot: BipedRobot, params: TrackParams | None = None, **overrides):
         self.robot = robot
-        self.params = params or TrackParams()
-        for key, value in overrides.items():
-            if not hasattr(self.params, key):
-                raise ValueError(f"unknown biped_track parameter {key!r}")
-            setattr(self.params, key, value)
+        unknown = set(overrides) - {f.name for f in dataclasses.fields(TrackParams)}
+        if unknown:
+            raise InvalidRequest(f"unknown biped_track parameter(s) {sorted(unknown)}")
+        self.params = dataclasses.replace(params or TrackParams(), **overrides)
         self.params.validate()
 
-    def plan(self, m: BipedMap2D, start, goal) -> res.BasePlanResult:
-        t0 = time.perf_counter()
-        robot, p = self.robot, self.params
-        checker = RectangleChecker(m.occupied, m.resolution, m.origin, robot.gait_length, robot.gait_width)
-        stats = {"expansions": 0, "collision_checks": 0, "deciding_stage": "track", "reroutes": 0}
-        layers: dict = {"map": m}
-        for pose, name in ((start, "start"), (goal, "goal")):
-            bad = _check_pose(m, checker, pose, name)
-            if bad:
-                return _finish(bad[0], bad[1], np.zeros((0, 3)), stats, layers, t0, checker)
+    def new_stats(self) -> BipedStats:
+        return TrackStats(deciding_stage="track")
+
+    def search(self, space: BipedSpace, start_end: Endpoint, goal_end: Endpoint, run: PlanRun) -> np.ndarray:
+        try:
+            return self._search(space.map, space.checker, start_end.pose, goal_end.pose, run)
+        finally:
+            run.stats.collision_checks = space.checker.checks
+
+    def _search(self, m: BipedMap2D, checker, start, goal, run: PlanRun) -> np.ndarray:
+        robot, p, stats, layers = self.robot, self.params, run.stats, run.layers
         clearance = ClearanceLookup(m)
-        verts, adjacency = build_track_graph(m, robot, clearance)
+        verts, adjacency = build_track_graph(m, robot, clearance, run.deadline)
         layers["track_vertices"], layers["track_edges"] = verts, _edge_array(verts, adjacency)
         half = robot.gait_width / 2
         s_id, g_id = len(verts), len(verts) + 1
@@ -202,12 +216,10 @@ class TrackFollowingPlanner:
         banned: set = set()
         message = "no mid-line track joins start and goal with room for the gait width"
         for attempt in range(p.max_reroutes + 1):
-            stats["reroutes"] = attempt
-            if p.time_limit and time.perf_counter() - t0 > p.time_limit:
-                return _finish(res.TIMED_OUT, f"time limit of {p.time_limit} s reached", np.zeros((0, 3)), stats,
-                               layers, t0, checker)
+            stats.reroutes = attempt
+            run.deadline.check_now("track following")
             ids = _shortest(graph, s_id, g_id, banned)
-            stats["expansions"] += len(ids or ())
+            stats.expansions += len(ids or ())
             if ids is None:
                 break
             track = self._simplify(nodes[ids], clearance, half, m.resolution)
@@ -215,18 +227,16 @@ class TrackFollowingPlanner:
             failure = self._check_turns(track, start, goal, clearance)
             if failure is None:
                 poses = _poses(track, start, goal)
-                if checker.sweep_collides(poses, m.resolution / 2):
-                    message = "the turning rule passed but the gait rectangle's sweep collides"
-                    failure = (1, message)
-                else:
-                    return _finish(res.SOLVED, f"track found ({len(track) - 1} segments)", poses, stats, layers,
-                                   t0, checker)
+                if not checker.sweep_collides(poses, m.resolution / 2):
+                    run.message = f"track found ({len(track) - 1} segments)"
+                    return poses
+                failure = (1, "the turning rule passed but the gait rectangle's sweep collides")
             index, message = failure
             if index in (0, len(track) - 1):
                 break  # turning at the start or the goal cannot be avoided by another route
             near = cKDTree(verts).query_ball_point(track[index], r=max(robot.corner_distance, 2 * m.resolution))
             banned.update(near)
-        return _finish(res.NO_PATH, message, np.zeros((0, 3)), stats, layers, t0, checker)
+        raise NoPath(message)
 
     def _connect(self, graph, nodes, node_id, clearance, half, verts):
         if not len(verts):
@@ -300,20 +310,3 @@ def _poses(track: np.ndarray, start, goal) -> np.ndarray:
     out[:, 2] = np.unwrap(out[:, 2])
     out[:, 2] = [wrap_angle(t) for t in out[:, 2]]
     return out
-
-
-def _check_pose(m, checker, pose, name):
-    row, col = m.world_to_cell(pose[0], pose[1])
-    if not (0 <= row < m.shape[0] and 0 <= col < m.shape[1]):
-        return (res.START_OUTSIDE_MAP if name == "start" else res.GOAL_OUTSIDE_MAP), f"{name} is outside the map"
-    if checker.collides(*pose):
-        return (res.START_OCCUPIED if name == "start" else res.GOAL_OCCUPIED), \
-            f"the gait rectangle at the {name} pose touches a line or virtual obstacle"
-    return None
-
-
-def _finish(status, message, path, stats, layers, t0, checker) -> res.BasePlanResult:
-    stats = dict(stats)
-    stats["collision_checks"] = checker.checks
-    stats["planning_time"] = time.perf_counter() - t0
-    return res.BasePlanResult(status, message, path, stats, layers)

@@ -25,39 +25,47 @@ the number c of consecutive such steps (eq. 12).
 
 from __future__ import annotations
 
+import dataclasses
 import math
-import time
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
-from maru_planner.base import result as res
 from maru_planner.base.biped.geometry import RectangleChecker
 from maru_planner.base.biped.mapping import BipedMap2D
-from maru_planner.base.biped.track import _check_pose
+from maru_planner.base.biped.space import BipedPlanner, BipedSpace, BipedStats
 from maru_planner.base.biped.world import BipedRobot
+from maru_planner.base.budget import check_bytes
 from maru_planner.base.common import wrap_angle
+from maru_planner.base.planner import Endpoint, PlanRun
+from maru_planner.errors import InvalidRequest, NoPath
+from maru_planner.params import param
+
+# Memory of the cost-to-go graph per map cell: 4 edge directions x (row, col, weight) + CSR copy.
+_GRAPH_BYTES_PER_CELL = 4 * 24 * 2
 
 
 @dataclass
 class WallParams:
-    step: float = 0.04  # metres walked per step
-    pivot: float = 0.5  # O along the axis, in gait lengths from the centre (0.5 = front edge)
-    max_turn: float = math.radians(12)  # largest rotation per step
-    safety: float = 0.8  # ξ ≤ safety · θ (eq. 6–7 need ξ < θ)
-    angle_step: float = math.radians(2)  # resolution of θ1, θ2
-    max_angle: float = math.radians(90)
-    lookahead: float = 0.35  # metres along the cost-to-go descent
-    goal_tolerance: float = 0.05
-    max_steps: int = 2000
-    patience: int = 150  # steps without getting closer to the goal before giving up
-    oscillation_tolerance: float = math.radians(1)
-    time_limit: float = 0.0  # seconds, checked every step; 0 = no limit
-    centering: float = 2.0  # extra cost-to-go per cell of clearance missing to K (keeps to mid-passage)
+    step: float = param(0.04, "metres walked per step", lower=1e-4, upper=10.0)
+    pivot: float = param(0.5, "pivot O along the axis, in gait lengths from the centre (0.5 = front edge)",
+                         lower=-0.5, upper=0.5)
+    max_turn: float = param(math.radians(12), "largest rotation per step (rad)", lower=1e-4, upper=math.pi)
+    safety: float = param(0.8, "xi <= safety * theta (eq. 6-7 need xi < theta)", lower=1e-3, upper=0.999)
+    angle_step: float = param(math.radians(2), "resolution of theta1, theta2 (rad)", lower=1e-4, upper=math.pi)
+    max_angle: float = param(math.radians(90), "largest rotation limit measured (rad)", lower=1e-4, upper=math.pi)
+    lookahead: float = param(0.35, "metres along the cost-to-go descent", lower=1e-3, upper=100.0)
+    goal_tolerance: float = param(0.05, "distance to the goal that counts as arrived (m)", lower=1e-4, upper=10.0)
+    max_steps: int = param(2000, "steps before giving up", lower=1, upper=10_000_000)
+    patience: int = param(150, "steps without getting closer to the goal before giving up", lower=1,
+                          upper=10_000_000)
+    oscillation_tolerance: float = param(math.radians(1), "limit change that counts as oscillating (rad)",
+                                         lower=0.0, upper=math.pi)
+    centering: float = param(2.0, "extra cost-to-go per cell of clearance missing to K", lower=0.0, upper=1000.0)
 
-    def validate(self):
+    def validate(self) -> None:
         checks = [
             (self.step > 0, "step must be > 0"),
             (-0.5 <= self.pivot <= 0.5, "pivot must be in [-0.5, 0.5] gait lengths"),
@@ -67,11 +75,16 @@ class WallParams:
             (self.lookahead > 0 and self.goal_tolerance > 0, "lookahead and goal_tolerance must be > 0"),
             (self.max_steps > 0 and self.patience > 0, "max_steps and patience must be > 0"),
             (self.centering >= 0, "centering must be >= 0"),
-            (math.isfinite(self.time_limit) and self.time_limit >= 0, "time_limit must be >= 0 s (0 = none)"),
         ]
         for ok, message in checks:
             if not ok:
-                raise ValueError(message)
+                raise InvalidRequest(message)
+
+
+@dataclass
+class WallStats(BipedStats):
+    damped_steps: int = 0
+    jammed_steps: int = 0
 
 
 def cost_to_go(passable: np.ndarray, goal_cell, cell_cost: np.ndarray | None = None) -> np.ndarray:
@@ -80,6 +93,8 @@ def cost_to_go(passable: np.ndarray, goal_cell, cell_cost: np.ndarray | None = N
     A move costs its length times the mean ``cell_cost`` of its two cells (1 by default).
     """
     h, w = passable.shape
+    check_bytes(float(h * w * _GRAPH_BYTES_PER_CELL), f"the cost-to-go graph over {w} x {h} cells",
+                "use a coarser map")
     index = np.arange(h * w).reshape(h, w)
     rows, cols, weights = [], [], []
     for dr, dc in ((0, 1), (1, 0), (1, 1), (1, -1)):
@@ -100,18 +115,15 @@ def cost_to_go(passable: np.ndarray, goal_cell, cell_cost: np.ndarray | None = N
     return dist.reshape(h, w)
 
 
-class VirtualWallPlanner:
+class VirtualWallPlanner(BipedPlanner):
     """Virtual wall planner on a :class:`BipedMap2D` for a :class:`BipedRobot`."""
 
     def __init__(self, robot: BipedRobot, params: WallParams | None = None, **overrides):
         self.robot = robot
-        self.params = params or WallParams()
-        for key, value in overrides.items():
-            if not hasattr(self.params, key):
-                raise ValueError(f"unknown biped_wall parameter {key!r}")
-            setattr(self.params, key, float(value) if isinstance(value, int | float) else value)
-        self.params.max_steps = int(self.params.max_steps)
-        self.params.patience = int(self.params.patience)
+        unknown = set(overrides) - {f.name for f in dataclasses.fields(WallParams)}
+        if unknown:
+            raise InvalidRequest(f"unknown biped_wall parameter(s) {sorted(unknown)}")
+        self.params = dataclasses.replace(params or WallParams(), **overrides)
         self.params.validate()
 
     # ----------------------------------------------------------- geometry
@@ -192,18 +204,21 @@ class VirtualWallPlanner:
         return math.atan2(y - pose[1], x - pose[0])
 
     # ---------------------------------------------------------------- plan
-    def plan(self, m: BipedMap2D, start, goal) -> res.BasePlanResult:
-        t0 = time.perf_counter()
+    def new_stats(self) -> BipedStats:
+        return WallStats(deciding_stage="virtual_wall")
+
+    def search(self, space: BipedSpace, start_end: Endpoint, goal_end: Endpoint, run: PlanRun) -> np.ndarray:
+        try:
+            poses = self._search(space.map, space.checker, start_end.pose, goal_end.pose, run)
+        finally:
+            run.stats.collision_checks = space.checker.checks
+        run.message = f"virtual-wall walk reached the goal in {len(poses) - 1} steps"
+        return np.asarray(poses, dtype=float)
+
+    def _search(self, m: BipedMap2D, checker: RectangleChecker, start, goal, run: PlanRun) -> list:
         robot = self.robot
-        checker = RectangleChecker(m.occupied, m.resolution, m.origin, robot.gait_length, robot.gait_width)
-        stats = {"expansions": 0, "collision_checks": 0, "deciding_stage": "virtual_wall", "damped_steps": 0,
-                 "jammed_steps": 0}
         trace = {"theta_cw": [], "theta_ccw": [], "xi": [], "widening": [], "damping": []}
-        layers = {"map": m, "trace": trace}
-        for pose, name in ((start, "start"), (goal, "goal")):
-            bad = _check_pose(m, checker, pose, name)
-            if bad:
-                return _finish(bad[0], bad[1], np.zeros((0, 3)), stats, layers, t0, checker)
+        run.layers["trace"] = trace
         clearance = m.clearance()
         passable = clearance >= min(robot.gait_length, robot.gait_width) / 2 - 1e-9
         goal_cell = m.world_to_cell(goal[0], goal[1])
@@ -211,16 +226,14 @@ class VirtualWallPlanner:
         # Narrow cells cost more, so the descent keeps to the middle of passages narrower than K.
         shortfall = np.clip(robot.corner_distance - clearance, 0.0, None) / m.resolution
         field = cost_to_go(passable, goal_cell, 1.0 + self.params.centering * shortfall)
-        layers["cost_to_go"] = field
+        run.layers["cost_to_go"] = field
         start_cell = m.world_to_cell(start[0], start[1])
         if not np.isfinite(field[start_cell]) and self._reference_heading(field, m, start) is None:
-            return _finish(res.NO_PATH, "no passage wide enough for the gait joins start and goal",
-                           np.zeros((0, 3)), stats, layers, t0, checker)
-        status, message, poses = self._walk(m, checker, field, start, goal, stats, trace, t0)
-        return _finish(status, message, np.asarray(poses, dtype=float), stats, layers, t0, checker)
+            raise NoPath("no passage wide enough for the gait joins start and goal")
+        return self._walk(m, checker, field, start, goal, run, trace)
 
-    def _walk(self, m, checker, field, start, goal, stats, trace, t0):
-        p = self.params
+    def _walk(self, m, checker, field, start, goal, run: PlanRun, trace) -> list:
+        p, stats = self.params, run.stats
         pose = tuple(float(v) for v in start)
         poses = [pose]
         prev_limits = None
@@ -229,23 +242,24 @@ class VirtualWallPlanner:
         damping = 1
         best_distance, since_best = math.inf, 0
         for _ in range(p.max_steps):
-            if p.time_limit and time.perf_counter() - t0 > p.time_limit:
-                return res.TIMED_OUT, f"time limit of {p.time_limit} s reached", []
-            stats["expansions"] += 1
+            run.deadline.check_now("virtual-wall walk")
+            stats.expansions += 1
             distance = math.hypot(goal[0] - pose[0], goal[1] - pose[1])
             if distance <= p.goal_tolerance:
-                return self._arrive(checker, pose, goal, poses)
+                arrived, why = self._arrive(checker, pose, goal, poses)
+                if arrived is None:
+                    raise NoPath(why)
+                return arrived
             if distance <= p.lookahead / 2:
-                arrived = self._arrive(checker, pose, goal, poses)  # close: side-step straight onto the goal
-                if arrived[0] == res.SOLVED:
+                arrived, _ = self._arrive(checker, pose, goal, poses)  # close: side-step straight onto the goal
+                if arrived is not None:
                     return arrived
             if distance < best_distance - 1e-6:
                 best_distance, since_best = distance, 0
             else:
                 since_best += 1
                 if since_best > p.patience:
-                    return res.NO_PATH, f"stuck {distance:.2f} m from the goal (no progress in {p.patience} steps)", \
-                        []
+                    raise NoPath(f"stuck {distance:.2f} m from the goal (no progress in {p.patience} steps)")
             cw, ccw = self.rotation_limits(pose, checker)
             room = (self._lateral_room(pose, checker, 1.0), self._lateral_room(pose, checker, -1.0))
             widening = self._widening(prev_limits, (cw, ccw), prev_xi, prev_room, room)
@@ -257,18 +271,18 @@ class VirtualWallPlanner:
             damping = self._damping(trace, xi, prev_xi, damping)
             xi /= damping
             trace["damping"].append(damping)
-            stats["damped_steps"] += damping > 1
+            stats.damped_steps += damping > 1
             moved = self._move(checker, pose, xi, min(p.step, distance))
             if moved is None:
-                stats["jammed_steps"] += 1
+                stats.jammed_steps += 1
                 moved, xi = self._unjam(checker, pose, desired, cw, ccw, widening, min(p.step, distance))
                 if moved is None:
-                    return res.NO_PATH, f"jammed at ({pose[0]:.2f}, {pose[1]:.2f}): no free rotation or step", []
+                    raise NoPath(f"jammed at ({pose[0]:.2f}, {pose[1]:.2f}): no free rotation or step")
             trace["xi"].append(xi)
             prev_limits, prev_xi, prev_room = (cw, ccw), xi, room
             pose = moved
             poses.append(pose)
-        return res.NO_PATH, f"gave up after {p.max_steps} steps", []
+        raise NoPath(f"gave up after {p.max_steps} steps")
 
     def _widening(self, prev_limits, limits, prev_xi, prev_room, room) -> tuple[bool, bool]:
         """Eq. 9–10: did the clockwise / counter-clockwise limit grow beyond eq. 6–7's prediction?"""
@@ -342,22 +356,15 @@ class VirtualWallPlanner:
             return back, 0.0
         return None, 0.0
 
-    def _arrive(self, checker, pose, goal, poses):
-        """Step (sideways if need be, a biped can) onto the goal and turn to its heading about the centre."""
+    def _arrive(self, checker, pose, goal, poses) -> tuple[list | None, str]:
+        """Step (sideways if need be, a biped can) onto the goal and turn to its heading about the centre.
+
+        Returns (the poses with the arrival, "") or (None, why not).
+        """
         final = (goal[0], goal[1], pose[2])
         if checker.sweep_collides(np.array([pose, final]), checker.resolution / 2):
-            return res.NO_PATH, "could not make the last step onto the goal", []
+            return None, "could not make the last step onto the goal"
         aligned = (goal[0], goal[1], goal[2])
         if checker.sweep_collides(np.array([final, aligned]), checker.resolution / 2):
-            return res.NO_PATH, "reached the goal position but cannot turn to the goal heading", []
-        poses = poses + [final, aligned]
-        return res.SOLVED, f"virtual-wall walk reached the goal in {len(poses) - 1} steps", poses
-
-
-def _finish(status, message, path, stats, layers, t0, checker) -> res.BasePlanResult:
-    stats = dict(stats)
-    stats["collision_checks"] = checker.checks
-    stats["planning_time"] = time.perf_counter() - t0
-    if status != res.SOLVED:
-        path = np.zeros((0, 3))
-    return res.BasePlanResult(status, message, path, stats, layers)
+            return None, "reached the goal position but cannot turn to the goal heading"
+        return poses + [final, aligned], ""

@@ -29,7 +29,10 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from maru_planner.base.budget import check_map_cells
 from maru_planner.errors import InvalidScene
+
+MAX_OBSTACLES = 10000
 
 
 @dataclass
@@ -108,6 +111,12 @@ class BipedWorld:
     meta: dict = field(default_factory=dict)
 
 
+def grid_shape(bounds: tuple, resolution: float) -> tuple[int, int]:
+    """(rows, cols) of the 2-D map covering ``bounds`` at ``resolution``."""
+    xmin, ymin, xmax, ymax = bounds
+    return int(math.ceil((ymax - ymin) / resolution - 1e-9)), int(math.ceil((xmax - xmin) / resolution - 1e-9))
+
+
 def _floats(value, n: int, what: str) -> tuple:
     try:
         out = tuple(float(v) for v in value)
@@ -164,7 +173,14 @@ def world_from_dict(data: dict, name: str = "world") -> BipedWorld:
     bounds = _floats(data["bounds"], 4, "bounds")
     if bounds[2] <= bounds[0] or bounds[3] <= bounds[1]:
         raise InvalidScene(f"bounds must be [xmin, ymin, xmax, ymax] with max > min, got {bounds}")
-    obstacles = [_box_from(i, o) for i, o in enumerate(data.get("obstacles") or [])]
+    rows, cols = grid_shape(bounds, resolution)
+    check_map_cells(rows, cols, f"world bounds {list(bounds)} at {resolution} m")
+    raw_obstacles = data.get("obstacles") or []
+    if not isinstance(raw_obstacles, list):
+        raise InvalidScene(f"obstacles must be a list, got {str(raw_obstacles)[:40]}")
+    if len(raw_obstacles) > MAX_OBSTACLES:
+        raise InvalidScene(f"the world has {len(raw_obstacles)} obstacles, over the limit of {MAX_OBSTACLES}")
+    obstacles = [_box_from(i, o) for i, o in enumerate(raw_obstacles)]
     start = _floats(data["start"], 3, "start") if "start" in data else None
     goal = _floats(data["goal"], 3, "goal") if "goal" in data else None
     line = None
