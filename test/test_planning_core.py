@@ -10,7 +10,15 @@ from ompl import geometric as og
 from planning_toys import BoxWorldChecker, ToyRobot, maze_checker
 
 from maru_planner import errors
-from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig, PlanStatus, planner_ids, postprocess
+from maru_planner.planning import (
+    PLANNERS,
+    MotionPlanner,
+    MotionRequest,
+    PlannerConfig,
+    PlanStatus,
+    planner_ids,
+    postprocess,
+)
 from maru_planner.planning.space import BatchedMotionValidator, EdgeChecker, GroupSpace, edge_states
 from maru_planner.planning.types import status_of_error
 
@@ -135,13 +143,29 @@ def test_plain_rrt_without_goal_bias_reports_a_timeout():
     assert "RRT" in res.message and isinstance(res.error, errors.PlanningTimedOut)
 
 
-@pytest.mark.parametrize("planner_id", ["RRTConnect", "GoalBiasedRRT", "RCRRT"])
+def params_that_finish() -> dict[str, dict]:
+    """Per-planner parameters with which every registered planner can reach the maze's goal:
+    a planner whose goal bias defaults to 0 (plain RRT) never lands exactly on the goal."""
+    params = {
+        pid: {"goal_bias": 0.05}
+        for pid, spec in PLANNERS.items()
+        if "goal_bias" in spec.params and spec.params["goal_bias"].default == 0
+    }
+    return {**params, "RCRRT": {"step": 0.05}}
+
+
+@pytest.mark.parametrize("planner_id", planner_ids())
 def test_same_seed_same_path(planner_id):
-    mp = planner_for()
-    a = mp.plan(request(planner_id=planner_id, seed=5))
-    b = mp.plan(request(planner_id=planner_id, seed=5))
-    assert a.success and b.success
-    assert np.array_equal(a.path, b.path)
+    """Two seeds, each planned by two fresh planners (a roadmap is built anew each time) and again
+    by the first one (a tree planner starts from scratch every query): the paths are identical."""
+    for seed in (5, 6):
+        first = planner_for(planner_params=params_that_finish())
+        a = first.plan(request(planner_id=planner_id, seed=seed))
+        b = planner_for(planner_params=params_that_finish()).plan(request(planner_id=planner_id, seed=seed))
+        assert a.success and b.success, (a.message, b.message)
+        assert np.array_equal(a.path, b.path)
+        if not PLANNERS[planner_id].has("roadmap"):
+            assert np.array_equal(first.plan(request(planner_id=planner_id, seed=seed)).path, a.path)
 
 
 def test_rcrrt_reports_no_path_at_its_resolution():

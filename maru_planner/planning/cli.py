@@ -8,33 +8,105 @@ Examples::
         --goal 0.9 -0.8 1.57 1.14 0.7 -1.24 -1.9 -0.7 1.57 2.44 0.7 -2.24 -1.25 --planner RRTConnect
     maru-plan --robot panda --group arm --start ... --goal ...     # example-robot-data robots
     maru-plan --problem maru13 --collision-model spheres --seed 1  # fast sphere checker, exact-verified path
+    maru-plan --problem maru6 --planner RCRRT --param step=0.2     # a planner parameter
 
-``--start``/``--goal`` values follow the group's joint order (``--list-groups`` prints it).
-Exit status: 0 on success, 1 when planning failed (the JSON says why), 2 for bad arguments.
+``--start``/``--goal`` values follow the group's joint order (``--list-groups`` prints it). The
+planners, their parameters and the exit codes are listed by ``--help`` (from the planner registry).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
+import os
 import sys
 import time
 from pathlib import Path
+from typing import Any, NoReturn
 
 import numpy as np
 
 from maru_planner import errors
-from maru_planner.planning.config import COLLISION_MODELS, PlannerConfig
+from maru_planner.planning.config import COLLISION_MODELS, TIME_PARAMETERIZATIONS, PlannerConfig
+from maru_planner.planning.motion_planner import MotionPlanner
 from maru_planner.planning.problems import PROBLEMS
-from maru_planner.planning.registry import planner_ids
+from maru_planner.planning.registry import PLANNERS, get_spec, merged_params
 from maru_planner.planning.types import MotionRequest, MotionResult, PlanStatus, status_of_error
+from maru_planner.robot import RobotModel, load_example_robot
+from maru_planner.scene import Scene
+
+PROG = "maru-plan"
+EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERNAL, EXIT_INTERRUPTED = 0, 1, 2, 3, 130
+EXIT_CODES = f"""exit codes:
+  {EXIT_OK}    a path was found
+  {EXIT_FAILED}    planning failed or timed out (the JSON says why)
+  {EXIT_BAD_INPUT}    bad input: an option, the robot, scene file, group, joints, planner or a parameter,
+       or an output path that cannot be written (one line on stderr; the JSON too once planning started)
+  {EXIT_INTERNAL}    internal error (a bug: one line on stderr)
+  {EXIT_INTERRUPTED}  interrupted (Ctrl-C)"""
+
+
+class CliError(errors.InvalidRequest):
+    """A bad command-line value or output path."""
+
+    source = "cli"
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> NoReturn:
+        """One line on stderr (argparse's usage block is in --help)."""
+        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message} (see --help)\n")
+
+
+def _positive(text: str) -> float:
+    value = float(text)
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"must be a finite number > 0, got {text!r}")
+    return value
+
+
+def _scaling(text: str) -> float:
+    value = float(text)
+    if not (math.isfinite(value) and 0.0 < value <= 1.0):
+        raise argparse.ArgumentTypeError(f"must be in (0, 1], got {text!r}")
+    return value
+
+
+def _count(text: str) -> int:
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be >= 1, got {text!r}")
+    return value
+
+
+def _seed(text: str) -> int:
+    value = int(text)
+    if not 0 <= value < 2**63:
+        raise argparse.ArgumentTypeError(f"must be in [0, 2^63), got {text!r}")
+    return value
+
+
+def planners_help() -> str:
+    """Every registered planner with its capabilities and parameters (the ``--help`` epilog)."""
+    lines = ["planners (--planner ID; parameters as --param NAME=VALUE):"]
+    for spec in PLANNERS.values():
+        lines.append(f"  {spec.id}: {spec.description} [{', '.join(sorted(spec.capabilities))}]")
+        for param in spec.params.values():
+            lines.append(f"      {param.name} (default {param.default}): {param.describe()}")
+    return "\n".join(lines)
+
+
+def problems_help() -> str:
+    return "problems (--problem NAME):\n" + "\n".join(f"  {p.name}: {p.description}" for p in PROBLEMS.values())
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
-        prog="maru-plan",
-        description="Plan an arm motion with OMPL (RRT, RRTConnect, PRM, GoalBiasedRRT, RCRRT) "
-        "and write the path, trajectory and stats as JSON.",
+    p = _Parser(
+        prog=PROG,
+        description="Plan an arm motion with OMPL and write the path, trajectory and stats as JSON.",
+        epilog="\n\n".join([planners_help(), problems_help(), EXIT_CODES]),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("--problem", choices=sorted(PROBLEMS), help="paper 000 problem: robot, scene, group, start, goal")
     p.add_argument("--robot", default=None, help="maru1 (default) or an example-robot-data name (panda, ur5, ...)")
@@ -42,45 +114,105 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--group", default=None, help="planning group (e.g. upper_body, right_arm)")
     p.add_argument("--start", type=float, nargs="+", help="start values in the group's joint order")
     p.add_argument("--goal", type=float, nargs="+", help="goal values in the group's joint order")
-    p.add_argument("--planner", default="RRTConnect", help=f"one of {', '.join(planner_ids())}")
-    p.add_argument("--time", type=float, default=5.0, help="time budget in seconds (IK + search + post-processing)")
-    p.add_argument("--seed", type=int, default=None, help="random seed (same seed, same path); default random")
-    p.add_argument("--attempts", type=int, default=1)
-    p.add_argument("--resolution", type=float, default=PlannerConfig.resolution, help="motion-check step (rad)")
+    p.add_argument("--planner", default="RRTConnect", help=f"one of {', '.join(PLANNERS)} (see below)")
+    p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
+                   help="a parameter of the chosen planner (repeatable; see below)")  # fmt: skip
+    p.add_argument("--time", "--max-time", dest="time", type=_positive, default=5.0,
+                   help="time budget in seconds (IK + search + post-processing)")  # fmt: skip
+    p.add_argument("--seed", type=_seed, default=None, help="random seed (same seed, same path); default random")
+    p.add_argument("--attempts", type=_count, default=1)
+    p.add_argument("--resolution", type=_positive, default=PlannerConfig.resolution, help="motion-check step (rad)")
     p.add_argument(
         "--collision-model",
         choices=COLLISION_MODELS,
         default="exact",
         help="exact: pinocchio + coal; spheres: batched sphere checker, the path then verified on the exact model",
     )
-    p.add_argument("--velocity-scaling", type=float, default=1.0)
-    p.add_argument("--acceleration-scaling", type=float, default=1.0)
+    p.add_argument("--velocity-scaling", type=_scaling, default=1.0)
+    p.add_argument("--acceleration-scaling", type=_scaling, default=1.0)
+    p.add_argument(
+        "--time-parameterization",
+        choices=TIME_PARAMETERIZATIONS,
+        default="",
+        help="toppra: time-optimal through blended corners (default); ruckig: jerk-limited, blended; "
+        "trapezoid: rest at every waypoint",
+    )
+    p.add_argument("--jerk-scaling", type=_scaling, default=1.0, help="scales the jerk limits (ruckig)")
     p.add_argument("--no-simplify", action="store_true", help="keep the raw planner path")
     p.add_argument("--json", type=Path, default=None, help="write the result JSON here (default: stdout)")
     p.add_argument("--png", type=Path, default=None, help="draw the hand traces over the scene (two views)")
     p.add_argument("--list-groups", action="store_true", help="print the robot's groups and joints, then exit")
+    p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     return p
 
 
-def load_robot(name: str):
-    from maru_planner.robot import RobotModel, load_example_robot
+# --- checks before anything is loaded ------------------------------------------------------
+def planner_params(planner_id: str, assignments: list[str]) -> dict[str, Any]:
+    """``--param NAME=VALUE`` strings as checked parameters of ``planner_id`` (InvalidRequest naming the culprit)."""
+    spec = get_spec(planner_id)
+    values: dict[str, Any] = {}
+    for text in assignments:
+        name, sep, raw = text.partition("=")
+        if not sep:
+            raise CliError(f"--param {text!r}: expected NAME=VALUE")
+        param = spec.params.get(name)
+        if param is None:
+            raise CliError(f"--param: planner {planner_id} has no parameter {name!r}; known: {', '.join(spec.params)}")
+        values[name] = _parse_value(raw, param.value_type, name)
+    merged_params(planner_id, values)
+    return values
 
+
+def _parse_value(raw: str, kind: type, name: str) -> Any:
+    if kind is bool:
+        if raw.lower() not in ("true", "false"):
+            raise CliError(f"--param {name}: expected true or false, got {raw!r}")
+        return raw.lower() == "true"
+    if kind in (int, float):
+        try:
+            return int(raw) if kind is int else float(raw)
+        except ValueError:
+            expected = "an integer" if kind is int else "a number"
+            raise CliError(f"--param {name}: expected {expected}, got {raw!r}") from None
+    return raw
+
+
+def check_writable(path: Path, option: str) -> None:
+    """CliError unless ``path`` can be created or replaced (its directory is created if missing)."""
+    if path.is_dir():
+        raise CliError(f"{option} {path}: is a directory")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise CliError(f"{option} {path}: cannot create its directory ({exc.strerror})") from None
+    if not os.access(path.parent, os.W_OK) or (path.exists() and not os.access(path, os.W_OK)):
+        raise CliError(f"{option} {path}: not writable")
+
+
+# --- loading and planning ------------------------------------------------------------------
+def load_robot(name: str) -> RobotModel:
     return RobotModel.maru1() if name == "maru1" else load_example_robot(name)
 
 
-def load_scene(path: str | None):
-    from maru_planner.scene import Scene
-
+def load_scene(path: str | None) -> Scene:
     if not path or path == "none":
         return Scene()
-    return Scene.from_yaml(path)
+    file = Path(path)
+    if file.is_file() and not file.read_text().strip():
+        raise errors.InvalidScene(f"scene file {path} is empty (use --scene none for no obstacles)")
+    return Scene.from_yaml(file)
 
 
-def _progress(msg: str) -> None:
-    print(f"[maru-plan] {msg}", file=sys.stderr, flush=True)
+class _Progress:
+    def __init__(self, quiet: bool):
+        self.quiet = quiet
+
+    def __call__(self, msg: str) -> None:
+        if not self.quiet:
+            print(f"[{PROG}] {msg}", file=sys.stderr, flush=True)
 
 
-def _fill_from_problem(args) -> None:
+def _fill_from_problem(args: argparse.Namespace) -> None:
     prob = PROBLEMS[args.problem]
     args.robot = args.robot or prob.robot
     args.group = args.group or prob.group
@@ -89,8 +221,8 @@ def _fill_from_problem(args) -> None:
     args.goal = args.goal or list(prob.goal)
 
 
-def _values(robot, group: str, values, what: str) -> dict[str, float]:
-    names = list(robot.groups.get(group, [])) if hasattr(robot, "groups") else []
+def _values(robot: RobotModel, group: str, values: list[float] | None, what: str) -> dict[str, float]:
+    names = list(robot.groups.get(group, []))
     if not names:
         robot.group_joint_indices(group)  # raises InvalidGroup with the known groups
     if values is None:
@@ -104,40 +236,38 @@ def _values(robot, group: str, values, what: str) -> dict[str, float]:
     return dict(zip(names, values, strict=True))
 
 
-def _rest_state(robot) -> dict[str, float]:
+def _rest_state(robot: RobotModel) -> dict[str, float]:
     """Joints outside the group: the SRDF "home" state if there is one, else the model's neutral."""
-    named = getattr(robot, "named_states", {}) or {}
     values = dict(zip(robot.joint_names, np.asarray(robot.neutral(), float).tolist(), strict=True))
-    values.update(named.get("home", {}))
+    values.update(robot.named_states.get("home", {}))
     return values
 
 
-def run(args) -> MotionResult:
-    from maru_planner.planning.motion_planner import MotionPlanner
-
-    if args.problem:
-        _fill_from_problem(args)
-    args.robot = args.robot or "maru1"
-    _progress(f"loading robot {args.robot}")
+def run(args: argparse.Namespace, params: dict[str, Any], progress: _Progress) -> MotionResult:
+    """Load robot and scene, plan, draw; typed errors for bad robots, scenes, groups and joints."""
+    progress(f"loading robot {args.robot}")
     robot = load_robot(args.robot)
     if args.list_groups:
         for group, joints in robot.groups.items():
             print(f"{group}: {' '.join(joints)}")
-        raise SystemExit(0)
+        raise SystemExit(EXIT_OK)
     if not args.group:
         raise errors.InvalidGroup(f"no --group given; known: {', '.join(robot.groups)}")
+    start = _values(robot, args.group, args.start, "start")
+    goal = _values(robot, args.group, args.goal, "goal")
     scene = load_scene(args.scene)
     config = PlannerConfig(
-        resolution=args.resolution, default_planner="RRTConnect", collision_model=args.collision_model
+        resolution=args.resolution,
+        collision_model=args.collision_model,
+        planner_params={args.planner: params},
     )
-    _progress(f"building the {args.collision_model} collision model")
+    progress(f"building the {args.collision_model} collision model")
     planner = MotionPlanner.from_scene(robot, scene, config)
-    start = _values(robot, args.group, args.start, "start")
     rest = _rest_state(robot)
     request = MotionRequest(
         group=args.group,
         start={**{n: v for n, v in rest.items() if n not in start}, **start},
-        goal_joints=_values(robot, args.group, args.goal, "goal"),
+        goal_joints=goal,
         planner_id=args.planner,
         time_budget=args.time,
         seed=args.seed,
@@ -145,47 +275,83 @@ def run(args) -> MotionResult:
         velocity_scaling=args.velocity_scaling,
         acceleration_scaling=args.acceleration_scaling,
         simplify=not args.no_simplify,
+        time_parameterization=args.time_parameterization,
+        jerk_scaling=args.jerk_scaling,
     )
-    _progress(f"planning {args.group} with {args.planner} (budget {args.time:g} s)")
+    progress(f"planning {args.group} with {args.planner} (budget {args.time:g} s)")
     t0 = time.monotonic()
     result = planner.plan(request)
-    _progress(f"{result.status.value} in {time.monotonic() - t0:.3f} s: {result.message}")
+    progress(f"{result.status.value} in {time.monotonic() - t0:.3f} s: {result.message}")
     if args.collision_model == "spheres":
-        _progress(
+        progress(
             f"exact re-check: {'free' if result.stats.verified else 'not passed'}, "
             f"{result.stats.verify_time:.3f} s, {result.stats.replans} re-plan(s)"
         )
     if args.png and result.success:
+        # lazy: matplotlib is only needed for --png
         from maru_planner.viz.plans import plot_plan
 
-        base_q = np.array([request.start.get(n, 0.0) for n in robot.joint_names])
+        base_q = np.array([request.start.get(n, 0.0) for n in robot.joint_names])  # type: ignore[union-attr]
         plot_plan(robot, scene, result, args.png, title=f"{args.problem or args.group}: {args.planner}", base_q=base_q)
-        _progress(f"picture written to {args.png}")
+        progress(f"picture written to {args.png}")
     return result
 
 
-def main(argv=None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
+# --- entry point ---------------------------------------------------------------------------
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    if args.problem:
+        _fill_from_problem(args)
+    args.robot = args.robot or "maru1"
     try:
-        result = run(args)
+        for option in ("json", "png"):
+            if getattr(args, option):
+                check_writable(getattr(args, option), f"--{option}")
+    except CliError as exc:
+        return _fail(EXIT_BAD_INPUT, exc)
+    progress = _Progress(args.quiet)
+    try:
+        result = run(args, planner_params(args.planner, args.param), progress)
     except errors.MaruError as exc:
-        result = MotionResult(status=status_of_error(exc), message=exc.message, error=exc)
-    except (FileNotFoundError, ValueError, KeyError) as exc:
-        result = MotionResult(status=PlanStatus.INVALID_REQUEST, message=f"{type(exc).__name__}: {exc}", error=exc)
+        result = MotionResult(status=status_of_error(exc), message=_one_line(exc), error=exc)
+    except (OSError, ValueError) as exc:  # robot files that do not load, bad values inside them
+        result = MotionResult(status=PlanStatus.INVALID_REQUEST, message=f"{type(exc).__name__}: {_one_line(exc)}")
+    except KeyboardInterrupt:
+        print(f"{PROG}: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except Exception as exc:  # a bug: one line, never a traceback
+        return _fail(EXIT_INTERNAL, exc, "internal error")
+    try:
+        _write_json(args, result, progress)
+    except OSError as exc:
+        return _fail(EXIT_BAD_INPUT, exc, f"--json {args.json}")
+    if result.success:
+        return EXIT_OK
+    code = EXIT_FAILED if result.status in (PlanStatus.PLANNING_FAILED, PlanStatus.TIMED_OUT) else EXIT_BAD_INPUT
+    print(f"{PROG}: {result.status.value}: {_one_line(result.message)}", file=sys.stderr)
+    return code
+
+
+def _write_json(args: argparse.Namespace, result: MotionResult, progress: _Progress) -> None:
     payload = json.dumps(result.to_json_dict(), indent=1, allow_nan=False, default=_json_default)
     if args.json:
-        args.json.parent.mkdir(parents=True, exist_ok=True)
         args.json.write_text(payload + "\n")
-        _progress(f"result written to {args.json}")
+        progress(f"result written to {args.json}")
     else:
         print(payload)
-    if result.success:
-        return 0
-    return 1 if result.status in (PlanStatus.PLANNING_FAILED, PlanStatus.TIMED_OUT) else 2
 
 
-def _json_default(value):
+def _fail(code: int, exc: BaseException, what: str = "error") -> int:
+    print(f"{PROG}: {what}: {_one_line(exc)}", file=sys.stderr)
+    return code
+
+
+def _one_line(message: object, limit: int = 400) -> str:
+    text = " ".join(str(message).split())
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def _json_default(value: object) -> object:
     if isinstance(value, np.generic):
         return value.item()
     raise TypeError(f"not JSON serialisable: {type(value).__name__}")

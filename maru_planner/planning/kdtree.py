@@ -21,19 +21,16 @@ class GrowingKDTree:
     registering: a node is indexed by existing in ``points[:count]``.
     """
 
-    def __init__(self, dim: int):
-        self.dim = dim
+    def __init__(self) -> None:
         self._tree: cKDTree | None = None
         self._tree_ids = np.zeros(0, dtype=int)
         self._tail_start = 0
-        self.rebuilds = 0
 
     def _rebuild(self, points: np.ndarray, active: np.ndarray, count: int) -> None:
         ids = np.flatnonzero(active[:count])
         self._tree_ids = ids
         self._tree = cKDTree(points[ids]) if len(ids) else None
         self._tail_start = count
-        self.rebuilds += 1
 
     def query(self, target: np.ndarray, k: int, points: np.ndarray, active: np.ndarray, count: int) -> np.ndarray:
         """Ids of up to ``k`` active nodes nearest to ``target``, nearest first."""

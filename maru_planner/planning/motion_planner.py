@@ -205,6 +205,8 @@ class MotionPlanner:
                 f"time_parameterization must be one of {', '.join(timing.METHODS)}, got {method!r}"
             )
         seed = int(req.seed) if req.seed is not None else secrets.randbelow(2**31 - 1)
+        if not 0 <= seed < 2**63:
+            raise errors.InvalidRequest(f"seed must be in [0, 2^63), got {seed}")
         stats.seed = seed
 
         indices = sorted(self.robot.group_joint_indices(req.group))

@@ -43,14 +43,8 @@ class PlannerParams:
         """Make ``spec.name`` settable: values are checked against ``spec``, then passed to ``setter``."""
         self._declared[spec.name] = _Declared(spec, setter, getter)
 
-    def has_param(self, name: str) -> bool:
-        return name in self._declared
-
     def param_names(self) -> list[str]:
         return list(self._declared)
-
-    def specs(self) -> dict[str, ParamSpec]:
-        return {name: d.spec for name, d in self._declared.items()}
 
     def set_param(self, name: str, value: Any) -> None:
         """Check ``value`` against the parameter's spec and apply it; InvalidRequest names the culprit."""

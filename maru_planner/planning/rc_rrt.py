@@ -146,7 +146,7 @@ class RCRRT(ob.Planner):
         self.keys: list[int] = []  # lattice code of each node; -1 for the goal node (off the lattice)
         self.count = 0
         self.goal_node = -1
-        self.nn = GrowingKDTree(dim)
+        self.nn = GrowingKDTree()
         self._data_states = []
 
     def _grow(self) -> None:

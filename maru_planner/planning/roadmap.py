@@ -87,14 +87,13 @@ class Roadmap:
     def edge_count(self) -> int:
         return int(self.planner.edgeCount())
 
-    def build(self, nodes: int, deadline: float) -> float:
+    def build(self, nodes: int, deadline: float) -> None:
         """Grow the roadmap until it has ``nodes`` milestones or ``deadline`` (monotonic) passes."""
         self.ss.setup()
         t0 = time.monotonic()
         while self.milestones < nodes and time.monotonic() < deadline:
             self._grow_round(nodes, deadline)
         self.build_time += time.monotonic() - t0
-        return self.build_time
 
     def _grow_round(self, nodes: int, deadline: float) -> None:
         """A grow phase (2·GROWTH_CHUNK milestones) then an expand phase (GROWTH_CHUNK), capped at ``nodes``."""
