@@ -140,7 +140,7 @@ def record_world(world_path: Path, out: Path, *, seed: int = 0, skip: float = 0.
 
 def save_picture(path: Path, recordings: list[dict]) -> None:
     """One panel per bag, drawn from what the bag holds: odometry path, scan points, and the core's strips."""
-    # matplotlib is loaded only when a picture is asked for (an optional heavy import)
+    # lazy: matplotlib is loaded only when a picture is asked for (a heavy import)
     import matplotlib
 
     matplotlib.use("Agg")

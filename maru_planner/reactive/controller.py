@@ -203,7 +203,7 @@ class ElasticStripController:
 
         dist_goal = float(np.hypot(*(self.goal[:2] - position)))
         event = obstacle_check(scan, p.avoidance_range, p.beam_window) is not None
-        target = self._choose_target(position, strip, points_world, event, dist_goal)
+        target = self._choose_target(position, strip, points_world, event, dist_goal, self.goal)
 
         robot_force = self._robot_force(position, target, points_world)
         v, w, reached = self._command(pose, target, robot_force, dist_goal, points_robot)
@@ -224,21 +224,22 @@ class ElasticStripController:
             robot_force=(float(robot_force[0]), float(robot_force[1])), work=work,
         )
 
-    def _choose_target(self, position, strip, points_world, event: bool, dist_goal: float) -> np.ndarray:
+    def _choose_target(self, position, strip, points_world, event: bool, dist_goal: float,
+                       goal: np.ndarray) -> np.ndarray:
         """The inserted avoidance via if one is active (sec. 4-5), else the clear lookahead via of the strip."""
         p = self.params
         look_idx, look_point = self.strip.lookahead(p.lookahead)
         self._blocked = False
         look_idx, look_point = self._clear_target(position, strip, look_idx, points_world)
         if p.use_via_events:
-            goal_dir = (self.goal[:2] - position) / max(dist_goal, 1e-9)
+            goal_dir = (goal[:2] - position) / max(dist_goal, 1e-9)
             self.via.refresh(position, goal_dir, points_world)
             if event and look_idx > 0:
-                current = self.via.point if self.via.active else self.goal[:2]
+                current = self.via.point if self.via.point is not None else goal[:2]
                 self.via.offer(look_point, current, p.is_sort_radius, p.is_sort_rule)
-        if self.via.active and not self._segment_clear(position, self.via.point, points_world):
+        if self.via.point is not None and not self._segment_clear(position, self.via.point, points_world):
             self.via.clear()
-        return self.via.point if self.via.active else look_point
+        return self.via.point if self.via.point is not None else look_point
 
     def _segment_clear(self, start: np.ndarray, end: np.ndarray, points: np.ndarray) -> bool:
         """Does the straight drive start -> end keep the body (robot_radius) off every scan point?"""

@@ -207,7 +207,11 @@ def _points(xy: np.ndarray) -> list[Point]:
 
 
 def strip_markers(
-    strip: np.ndarray, obstacle_points: np.ndarray, target: np.ndarray | None, frame_id: str, stamp_s: float
+    strip: np.ndarray,
+    obstacle_points: np.ndarray,
+    target: tuple[float, float] | np.ndarray | None,
+    frame_id: str,
+    stamp_s: float,
 ) -> MarkerArray:
     """The strip (line + vias), the obstacle points the forces came from, and the current target."""
     line = _marker("strip", Marker.LINE_STRIP, frame_id, stamp_s, 0.03, _color(0.1, 0.4, 1.0))

@@ -94,7 +94,7 @@ def run(args: argparse.Namespace) -> None:
         Path(args.json).write_text(text + "\n")
     print(text)
     if want_frames:
-        # matplotlib is loaded only when a picture is asked for (an optional heavy import)
+        # lazy: matplotlib is loaded only when a picture is asked for (a heavy import)
         from maru_planner.viz.reactive import save_run_gif, save_run_picture
 
         if args.png:

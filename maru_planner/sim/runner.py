@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 from maru_planner.reactive import ElasticStripController, StripParams
 from maru_planner.sim.simulator import RunResult, Simulator
 from maru_planner.sim.world import World
@@ -16,7 +18,7 @@ def strip_params_for(world: World, strip: str = "modified", **overrides) -> Stri
     """StripParams matching the world's robot: radius (circumradius of a footprint), limits, laser mount."""
     robot = world.robot
     laser = robot.laser
-    values = dict(strip=strip, robot_radius=robot.bounding_radius, max_linear=robot.max_linear,
+    values: dict[str, Any] = dict(strip=strip, robot_radius=robot.bounding_radius, max_linear=robot.max_linear,
                   max_angular=robot.max_angular, laser_pose=(laser.x, laser.y, laser.yaw))
     if laser.beams != 361:  # the paper's window (31, 331) is for a 361-beam LMS200 scan
         values["beam_window"] = None

@@ -19,7 +19,7 @@ from maru_planner.sim.geometry import (
     segments_intersect,
     transform,
 )
-from maru_planner.sim.world import World
+from maru_planner.sim.world import OccupancyMap, World
 
 
 @dataclass
@@ -83,18 +83,9 @@ class Simulator:
                            self.world.circles_at(self.time, self.mover_offset), laser.range_max)
         r = np.minimum(r, rays_vs_segments(origin, dirs, self.world.segments))
         if self.world.occupancy is not None:
-            r = np.minimum(r, self._rays_vs_map(origin, dirs, laser.range_max))
+            r = np.minimum(r, _rays_vs_map(self.world.occupancy, origin, dirs, laser.range_max))
         r[r > laser.range_max] = np.inf
         return r
-
-    def _rays_vs_map(self, origin: np.ndarray, dirs: np.ndarray, max_range: float) -> np.ndarray:
-        occ = self.world.occupancy
-        step = 0.5 * occ.resolution
-        t = np.arange(step, max_range + step, step)
-        pts = origin[None, None, :] + dirs[:, None, :] * t[None, :, None]
-        hit = occ.is_occupied(pts)
-        first = np.argmax(hit, axis=1)
-        return np.where(hit.any(axis=1), t[first], np.inf)
 
     def scan(self) -> LaserScanData:
         """One LMS200-like scan at the current time (Gaussian range noise, REP 117 inf for no return)."""
@@ -148,10 +139,13 @@ class Simulator:
         return best
 
     def _map_distance(self, points: np.ndarray) -> float:
-        row, col, inside = self.world.occupancy.cells(points)
+        occupancy, distances = self.world.occupancy, self._distance_field
+        if occupancy is None or distances is None:
+            return math.inf
+        row, col, inside = occupancy.cells(points)
         if not np.any(inside):
-            return np.inf
-        return float(self._distance_field[row[inside], col[inside]].min())
+            return math.inf
+        return float(distances[row[inside], col[inside]].min())
 
     # -- motion ----------------------------------------------------------------------------------------
     def step(self, v: float, w: float, dt: float) -> bool:
@@ -231,3 +225,13 @@ class Simulator:
                          update_ms={"median": round(float(np.median(ms)), 4),
                                     "p99": round(float(np.percentile(ms, 99)), 4)},
                          trajectory=np.array(traj), updates=len(update_times), strips=strips)
+
+
+def _rays_vs_map(occ: OccupancyMap, origin: np.ndarray, dirs: np.ndarray, max_range: float) -> np.ndarray:
+    """Range of each ray to the first occupied cell, marched at half a cell (inf for none within max_range)."""
+    step = 0.5 * occ.resolution
+    t = np.arange(step, max_range + step, step)
+    pts = origin[None, None, :] + dirs[:, None, :] * t[None, :, None]
+    hit = occ.is_occupied(pts)
+    first = np.argmax(hit, axis=1)
+    return np.where(hit.any(axis=1), t[first], np.inf)

@@ -96,7 +96,7 @@ class Mover:
     waypoints: np.ndarray
     start_time: float = 0.0
     mode: str = "stop"
-    _cum: np.ndarray = field(default=None, repr=False)
+    _cum: np.ndarray = field(init=False, repr=False)
 
     def __post_init__(self):
         seg = np.hypot(*np.diff(self.waypoints, axis=0).T)
@@ -167,7 +167,7 @@ class World:
     max_time: float = 60.0
     name: str = "world"
     bounds: tuple | None = None
-    segments: np.ndarray = field(default=None)
+    segments: np.ndarray = field(init=False)
 
     def __post_init__(self):
         self.circles = np.asarray(self.circles, dtype=float).reshape(-1, 3)
@@ -195,7 +195,8 @@ class World:
             raise WorldError(f"world: unknown field(s) {sorted(unknown)}")
         if "robot" not in data:
             raise WorldError("world: missing field 'robot' (with start and goal)")
-        circles, polygons = [], []
+        circles: list[tuple[float, float, float]] = []
+        polygons: list[np.ndarray] = []
         for i, entry in enumerate(_entries(data, "obstacles")):
             kind, shape = _parse_obstacle(entry, f"obstacles[{i}]")
             (circles if kind == "circle" else polygons).append(shape)

@@ -7,6 +7,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
 from matplotlib.patches import Circle, Polygon  # noqa: E402
 from PIL import Image  # noqa: E402
 
@@ -92,8 +93,9 @@ def save_run_gif(path, world, result, fps: int = 10, robot_radius: float = 0.3, 
         draw_strip_snapshot(ax, snap, robot_radius=robot_radius)
         ax.set_title(f"{world.name}  t = {snap[0]:.1f} s")
         fig.tight_layout()
-        fig.canvas.draw()
-        frames.append(Image.fromarray(np.asarray(fig.canvas.buffer_rgba())[..., :3]))
+        canvas = FigureCanvasAgg(fig)
+        canvas.draw()
+        frames.append(Image.fromarray(np.asarray(canvas.buffer_rgba())[..., :3]))
         plt.close(fig)
     if frames:
         frames[0].save(path, save_all=True, append_images=frames[1:], duration=int(1000 / fps), loop=0)
