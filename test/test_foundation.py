@@ -1,4 +1,4 @@
-"""Foundation checks: lint, the core is ROS-free, loopback DDS, packaging metadata."""
+"""Foundation checks: lint, pre-commit hooks, the core is ROS-free, loopback DDS, packaging metadata."""
 
 from __future__ import annotations
 
@@ -9,6 +9,8 @@ import subprocess
 import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
+
+import yaml
 
 import maru_planner
 
@@ -26,6 +28,19 @@ def test_ruff_lint_is_clean():
         text=True,
     )
     assert result.returncode == 0, result.stdout + result.stderr
+
+
+def test_pre_commit_hooks_run_the_pinned_tools_from_the_venv():
+    config = yaml.safe_load((REPO_ROOT / ".pre-commit-config.yaml").read_text())
+    hooks = {hook["id"]: hook for repo in config["repos"] for hook in repo["hooks"]}
+    assert {"ruff-check", "ruff-format", "mypy"} <= hooks.keys()
+    requirements = (REPO_ROOT / "requirements.txt").read_text().splitlines()
+    pinned = {line.split("==")[0].strip().lower() for line in requirements if "==" in line}
+    for hook_id, hook in hooks.items():
+        tool = Path(hook["entry"].split()[0])
+        assert tool.parent == Path(".venv/bin"), f"hook {hook_id} does not run from .venv: {hook['entry']}"
+        assert tool.name in pinned, f"hook {hook_id} runs {tool.name}, which requirements.txt does not pin"
+        assert (Path(sys.executable).parent / tool.name).is_file(), f"{tool.name} is not installed in the venv"
 
 
 def _core_modules() -> list[str]:
@@ -74,7 +89,7 @@ def test_loopback_environment_is_set_for_this_run():
 
 
 def test_package_xml_is_ament_python_format3():
-    root = ET.parse(REPO_ROOT / "package.xml").getroot()
+    root = ET.parse(REPO_ROOT / "packaging" / "maru_planner" / "package.xml").getroot()
     assert root.get("format") == "3"
     assert root.findtext("name") == "maru_planner"
     assert root.find("export/build_type").text == "ament_python"
@@ -83,7 +98,7 @@ def test_package_xml_is_ament_python_format3():
 
 
 def test_console_scripts_point_at_existing_modules():
-    setup_py = (REPO_ROOT / "setup.py").read_text()
+    setup_py = (REPO_ROOT / "packaging" / "maru_planner" / "setup.py").read_text()
     modules = [line.split("=")[1].split(":")[0].strip() for line in setup_py.splitlines() if " = maru_planner" in line]
     assert modules, "no console_scripts found in setup.py"
     missing = [m for m in modules if importlib.util.find_spec(m) is None]
