@@ -137,3 +137,35 @@ def test_changes_that_cannot_apply_are_rejected_with_a_reason(client, name, valu
     assert get(client, name) == before
     _, twist = step(client)
     assert twist.linear.x > 0.0, "the node keeps serving with its previous parameters"
+
+
+def _another_value(spec):
+    """A valid value of ``spec`` other than its default."""
+    if spec.choices:
+        return next(c for c in spec.choices if c != spec.default)
+    if isinstance(spec.default, bool):
+        return not spec.default
+    if isinstance(spec.default, (int, float)):
+        upper = spec.upper if spec.upper is not None else spec.default + 10
+        value = min(upper, spec.default + max(abs(spec.default) * 0.5, 1 if isinstance(spec.default, int) else 0.1))
+        return type(spec.default)(value)
+    if isinstance(spec.default, tuple):
+        return [v + 1 for v in spec.default]
+    return spec.default + "_2"
+
+
+def test_every_run_time_parameter_is_applied_or_rejected_with_a_reason(client):
+    from maru_planner.ros.reactive_node import NODE_SPECS, STRIP_SPECS
+
+    for name, spec in {**STRIP_SPECS, **NODE_SPECS}.items():
+        before = get(client, name)[0]
+        value = _another_value(spec)
+        result = set_parameter(client, name, value)
+        if spec.read_only:
+            assert not result.successful and "read-only" in result.reason, name
+            continue
+        assert result.successful, f"{name} = {value!r}: {result.reason}"
+        assert get(client, name) == [value]
+        assert set_parameter(client, name, before).successful, name
+    _, twist = step(client)
+    assert twist.linear.x > 0.0, "the node serves on with its parameters restored"
