@@ -153,6 +153,9 @@ def test_bad_requests_get_status_not_exceptions(planner_id):
 
 OPEN = OccupancyGrid(np.pad(np.zeros((38, 58), bool), 1, constant_values=True), 0.1)
 SQUAT = rectangle(0.4, 0.36)  # biped_wall cannot walk a long thin gait (0.9 x 0.3) even in an open room
+_closed = OPEN.occupied.copy()
+_closed[:, 29:31] = True
+CLOSED = OccupancyGrid(_closed, 0.1)  # a wall right across the room: no robot gets through
 
 
 @pytest.mark.parametrize("planner_id", registry.planner_ids())
@@ -166,8 +169,7 @@ def test_every_planner_solves_an_open_room(planner_id):
 
 @pytest.mark.parametrize("planner_id", registry.planner_ids())
 def test_every_planner_reports_no_path_and_only_provers_prove_it(planner_id):
-    grid, prob = SCENES["impossible"]
-    result = registry.plan(planner_id, grid, prob["start"], prob["goal"], prob["footprint"], time_limit=60.0)
+    result = registry.plan(planner_id, CLOSED, (1.0, 2.0, 0.0), (5.0, 2.0, 0.0), SQUAT, time_limit=60.0)
     proven = registry.spec(planner_id).has(registry.PROVES_NO_PATH)
     assert result.status == (R.NO_PATH_PROVEN if proven else R.NO_PATH), result.message
     assert len(result.path) == 0 and result.message

@@ -51,20 +51,28 @@ class _Parser(argparse.ArgumentParser):
 def parse_footprint(text: str) -> np.ndarray:
     """``x,y x,y ...`` vertices, ``rect:L:W`` or ``disc:R``; InvalidRequest naming the bad part."""
     tokens = text.replace(";", " ").split()
+    kind = tokens[0].split(":")[0] if len(tokens) == 1 and ":" in tokens[0] else "polygon"
     try:
-        if len(tokens) == 1 and tokens[0].startswith("rect:"):
+        if kind == "rect":
             _, length, width = tokens[0].split(":")
-            return rectangle(float(length), float(width))
-        if len(tokens) == 1 and tokens[0].startswith("disc:"):
+            numbers = [float(length), float(width)]
+        elif kind == "disc":
             _, radius = tokens[0].split(":")
-            return disc(float(radius))
-        vertices = []
-        for token in tokens:
-            x, y = token.split(",")
-            vertices.append((float(x), float(y)))
+            numbers = [float(radius)]
+        else:
+            numbers = [float(v) for token in tokens for v in _pair(token)]
     except ValueError:
         raise InvalidRequest(f"--footprint {text[:60]!r}: expected 'x,y x,y ...', rect:L:W or disc:R") from None
-    return np.array(vertices)
+    if kind == "rect":
+        return rectangle(*numbers)
+    if kind == "disc":
+        return disc(*numbers)
+    return np.array(numbers).reshape(-1, 2)
+
+
+def _pair(token: str) -> tuple[str, str]:
+    x, y = token.split(",")
+    return x, y
 
 
 def _params(pairs: list[str]) -> dict:

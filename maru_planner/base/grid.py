@@ -68,7 +68,10 @@ class OccupancyGrid:
         if not (math.isfinite(self.resolution) and self.resolution > 0):
             raise InvalidMap(f"resolution must be a positive number of metres per cell, got {self.resolution}")
         self.resolution = float(self.resolution)
-        origin = tuple(float(v) for v in self.origin)
+        try:
+            origin = tuple(float(v) for v in self.origin)
+        except (TypeError, ValueError):
+            raise InvalidMap(f"origin must be finite (x, y, yaw), got {str(self.origin)[:60]}") from None
         if len(origin) == 2:
             origin = (*origin, 0.0)
         if len(origin) != 3 or not all(math.isfinite(v) for v in origin):

@@ -7,6 +7,10 @@ import math
 import numpy as np
 
 from maru_planner.base.common import wrap_angle
+from maru_planner.errors import TooLarge
+
+# Sample points of one rectangle test; a bigger gait rectangle (for the map's resolution) is refused.
+MAX_RECTANGLE_SAMPLES = 200_000
 
 
 class RectangleChecker:
@@ -23,6 +27,9 @@ class RectangleChecker:
         step = resolution / 2
         nu = max(2, int(math.ceil(length / step)) + 1)
         nv = max(2, int(math.ceil(width / step)) + 1)
+        if nu * nv > MAX_RECTANGLE_SAMPLES:
+            raise TooLarge(f"a {length:g} x {width:g} m gait rectangle on {resolution:g} m cells needs {nu * nv} "
+                           f"samples per check, over the limit of {MAX_RECTANGLE_SAMPLES}")
         u, v = np.meshgrid(np.linspace(-length / 2, length / 2, nu), np.linspace(-width / 2, width / 2, nv))
         self.local = np.column_stack([u.ravel(), v.ravel()])
         self.checks = 0
