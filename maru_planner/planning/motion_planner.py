@@ -17,6 +17,7 @@ import math
 import secrets
 import threading
 import time
+from collections.abc import Iterator
 
 import numpy as np
 from ompl import base as ob
@@ -52,7 +53,7 @@ ou.setLogLevel(ou.LOG_WARN)  # OMPL's INFO chatter would mix into CLI output
 
 
 @contextlib.contextmanager
-def seeded_ompl(seed: int):
+def seeded_ompl(seed: int) -> Iterator[None]:
     """Hold the OMPL lock with OMPL's seed generator restarted from ``seed`` (its warning silenced)."""
     with OMPL_LOCK:
         level = ou.getLogLevel()

@@ -7,6 +7,7 @@ order of the Maru-1 SRDF; the 6-DOF problem is the right arm with the rest at ne
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 from maru_planner.paths import config_path
 
@@ -22,7 +23,7 @@ class Problem:
     description: str
 
     @property
-    def scene_path(self):
+    def scene_path(self) -> Path:
         return config_path("scenes", self.scene_file)
 
     def start_dict(self, joint_names) -> dict[str, float]:

@@ -95,12 +95,12 @@ class RCRRT(ob.Planner):
         )
 
     # --- OMPL planner interface ------------------------------------------------------------
-    def clear(self):
+    def clear(self) -> None:
         self._reset_tree(self.dim)
         self.exhausted = False
         self.collisions = 0
 
-    def solve(self, ptc):
+    def solve(self, ptc: ob.PlannerTerminationCondition) -> ob.PlannerStatus:
         space = self._si.getStateSpace()
         self.dim = dim = space.getDimension()
         bounds = space.getBounds()
@@ -116,7 +116,7 @@ class RCRRT(ob.Planner):
         goal = np.array([goal_state[i] for i in range(dim)])
         return self._search(start, goal, ptc)
 
-    def getPlannerData(self, data):  # noqa: N802 (OMPL's name)
+    def getPlannerData(self, data: ob.PlannerData) -> None:  # noqa: N802 (OMPL's name)
         """Tree vertices (start tagged as start, goal as goal) and parent→child edges."""
         # PlannerData keeps pointers to the states: they must outlive it (owned by the planner).
         self._data_states = [self._ompl_state(self.X[i]) for i in range(self.count)]

@@ -112,7 +112,7 @@ class Roadmap:
         if not done():
             run(ob.PlannerTerminationCondition(done))
 
-    def query(self, start: np.ndarray, goal: np.ndarray, seconds: float):
+    def query(self, start: np.ndarray, goal: np.ndarray, seconds: float) -> tuple[str, np.ndarray | None]:
         """Solve start→goal on the roadmap. Returns (mode, path | None).
 
         First the query phase on the roadmap as it is (:meth:`query_graph`): mode "roadmap". If start
@@ -146,7 +146,7 @@ class Roadmap:
             self._graph_cache = (key, verts, adj, comp, tree)
         return self._graph_cache[1:]
 
-    def query_graph(self, start: np.ndarray, goal: np.ndarray, candidates: int = 8):
+    def query_graph(self, start: np.ndarray, goal: np.ndarray, candidates: int = 8) -> np.ndarray | None:
         """PRM query phase: attach start and goal to their nearest reachable milestones of one
         component (batched edge checks, nearest first) and run Dijkstra on the roadmap."""
         verts, adj, comp, tree = self._search_graph()
@@ -179,7 +179,7 @@ class Roadmap:
             chain.append(int(pred[chain[-1]]))
         return np.vstack([start, verts[chain[::-1]], goal])
 
-    def graph(self):
+    def graph(self) -> tuple[np.ndarray, np.ndarray]:
         """(vertices as an (n, dim) array, undirected edges as an (m, 2) index array)."""
         data = ob.PlannerData(self.si)
         self.planner.getPlannerData(data)

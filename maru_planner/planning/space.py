@@ -18,6 +18,8 @@ all on full robot configurations.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 from ompl import base as ob
@@ -50,7 +52,7 @@ class GroupSpace:
     def to_array(self, state) -> np.ndarray:
         return np.array([state[i] for i in range(self.dim)])
 
-    def to_state(self, q, state=None):
+    def to_state(self, q: np.ndarray | list[float], state: Any = None) -> Any:
         if state is None:
             state = self.space.allocState()
         for i in range(self.dim):
@@ -109,11 +111,11 @@ class BatchedMotionValidator(ob.MotionValidator):
         self.edges = edge_checker
         self._gs = edge_checker.gs
 
-    def checkMotion(self, s1, s2, *_):  # noqa: N802 (OMPL's name)
+    def checkMotion(self, s1: Any, s2: Any, *_: Any) -> bool:  # noqa: N802 (OMPL's name)
         return self.edges.edge_valid(self._gs.to_array(s1), self._gs.to_array(s2))
 
 
-def make_validity_fn(edge_checker: EdgeChecker):
+def make_validity_fn(edge_checker: EdgeChecker) -> Callable[[Any], bool]:
     """A Python state-validity callable for ``SpaceInformation.setStateValidityChecker``."""
     gs = edge_checker.gs
     checker = edge_checker.checker
