@@ -15,11 +15,13 @@ export PIP_DISABLE_PIP_VERSION_CHECK := 1
 
 setup: $(STAMP) interfaces
 
-$(STAMP): requirements.txt setup.py package.xml
+PACKAGE_DIR := packaging/maru_planner
+
+$(STAMP): requirements.txt $(PACKAGE_DIR)/setup.py $(PACKAGE_DIR)/package.xml
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	@echo "[setup] installing pinned requirements into .venv (first run takes a few minutes)"
 	@$(PY) -m pip install --progress-bar off -q -r requirements.txt
-	@$(PY) -m pip install --progress-bar off -q --no-deps -e .
+	@$(PY) -m pip install --progress-bar off -q --no-deps -e $(PACKAGE_DIR)
 	@touch $(STAMP)
 
 interfaces: $(STAMP)

@@ -7,6 +7,8 @@ import sys
 from pathlib import Path
 
 PACKAGE_NAME = "maru_planner"
+# The colcon/ament package of the repository (package.xml, setup.py; its sources are symlinks to the root).
+PACKAGE_MANIFEST_DIR = Path("packaging") / PACKAGE_NAME
 
 
 def share_dir() -> Path:
@@ -16,7 +18,7 @@ def share_dir() -> Path:
     ament install uses ``<prefix>/share/maru_planner``.
     """
     repo_root = Path(__file__).resolve().parent.parent
-    if (repo_root / "config").is_dir() and (repo_root / "package.xml").is_file():
+    if (repo_root / "config").is_dir() and (repo_root / PACKAGE_MANIFEST_DIR / "package.xml").is_file():
         return repo_root
     for prefix in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep) + [sys.prefix]:
         candidate = Path(prefix) / "share" / PACKAGE_NAME

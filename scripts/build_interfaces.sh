@@ -17,30 +17,10 @@ if [ -f "$stamp" ] && [ "$(cat "$stamp")" = "$hash" ] \
   exit 0
 fi
 
-# The msg wheels' CMake exports name the wheel builder's Python and numpy include
-# dirs; point them at this venv's.
-py_inc=$("$py" -c "import sysconfig; print(sysconfig.get_paths()['include'])")
-np_inc=$("$py" -c "import numpy; print(numpy.get_include())")
-for f in "$venv"/share/*/cmake/*__rosidl_generator_pyExport.cmake; do
-  if grep -q "/opt/python/cp311-cp311" "$f"; then
-    sed -i -e "s#/opt/python/cp311-cp311/include/python3.11#$py_inc#g" \
-           -e "s#/opt/python/cp311-cp311/lib/python3.11/site-packages/numpy/_core/include#$np_inc#g" "$f"
-  fi
-done
-
 mkdir -p "$build"
 echo "maru_planner_interfaces: building (about 10 s)"
-export PATH="$venv/bin:$PATH"
-# The wheels ship their shared libraries under the venv; cmake-run generators need them.
-ros_libs=$("$py" - <<'PY'
-import glob, os, sys
-site = [p for p in sys.path if p.endswith("site-packages")][0]
-dirs = {os.path.dirname(p) for p in glob.glob(os.path.join(sys.prefix, "lib", "*.so*"))}
-dirs |= {os.path.dirname(p) for p in glob.glob(os.path.join(site, "**", "lib", "*.so*"), recursive=False)}
-print(":".join(sorted(dirs)))
-PY
-)
-export LD_LIBRARY_PATH="$venv/lib:${ros_libs}:${LD_LIBRARY_PATH:-}"
+# shellcheck source=scripts/wheels_env.sh
+source "$root/scripts/wheels_env.sh"
 cmake -S "$src" -B "$build" -DCMAKE_INSTALL_PREFIX="$venv" -DCMAKE_PREFIX_PATH="$venv" \
   -DPython3_EXECUTABLE="$py" -DBUILD_TESTING=OFF -DCMAKE_BUILD_TYPE=Release >"$build/build.log" 2>&1 \
   || { tail -40 "$build/build.log"; exit 1; }

@@ -256,9 +256,9 @@ def test_function_level_imports_give_a_reason(imports):
 
 
 def test_type_check_passes():
-    """mypy with the ``[mypy]`` section of setup.cfg (files = maru_planner) reports no error."""
+    """mypy with the mypy.ini (files = maru_planner) reports no error."""
     result = subprocess.run(
-        [sys.executable, "-m", "mypy", "--config-file", "setup.cfg"],
+        [sys.executable, "-m", "mypy", "--config-file", "mypy.ini"],
         cwd=REPO_ROOT,
         capture_output=True,
         text=True,
