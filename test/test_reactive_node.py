@@ -549,7 +549,8 @@ def test_launch_file_starts_the_node_with_the_shipped_config(monkeypatch):
     file, overrides = node.kwargs["parameters"]
     assert file == "<params_file>" and overrides == {"strip": "<strip>", "use_sim_time": "<use_sim_time>"}
     assert defaults["use_sim_time"] == "false"
-    assert "reactive_node = maru_planner.ros.reactive_node:main" in (REPO_ROOT / "packaging" / "maru_planner" / "setup.py").read_text()
+    setup_py = REPO_ROOT / "packaging" / "maru_planner" / "setup.py"
+    assert "reactive_node = maru_planner.ros.reactive_node:main" in setup_py.read_text()
     remapped = dict(node.kwargs["remappings"])
     assert set(remapped) == {"scan", "odom", "plan", "goal_pose", "cmd_vel"}
     assert {defaults[v.strip("<>")] for v in remapped.values()} == set(remapped), "remappings default to identity"
