@@ -153,11 +153,17 @@ def _is_file(text: str) -> bool:
         return False
 
 
-class Scene:
-    """An ordered set of named obstacles in ``frame`` (the robot's root frame)."""
+MAX_OBSTACLES = 500_000  # default size limit of a scene
 
-    def __init__(self, obstacles: list[Obstacle] | None = None, frame: str = "base_link"):
+
+class Scene:
+    """An ordered set of named obstacles in ``frame`` (the robot's root frame), at most ``max_obstacles``."""
+
+    def __init__(
+        self, obstacles: list[Obstacle] | None = None, frame: str = "base_link", *, max_obstacles: int = MAX_OBSTACLES
+    ):
         self.frame = frame
+        self.max_obstacles = int(max_obstacles)
         self.obstacles: OrderedDict[str, Obstacle] = OrderedDict()
         self.version = 0
         for obstacle in obstacles or []:
@@ -168,6 +174,8 @@ class Scene:
         """Add (or replace, keeping its position in the order) an obstacle."""
         if not isinstance(obstacle, Obstacle):
             raise InvalidScene(f"expected an Obstacle, got {type(obstacle).__name__}")
+        if obstacle.name not in self.obstacles and len(self.obstacles) >= self.max_obstacles:
+            raise InvalidScene(f"obstacle '{obstacle.name}': the scene is full ({self.max_obstacles} obstacles)")
         self.obstacles[obstacle.name] = obstacle
         self.version += 1
 
@@ -200,9 +208,9 @@ class Scene:
 
     # ---------------------------------------------------------------- I/O --
     @classmethod
-    def from_dict(cls, d: dict | None, base_dir: Path | None = None) -> Scene:
+    def from_dict(cls, d: dict | None, base_dir: Path | None = None, *, max_obstacles: int = MAX_OBSTACLES) -> Scene:
         if d is None:
-            return cls()
+            return cls(max_obstacles=max_obstacles)
         if not isinstance(d, dict):
             raise InvalidScene(f"scene must be a mapping with 'obstacles', got {type(d).__name__}")
         unknown = set(d) - {"frame", "obstacles"}
@@ -211,14 +219,16 @@ class Scene:
         entries = d.get("obstacles") or []
         if not isinstance(entries, list):
             raise InvalidScene("scene: field 'obstacles' must be a list")
+        if len(entries) > max_obstacles:
+            raise InvalidScene(f"scene: {len(entries)} obstacles, more than the limit of {max_obstacles}")
         obstacles = [Obstacle.from_dict(e, base_dir) for e in entries]
         dupes = sorted(name for name, count in Counter(o.name for o in obstacles).items() if count > 1)
         if dupes:
             raise InvalidScene(f"scene: duplicate obstacle name(s) {dupes}")
-        return cls(obstacles, frame=str(d.get("frame", "base_link")))
+        return cls(obstacles, frame=str(d.get("frame", "base_link")), max_obstacles=max_obstacles)
 
     @classmethod
-    def from_yaml(cls, source: str | Path) -> Scene:
+    def from_yaml(cls, source: str | Path, *, max_obstacles: int = MAX_OBSTACLES) -> Scene:
         """Load from a YAML file path or a YAML string."""
         base_dir = None
         text = str(source)
@@ -233,7 +243,7 @@ class Scene:
             data = yaml.safe_load(text)
         except yaml.YAMLError as exc:
             raise InvalidScene(f"scene YAML does not parse: {exc}") from None
-        return cls.from_dict(data, base_dir)
+        return cls.from_dict(data, base_dir, max_obstacles=max_obstacles)
 
     def to_dict(self) -> dict:
         return {"frame": self.frame, "obstacles": [o.to_dict() for o in self.obstacles.values()]}

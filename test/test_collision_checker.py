@@ -46,7 +46,7 @@ def test_self_collision_is_detected_and_srdf_filters_adjacent(robot):
     assert ("torso", "l_arm_link3") in cc.colliding_pairs(left_arm_through_chest)
     home = robot.named_state("home")
     assert cc.is_valid(home) and cc.colliding_pairs(home) == []
-    pairs = {frozenset(p) for p in cc._pair_names}
+    pairs = {frozenset(p) for p in cc.checked_pairs}
     assert frozenset(("torso", "r_arm_link1")) not in pairs  # adjacent
     assert frozenset(("r_arm_link5", "l_arm_link5")) in pairs  # forearms can meet
 

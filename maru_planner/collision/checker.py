@@ -1,12 +1,16 @@
 """CollisionChecker: robot self-collision (SRDF-filtered) + robot-vs-scene, on Pinocchio + coal.
 
 One Pinocchio ``Data`` and one ``GeometryData`` are built per scene and reused
-for every check. The geometry model (robot geometry + one object per
-obstacle) and its pair list are rebuilt from scratch whenever the scene
-changes (``set_scene`` or any edit that bumps ``scene.version``), so a removed
-obstacle never leaves a stale pair behind. Robot-vs-scene pairs come first in
-the pair list: in planning they are the ones that usually fail, and
-``stop_at_first_collision`` then returns early.
+for every check. Whenever the scene changes (``set_scene`` or any edit that
+bumps ``scene.version``) everything scene-related is rebuilt from scratch, so a
+removed obstacle never leaves a stale pair behind. The build is linear in the
+number of obstacles and bounded by ``build_budget`` (InvalidScene when it runs out):
+
+- obstacles the robot can never reach are dropped (:mod:`maru_planner.collision.broadphase`);
+- up to ``PAIR_LIST_LIMIT`` reachable obstacles join the robot's geometry model as
+  (moving link, obstacle) pairs, ahead of the self-collision pairs: in planning they
+  are the ones that usually fail, and ``stop_at_first_collision`` then returns early;
+- more than that go in a coal AABB tree (``SceneTree``), one tree-vs-tree query per check.
 
 Validity checks (``is_valid``, ``are_valid``, ``first_invalid``,
 ``any_invalid``) go through a coal broad phase, which skips the narrow phase
@@ -26,8 +30,11 @@ import coal
 import numpy as np
 import pinocchio as pin
 
+from maru_planner.collision.broadphase import BuildClock, SceneTree, reachable_obstacles, robot_reach
 from maru_planner.robot.model import RobotModel
 from maru_planner.scene import Obstacle, Scene
+
+PAIR_LIST_LIMIT = 64  # reachable obstacles kept as pairs; beyond, the tree's per-check cost is lower
 
 
 def obstacle_geometry(obstacle: Obstacle) -> coal.CollisionGeometry:
@@ -99,11 +106,20 @@ class CollisionChecker:
     """Validity of full robot configurations against self-collision and a scene."""
 
     def __init__(
-        self, robot: RobotModel, scene: Scene | None = None, *, padding: float = 0.0, broadphase: str = "auto"
+        self,
+        robot: RobotModel,
+        scene: Scene | None = None,
+        *,
+        padding: float = 0.0,
+        broadphase: str = "auto",
+        build_budget: float | None = None,
+        pair_list_limit: int = PAIR_LIST_LIMIT,
     ):
         """``padding`` (m) is added to every pair's security margin: closer than that counts as collision.
 
-        ``broadphase``: "auto", "naive", "aabb_tree" or "none" (pair loop only).
+        ``broadphase``: "auto", "naive", "aabb_tree" or "none" (pair loop only), for the pair list.
+        ``build_budget``: seconds a scene build may take (None: no limit); InvalidScene when exceeded.
+        ``pair_list_limit``: most reachable obstacles checked as a pair list; more go in an AABB tree.
         """
         if broadphase != "auto" and broadphase not in BROADPHASES:
             raise ValueError(f"broadphase must be 'auto' or one of {sorted(BROADPHASES)}, got {broadphase!r}")
@@ -114,6 +130,10 @@ class CollisionChecker:
             broadphase = "aabb_tree" if has_mesh else "naive"
         self.broadphase = "none" if self.padding > 0 else broadphase
         self.check_count = 0
+        self.build_budget = build_budget
+        self.pair_list_limit = int(pair_list_limit)
+        self.reach = robot_reach(robot)
+        self.scene_tree: SceneTree | None = None  # set when the reachable obstacles exceed PAIR_LIST_LIMIT
         self._self_pairs = self_collision_pairs(robot)
         self._model = robot.model
         self._data = robot.model.createData()
@@ -132,18 +152,23 @@ class CollisionChecker:
         self._build()
 
     def _build(self) -> None:
+        obstacles = list(self._scene.obstacles.values())
+        clock = BuildClock(self.build_budget, len(obstacles))
+        reachable = reachable_obstacles(obstacles, self.reach, self.padding, clock)
+        listed = reachable if len(reachable) <= self.pair_list_limit else []
+        self.scene_tree = SceneTree(self.robot, reachable, self.padding, clock) if not listed and reachable else None
         geom_model = self.robot.collision_model.copy()
         n_robot = geom_model.ngeoms
         names = [self._model.frames[g.parentFrame].name for g in geom_model.geometryObjects]
-        for obstacle in self._scene.obstacles.values():
+        for obstacle in listed:
             placement = pin.SE3(obstacle.pose[:3, :3].copy(), obstacle.pose[:3, 3].copy())
-            obj = pin.GeometryObject(f"scene/{obstacle.name}", 0, 0, placement, obstacle_geometry(obstacle))
+            obj = pin.GeometryObject(f"scene/{obstacle.name}", 0, 0, placement, obstacle.geometry())
             geom_model.addGeometryObject(obj)
             names.append(obstacle.name)
         moving = [i for i in range(n_robot) if geom_model.geometryObjects[i].parentJoint != 0]
         scene_pairs = [(i, k) for k in range(n_robot, geom_model.ngeoms) for i in moving]
         pairs = scene_pairs + self._self_pairs
-        geom_model.setCollisionPairs(np.zeros((geom_model.ngeoms, geom_model.ngeoms), dtype=bool), False)
+        geom_model.removeAllCollisionPairs()
         for i, j in pairs:
             geom_model.addCollisionPair(pin.CollisionPair(i, j))
         self._geom_model = geom_model
@@ -158,8 +183,12 @@ class CollisionChecker:
 
     def _collides(self, q: np.ndarray) -> bool:
         if self._manager is not None:
-            return pin.computeCollisions(self._model, self._data, self._manager, q, True)
-        return pin.computeCollisions(self._model, self._data, self._geom_model, self._geom_data, q, True)
+            hit = pin.computeCollisions(self._model, self._data, self._manager, q, True)
+        else:
+            hit = pin.computeCollisions(self._model, self._data, self._geom_model, self._geom_data, q, True)
+        if hit or self.scene_tree is None:
+            return hit
+        return self.scene_tree.collides(self._data)  # the pair list's call left the kinematics in _data
 
     def _sync(self) -> None:
         if self._scene.version != self._scene_version:
@@ -167,9 +196,15 @@ class CollisionChecker:
 
     @property
     def n_pairs(self) -> int:
-        """Number of geometry pairs checked per configuration."""
+        """Number of geometry pairs that can be checked per configuration (the tree skips most)."""
         self._sync()
-        return len(self._pair_names)
+        return len(self._pair_names) + (self.scene_tree.n_pairs if self.scene_tree is not None else 0)
+
+    @property
+    def checked_pairs(self) -> list[tuple[str, str]]:
+        """(link or obstacle, link or obstacle) names of every pair that can be checked."""
+        self._sync()
+        return self._pair_names + (self.scene_tree.pair_names() if self.scene_tree is not None else [])
 
     @property
     def geometry_model(self) -> pin.GeometryModel:
@@ -226,25 +261,29 @@ class CollisionChecker:
         self.check_count += 1
         pin.computeCollisions(self._model, self._data, self._geom_model, self._geom_data, q, False)
         hits = [self._pair_names[k] for k, r in enumerate(self._geom_data.collisionResults) if r.isCollision()]
+        if self.scene_tree is not None:
+            hits = self.scene_tree.colliding_pairs(self._data) + hits
         return list(dict.fromkeys(hits))
 
     def clearance(self, q: np.ndarray) -> float:
         """Minimum distance over all checked pairs (m); <= 0 when in collision."""
-        self._sync()
-        self.check_count += 1
-        if not self._pair_names:
-            return float("inf")
-        pin.computeDistances(self._model, self._data, self._geom_model, self._geom_data, q)
-        return float(min(r.min_distance for r in self._geom_data.distanceResults)) - self.padding
+        return self.closest_pair(q)[1] - self.padding
 
     def closest_pair(self, q: np.ndarray) -> tuple[tuple[str, str], float]:
-        """(names, distance) of the closest pair at ``q``."""
+        """(names, distance) of the closest pair at ``q``; (("", ""), inf) without pairs."""
         self._sync()
         self.check_count += 1
         pin.computeDistances(self._model, self._data, self._geom_model, self._geom_data, q)
-        d = [r.min_distance for r in self._geom_data.distanceResults]
-        k = int(np.argmin(d))
-        return self._pair_names[k], float(d[k])
+        best, best_pair = np.inf, ("", "")
+        if self._pair_names:
+            d = [r.min_distance for r in self._geom_data.distanceResults]
+            k = int(np.argmin(d))
+            best, best_pair = float(d[k]), self._pair_names[k]
+        if self.scene_tree is not None:
+            pair, distance = self.scene_tree.nearest(self._data)
+            if distance < best:
+                best, best_pair = distance, pair
+        return best_pair, best
 
     def reset_count(self) -> None:
         self.check_count = 0

@@ -8,7 +8,9 @@ radius is a ball inside the link (its centre's depth in the convex link). Outer 
 hit -> hit; between the two the exact model decides (spheres.py).
 
 Broad phase: each geometry object's spheres have a bounding sphere; only when it is within reach of
-an obstacle (or of the other group's bound, for self-collision pairs) are its spheres tested.
+an obstacle (or of the other group's bound, for self-collision pairs) are its spheres tested. In a
+large scene the obstacles sit in a uniform grid (:func:`build_grid`) and each group only meets the
+obstacles listed in the cells its bounding sphere overlaps.
 """
 
 from __future__ import annotations
@@ -77,15 +79,42 @@ def _dist(a, b):
 VALID, COLLIDING, AMBIGUOUS = 0, 1, 2
 
 
+@njit(cache=True, inline="always")
+def group_vs_obstacle(
+    g, k, padding, s_inner, s_radius, c_start, c_radius, g_radius, g_clusters, world, gworld, cworld,
+    box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact,
+):  # fmt: skip
+    """0: group ``g``'s outer spheres clear obstacle ``k``; 1: some touch it; COLLIDING (via 2): an inner ball does."""
+    gd = point_obstacle_distance(gworld[g], k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r)
+    if gd >= g_radius[g] + padding:
+        return 0
+    touched = 0
+    for c in range(g_clusters[g], g_clusters[g + 1]):
+        cd = point_obstacle_distance(cworld[c], k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r)
+        if cd >= c_radius[c] + padding:
+            continue
+        for s in range(c_start[c], c_start[c + 1]):
+            d = point_obstacle_distance(world[s], k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r)
+            if exact[k] and d < s_inner[s] + padding:
+                return 2
+            if d < s_radius[s] + padding:
+                touched = 1
+    return touched
+
+
 @njit(cache=True)
 def classify_state(
     q, parent, kind, axis, prot, ppos, idx_q,
     s_joint, s_center, s_radius, s_inner, g_start, g_joint, g_center, g_radius, self_pairs, padding,
     c_start, c_joint, c_center, c_radius, g_clusters,
-    box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact,
-    rot, pos, world, gworld, cworld, amb,
+    box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact, grid_i, grid_f,
+    rot, pos, world, gworld, cworld, amb, mark, buffer,
 ):  # fmt: skip
     """VALID, COLLIDING or AMBIGUOUS for one configuration, and the number of ambiguous pairs.
+
+    Each moving group is tested against the obstacles in the grid cells its bounding sphere overlaps
+    (:func:`build_grid`; all obstacles when the grid is empty); ``mark`` (n_obs + 1, last = a running
+    tag) drops repeats, ``buffer`` (n_obs) holds the candidates.
 
     COLLIDING: an *inner* ball (contained in the link) is within ``padding`` of an obstacle (whose primitive
     is ``exact``, not just a bound) or of an
@@ -100,27 +129,43 @@ def classify_state(
     n_obs = box_c.shape[0] + sph_c.shape[0] + cyl_c.shape[0]
     n_groups = g_joint.shape[0]
     n_amb = 0
-    for k in range(n_obs):
-        for g in range(n_groups):
-            if g_joint[g] == 0:  # fixed to the world: like the exact checker, never tested against the scene
-                continue
-            gd = point_obstacle_distance(gworld[g], k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r)
-            if gd >= g_radius[g] + padding:
-                continue
-            touched = False
-            for c in range(g_clusters[g], g_clusters[g + 1]):
-                cd = point_obstacle_distance(cworld[c], k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h,
-                                             cyl_r)
-                if cd >= c_radius[c] + padding:
-                    continue
-                for s in range(c_start[c], c_start[c + 1]):
-                    d = point_obstacle_distance(world[s], k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h,
-                                                cyl_r)
-                    if exact[k] and d < s_inner[s] + padding:
-                        return COLLIDING, 0
-                    if d < s_radius[s] + padding:
-                        touched = True
-            if touched and n_amb < amb.shape[0]:
+    nx, ny, nz = grid_i[0], grid_i[1], grid_i[2]
+    cell_start, items, big = unpack_grid(grid_i)
+    h, ox, oy, oz = grid_f[0], grid_f[1], grid_f[2], grid_f[3]
+    for g in range(n_groups):
+        if g_joint[g] == 0:  # fixed to the world: like the exact checker, never tested against the scene
+            continue
+        n_cand = n_obs  # no grid (a small scene): every obstacle
+        if nx > 0:
+            mark[n_obs] += 1
+            tag = mark[n_obs]
+            r = g_radius[g] + padding
+            i0, i1 = _cell_range(gworld[g, 0] - r, gworld[g, 0] + r, ox, h, nx)
+            j0, j1 = _cell_range(gworld[g, 1] - r, gworld[g, 1] + r, oy, h, ny)
+            l0, l1 = _cell_range(gworld[g, 2] - r, gworld[g, 2] + r, oz, h, nz)
+            n_cand = 0
+            for i in range(i0, i1 + 1):
+                for j in range(j0, j1 + 1):
+                    for l in range(l0, l1 + 1):
+                        cell = (i * ny + j) * nz + l
+                        for idx in range(cell_start[cell], cell_start[cell + 1]):
+                            k = items[idx]
+                            if mark[k] != tag:
+                                mark[k] = tag
+                                buffer[n_cand] = k
+                                n_cand += 1
+            for b in big:
+                buffer[n_cand] = b
+                n_cand += 1
+        for t in range(n_cand):
+            k = t if nx == 0 else buffer[t]
+            hit = group_vs_obstacle(
+                g, k, padding, s_inner, s_radius, c_start, c_radius, g_radius, g_clusters, world, gworld, cworld,
+                box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact,
+            )  # fmt: skip
+            if hit == 2:
+                return COLLIDING, 0
+            if hit == 1 and n_amb < amb.shape[0]:
                 amb[n_amb, 0], amb[n_amb, 1], amb[n_amb, 2] = 0, g, k
                 n_amb += 1
     for p in range(self_pairs.shape[0]):
@@ -243,10 +288,11 @@ def unpack_scene(sf):
 
 
 @njit(cache=True)
-def scan_nb(Q, start, ri, rf, sf, amb, stop_at_ambiguous):
+def scan_nb(Q, start, ri, rf, sf, grid_i, grid_f, amb, mark, stop_at_ambiguous):
     """First row >= ``start`` of ``Q`` that is not VALID: (row, status, n_ambiguous), or (-1, VALID, 0).
 
-    ``ri``/``rf``/``sf``: :func:`pack_robot` and :func:`pack_scene` arrays. With ``stop_at_ambiguous``
+    ``ri``/``rf``/``sf``: :func:`pack_robot` and :func:`pack_scene` arrays; ``grid_i``/``grid_f``:
+    :func:`build_grid`'s; ``mark``: n_obs + 1 int64 kept across calls. With ``stop_at_ambiguous``
     false, AMBIGUOUS rows are reported as COLLIDING (the pure sphere model).
     """
     (parent, kind, axis, prot, ppos, idx_q, s_joint, s_center, s_radius, s_inner, g_start, g_joint, g_center,
@@ -258,12 +304,14 @@ def scan_nb(Q, start, ri, rf, sf, amb, stop_at_ambiguous):
     world = np.empty((s_joint.shape[0], 3))
     gworld = np.empty((g_joint.shape[0], 3))
     cworld = np.empty((c_joint.shape[0], 3))
+    buffer = np.empty(mark.shape[0], dtype=np.int64)
     for i in range(start, Q.shape[0]):
         status, n_amb = classify_state(
             Q[i], parent, kind, axis, prot, ppos, idx_q,
             s_joint, s_center, s_radius, s_inner, g_start, g_joint, g_center, g_radius, self_pairs, padding,
             c_start, c_joint, c_center, c_radius, g_clusters,
-            box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact, rot, pos, world, gworld, cworld, amb,
+            box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact, grid_i, grid_f,
+            rot, pos, world, gworld, cworld, amb, mark, buffer,
         )  # fmt: skip
         if status == COLLIDING:
             return i, COLLIDING, 0
@@ -283,3 +331,83 @@ def sphere_obstacle_distances_nb(world, sf):
             out[s, k] = point_obstacle_distance(world[s], k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h,
                                                 cyl_r)
     return out
+
+
+# ------------------------------------------------------------------ grid --
+NO_GRID = np.zeros(6, dtype=np.int64), np.zeros(4)
+
+
+@njit(cache=True, inline="always")
+def _cell_range(lo, hi, origin, h, n):
+    """First and last cell (clamped to 0..n-1) along one axis of the interval [lo, hi]; first > last if outside."""
+    a = int(np.floor((lo - origin) / h))
+    b = int(np.floor((hi - origin) / h))
+    return max(a, 0), min(b, n - 1)
+
+
+@njit(cache=True, inline="always")
+def _box_cells(box_lo, box_hi, k, origin, h, dims):
+    i0, i1 = _cell_range(box_lo[k, 0], box_hi[k, 0], origin[0], h, dims[0])
+    j0, j1 = _cell_range(box_lo[k, 1], box_hi[k, 1], origin[1], h, dims[1])
+    l0, l1 = _cell_range(box_lo[k, 2], box_hi[k, 2], origin[2], h, dims[2])
+    return i0, i1, j0, j1, l0, l1, (i1 - i0 + 1) * (j1 - j0 + 1) * (l1 - l0 + 1)
+
+
+@njit(cache=True)
+def build_grid(box_lo, box_hi, h, max_cells):
+    """A uniform grid of cell size ``h`` over obstacle boxes (n, 3): (ints, floats) for :func:`classify_state`.
+
+    Each obstacle is listed in every cell its box overlaps; one overlapping more than ``max_cells`` cells
+    (a floor) goes in the ``big`` list that every query tests. ints: nx, ny, nz, n_cells, n_items, n_big,
+    cell starts, items, big; floats: h and the grid's origin. Linear in the listed cells.
+    """
+    n = box_lo.shape[0]
+    origin = np.empty(3)
+    dims = np.empty(3, dtype=np.int64)
+    for a in range(3):
+        origin[a] = box_lo[:, a].min()
+        dims[a] = max(1, int(np.ceil((box_hi[:, a].max() - origin[a]) / h)))
+    ny, nz = dims[1], dims[2]
+    n_cells = dims[0] * ny * nz
+    counts = np.zeros(n_cells + 1, dtype=np.int64)
+    big = np.zeros(n, dtype=np.bool_)
+    for k in range(n):
+        i0, i1, j0, j1, l0, l1, size = _box_cells(box_lo, box_hi, k, origin, h, dims)
+        if size > max_cells:
+            big[k] = True
+            continue
+        for i in range(i0, i1 + 1):
+            for j in range(j0, j1 + 1):
+                for l in range(l0, l1 + 1):
+                    counts[(i * ny + j) * nz + l + 1] += 1
+    starts = np.cumsum(counts)
+    items = np.empty(starts[-1], dtype=np.int64)
+    fill = starts[:-1].copy()
+    for k in range(n):
+        if big[k]:
+            continue
+        i0, i1, j0, j1, l0, l1, _ = _box_cells(box_lo, box_hi, k, origin, h, dims)
+        for i in range(i0, i1 + 1):
+            for j in range(j0, j1 + 1):
+                for l in range(l0, l1 + 1):
+                    cell = (i * ny + j) * nz + l
+                    items[fill[cell]] = k
+                    fill[cell] += 1
+    big_list = np.flatnonzero(big).astype(np.int64)
+    head = np.array([dims[0], ny, nz, n_cells, items.shape[0], big_list.shape[0]], dtype=np.int64)
+    ints = np.concatenate((head, starts, items, big_list))
+    floats = np.array([h, origin[0], origin[1], origin[2]])
+    return ints, floats
+
+
+@njit(cache=True)
+def unpack_grid(grid_i):
+    """(cell starts, items, big) of :func:`build_grid`'s ints (empty arrays for :data:`NO_GRID`)."""
+    n_cells, n_items, n_big = grid_i[3], grid_i[4], grid_i[5]
+    o = 6
+    n_starts = n_cells + 1 if n_cells > 0 else 0
+    starts = grid_i[o : o + n_starts]
+    o += n_starts
+    items = grid_i[o : o + n_items]
+    o += n_items
+    return starts, items, grid_i[o : o + n_big]

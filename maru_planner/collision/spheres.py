@@ -27,6 +27,7 @@ import numpy as np
 
 from maru_planner.collision import sphere_kernels as _kernels
 from maru_planner.collision.batch_fk import KinematicTree, batch_joint_poses, joint_poses_nb, sphere_centers_nb
+from maru_planner.collision.broadphase import BuildClock, robot_reach
 from maru_planner.collision.checker import self_collision_pairs
 from maru_planner.collision.sphere_model import SphereFitOptions, SphereModel, load_or_fit
 from maru_planner.scene import Obstacle, Scene
@@ -35,6 +36,8 @@ from maru_planner.shapes import KERNEL_KINDS, KernelPrimitive
 VALID, COLLIDING, AMBIGUOUS = 0, 1, 2  # same codes as sphere_kernels
 
 DEFAULT_PADDING = 0.0  # m added to every robot sphere; the spheres already cover the links (module doc)
+GRID_MIN_OBSTACLES = 32  # reachable obstacles from which the kernels look them up in a grid
+GRID_MAX_CELLS = 512  # an obstacle overlapping more grid cells is tested by every query instead
 
 
 @dataclass(frozen=True)
@@ -66,12 +69,17 @@ class ScenePrimitives:
         )  # fmt: skip
 
     @classmethod
-    def from_scene(cls, scene: Scene | None) -> ScenePrimitives:
-        """Convert a :class:`~maru_planner.scene.Scene` (``None`` = empty)."""
+    def from_scene(cls, scene: Scene | None, reach: float = np.inf, clock: BuildClock | None = None) -> ScenePrimitives:
+        """Convert a :class:`~maru_planner.scene.Scene` (``None`` = empty), keeping the obstacles whose
+        bounding sphere comes within ``reach`` of the root origin."""
+        obstacles = list(scene.obstacles.values()) if scene is not None else []
+        clock = clock or BuildClock(None, len(obstacles))
         by_kind: dict[str, list[tuple[Obstacle, KernelPrimitive]]] = {kind: [] for kind in KERNEL_KINDS}
-        for obstacle in scene.obstacles.values() if scene is not None else ():
+        for k, obstacle in enumerate(obstacles):
+            clock.tick(k, "converting obstacles to primitives")
             primitive = obstacle.kernel_primitive()
-            by_kind[primitive.kind].append((obstacle, primitive))
+            if np.linalg.norm(primitive.center) - np.linalg.norm(primitive.half_extents) <= reach:
+                by_kind[primitive.kind].append((obstacle, primitive))
         boxes, spheres, cylinders = (by_kind[kind] for kind in KERNEL_KINDS)
         ordered = boxes + spheres + cylinders
         return cls(
@@ -88,6 +96,16 @@ class ScenePrimitives:
             names=tuple(o.name for o, _ in ordered),
             obstacles=tuple(o for o, _ in ordered),
         )
+
+
+    def boxes(self) -> tuple[np.ndarray, np.ndarray]:
+        """World axis-aligned boxes (lo, hi), each (n, 3), of the primitives in kernel order."""
+        box_half = np.einsum("kab,kb->ka", np.abs(self.box_rot), self.box_half)
+        radial = np.sqrt(np.clip(1.0 - self.cyl_axis**2, 0.0, None))
+        cyl_half = np.abs(self.cyl_axis) * self.cyl_half[:, None] + radial * self.cyl_radius[:, None]
+        centers = np.concatenate([self.box_center, self.sphere_center, self.cyl_center])
+        halves = np.concatenate([box_half, np.repeat(self.sphere_radius[:, None], 3, axis=1), cyl_half])
+        return centers - halves, centers + halves
 
 
 def _stack(values: list, shape: tuple[int, ...]) -> np.ndarray:
@@ -119,7 +137,11 @@ class SphereCollisionChecker:
         fit_options: SphereFitOptions | None = None,
         spheres: SphereModel | None = None,
         use_numba: bool = True,
+        build_budget: float | None = None,
+        grid_min_obstacles: int = GRID_MIN_OBSTACLES,
     ):
+        """``build_budget``: seconds a scene build may take (None: no limit; InvalidScene when exceeded).
+        ``grid_min_obstacles``: reachable obstacles from which a grid broad phase is built (numba path)."""
         self.robot = robot
         self.tree = KinematicTree.from_pinocchio(robot.model)
         self.spheres = spheres or load_or_fit(robot.model, robot.collision_model, fit_options)
@@ -127,6 +149,9 @@ class SphereCollisionChecker:
         self.padding = float(padding)
         self.confirm = bool(confirm)
         self.use_numba = bool(use_numba)
+        self.build_budget = build_budget
+        self.grid_min_obstacles = int(grid_min_obstacles)
+        self.reach = robot_reach(robot)
         self.check_count = 0
         self.exact_pair_checks = 0  # coal calls made to settle near contacts
         self.scene = None
@@ -150,13 +175,31 @@ class SphereCollisionChecker:
     def set_scene(self, scene) -> None:
         """Use ``scene``; later edits to it (``scene.version`` bumps) are picked up automatically."""
         self.scene = scene
-        self.primitives = ScenePrimitives.from_scene(scene)
+        clock = BuildClock(self.build_budget, len(scene.obstacles) if scene is not None else 0)
+        self.primitives = ScenePrimitives.from_scene(scene, self.reach + self.padding, clock)
         self._scene_args = self.primitives.as_tuple()
         self._packed_scene = _kernels.pack_scene(*self._scene_args) if self.use_numba else None
+        self._grid = self._build_grid()
+        self._mark = np.zeros(len(self.primitives.names) + 1, dtype=np.int64)
         self._scene_version = getattr(scene, "version", None)
         self._amb = np.zeros((self.spheres.n_groups * max(1, len(self.primitives.names)) + len(self.self_pairs), 3),
                              dtype=np.int64)
         self._request = None
+
+    @property
+    def uses_grid(self) -> bool:
+        """Whether the kernels look obstacles up in a grid (large scenes) rather than test them all."""
+        return bool(self._grid[0][0] > 0)
+
+    def _build_grid(self) -> tuple[np.ndarray, np.ndarray]:
+        """Grid broad phase over the reachable obstacles, cells about one robot geometry's bound across."""
+        if not self.use_numba or len(self.primitives.names) < self.grid_min_obstacles:
+            return _kernels.NO_GRID
+        lo, hi = self.primitives.boxes()
+        moving = self.spheres.group_joint != 0
+        cell = float(np.median(self.spheres.group_radius[moving])) if moving.any() else 0.1
+        cell = max(cell, float((hi.max(axis=0) - lo.min(axis=0)).max()) / 64.0, 1e-3)
+        return _kernels.build_grid(lo - self.padding, hi + self.padding, cell, GRID_MAX_CELLS)
 
     def reset_count(self) -> None:
         self.check_count = 0
@@ -247,7 +290,9 @@ class SphereCollisionChecker:
         """First row >= start that is not clearly valid: (row, status, number of ambiguous pairs)."""
         if self.use_numba:
             ri, rf = self._packed_robot
-            row, status, n_amb = _kernels.scan_nb(Q, start, ri, rf, self._packed_scene, self._amb, self.confirm)
+            row, status, n_amb = _kernels.scan_nb(
+                Q, start, ri, rf, self._packed_scene, *self._grid, self._amb, self._mark, self.confirm
+            )
             return int(row), int(status), int(n_amb)
         for row in range(start, len(Q)):
             status, pairs = self._classify_np(Q[row])
