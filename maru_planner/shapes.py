@@ -51,6 +51,10 @@ class KernelPrimitive:
     half_extents: np.ndarray  # (3,) box: half sides; sphere: (r, r, r); cylinder: (r, r, half length)
     exact: bool = True  # False: only bounds the shape, so touching it never decides a collision alone
 
+    def within(self, radius: float) -> bool:
+        """Whether the primitive's bounding sphere comes within ``radius`` of the scene origin."""
+        return math.hypot(*self.center) - math.hypot(*self.half_extents) <= radius
+
 
 @dataclass(frozen=True)
 class MarkerShape:
@@ -142,7 +146,7 @@ def numbers(where: str, field_name: str, value: Any, count: int) -> np.ndarray:
         raise InvalidScene(f"{where}: field '{field_name}' must be {count} numbers, got {value!r}") from None
     if arr.size != count:
         raise InvalidScene(f"{where}: field '{field_name}' must have {count} numbers, got {arr.size}")
-    if not np.all(np.isfinite(arr)):
+    if not np.isfinite(arr).all():
         raise InvalidScene(f"{where}: field '{field_name}' contains NaN or inf: {value!r}")
     return arr
 
@@ -165,7 +169,7 @@ def validate(spec: ShapeSpec, where: str, values: Mapping[str, Any]) -> Dimensio
 
 def _positive(where: str, dim: Dimension, value: Any) -> float | tuple[float, ...]:
     arr = numbers(where, dim.name, value, dim.count)
-    if np.any(arr <= 0):
+    if (arr <= 0).any():
         shown = arr.tolist() if dim.count > 1 else float(arr[0])
         raise InvalidScene(f"{where}: field '{dim.name}' must be > 0, got {shown}")
     return float(arr[0]) if dim.count == 1 else tuple(float(v) for v in arr)

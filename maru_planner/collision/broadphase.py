@@ -69,8 +69,7 @@ def reachable_obstacles(obstacles: list[Obstacle], reach: float, padding: float,
     kept = []
     for k, obstacle in enumerate(obstacles):
         clock.tick(k, "culling far obstacles")
-        primitive = obstacle.kernel_primitive()
-        if np.linalg.norm(primitive.center) - np.linalg.norm(primitive.half_extents) <= reach + padding:
+        if obstacle.kernel_primitive().within(reach + padding):
             kept.append(obstacle)
     return kept
 

@@ -78,7 +78,7 @@ class ScenePrimitives:
         for k, obstacle in enumerate(obstacles):
             clock.tick(k, "converting obstacles to primitives")
             primitive = obstacle.kernel_primitive()
-            if np.linalg.norm(primitive.center) - np.linalg.norm(primitive.half_extents) <= reach:
+            if primitive.within(reach):
                 by_kind[primitive.kind].append((obstacle, primitive))
         boxes, spheres, cylinders = (by_kind[kind] for kind in KERNEL_KINDS)
         ordered = boxes + spheres + cylinders
