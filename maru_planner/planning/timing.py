@@ -49,8 +49,8 @@ CERTIFY_STEP = 0.005  # rad: joint step of the collision re-check of blends
 BLEND_SHRINK = 4.0  # each retry of a colliding blend divides its deviation by this
 BLEND_RETRIES = 2  # retries before a corner becomes a stop
 MIN_BLEND_SPEED = 0.1  # |u_in + u_out| below this (a near reversal): stop instead of blending
-GRID_INTERVALS = 40  # toppra grid intervals along a section (plus ≥ BLEND_INTERVALS per blend)
-BLEND_INTERVALS = 4
+GRID_INTERVALS = 30  # toppra grid intervals along a section (plus ≥ BLEND_INTERVALS per blend)
+BLEND_INTERVALS = 3
 RATIO_TOL = 1e-9
 RUCKIG_DURATION = 100.0  # s: longer sections are computed sped up and played back slower (_RuckigPieces)
 
@@ -450,7 +450,6 @@ def _ruckig(waypoints, limits: Limits, curve_free: CurveFree, max_deviation: flo
     report = TimingReport("ruckig")
     deviation = np.full(len(waypoints), max_deviation)
     deviation[[0, -1]] = 0.0
-    t0 = time.monotonic()
     for attempt in range(BLEND_RETRIES + 2):
         half = np.array([blend_half_length(waypoints, k, deviation[k]) if 0 < k < len(waypoints) - 1 else 0.0
                          for k in range(len(waypoints))])  # fmt: skip
@@ -464,7 +463,6 @@ def _ruckig(waypoints, limits: Limits, curve_free: CurveFree, max_deviation: flo
             deviation[k] = 0.0 if last else deviation[k] / BLEND_SHRINK
     else:
         raise _ParameterizationFailed(f"ruckig: no certified motion near waypoint(s) {failing}, even at rest there")
-    report.certify_time = time.monotonic() - t0
     _count_corners(waypoints, half, report)
     return [pieces for pieces, _ in sections], report
 
@@ -533,6 +531,7 @@ def _reachable_speed(length: float, direction: np.ndarray, limits: Limits) -> fl
 
 def _failing_corners(sections, waypoints, half, max_deviation, curve_free: CurveFree, report) -> list[int]:
     """Interior waypoints whose Ruckig motion leaves the path by more than allowed or collides there."""
+    t0 = time.monotonic()
     failing = set()
     for pieces, blend_of in sections:
         for trajectory, corner in zip(pieces.trajectories, blend_of, strict=True):
@@ -544,6 +543,7 @@ def _failing_corners(sections, waypoints, half, max_deviation, curve_free: Curve
             report.certify_checks += int(off.sum())
             if deviation.max() > max_deviation + 1e-9 or not curve_free(q[off]):
                 failing.add(int(corner) if corner >= 0 else _nearest_corner(q[off], waypoints))
+    report.certify_time += time.monotonic() - t0
     return sorted(k for k in failing if 0 < k < len(waypoints) - 1)
 
 
