@@ -3,30 +3,45 @@
 A thin adapter: messages are converted in :mod:`planning_conversions`, the
 work is done by the core (``MotionPlanner``, ``solve_ik``, ``Scene``).
 
-Concurrency: service callbacks are coroutines. They hand the core call to a
-small pool of worker threads, each owning its own robot model, collision
-checker and planner (pinocchio data and OMPL set-ups are not shared between
-threads), and ``await`` the answer. No executor thread is held while a plan
-runs, so ``/joint_states``, scene updates and other requests keep being
-served, and every request gets its own answer.
+Parameters are declared from :class:`NodeSettings` (the node's own), the fields of
+:class:`~maru_planner.planning.PlannerConfig` and, per registered planner, its parameters as
+``planners.<ID>.<name>`` (:mod:`maru_planner.planning.registry`); each has a descriptor with its
+type, range and description. A run-time change is applied at once (the planning contexts are
+rebuilt when a planner setting or ``workers`` changes, so the next answer uses it) or rejected
+with a reason (read-only ones: the robot, the start-up scene, the frame, executor threads).
+
+Concurrency and admission: service callbacks are coroutines. They hand the core call to a
+:class:`WorkerPool` of ``workers`` threads, each owning its own robot model, collision checker
+and planner (pinocchio data and OMPL set-ups are not shared between threads), and ``await``
+the answer, so no executor thread is held while a plan runs. At most ``workers + queue_size``
+requests are admitted (planning or waiting); one more is answered BUSY at once. Time spent
+waiting counts against the request's own budget. The services' QoS queue
+(``request_queue_depth``) is deeper than that, so the middleware drops no request before the
+node has seen it.
 """
 
 from __future__ import annotations
 
 import copy
+import dataclasses
+import itertools
 import math
 import queue
+import sys
 import threading
 import time
-from concurrent.futures import ThreadPoolExecutor
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import rclpy
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
 from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.parameter import Parameter
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.task import Future
 from sensor_msgs.msg import JointState
 from std_msgs.msg import String
@@ -34,12 +49,16 @@ from trajectory_msgs.msg import JointTrajectory
 from visualization_msgs.msg import MarkerArray
 
 from maru_planner import errors
+from maru_planner.params import ParamSpec, dataclass_params, param
 from maru_planner.paths import config_path, urdf_path
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig
+from maru_planner.planning.config import PLANNER_CONFIG_PARAMS
+from maru_planner.planning.registry import PLANNERS
 from maru_planner.robot import RobotModel
 from maru_planner.robot.ik import solve_ik
+from maru_planner.ros import parameters
 from maru_planner.ros import planning_conversions as conv
-from maru_planner.ros.env import configure_loopback_dds
+from maru_planner.ros.env import network_from_environment
 from maru_planner.ros.markers import plan_markers, scene_markers
 from maru_planner.scene import Obstacle, Scene
 from maru_planner_interfaces.msg import PlanningError, SceneObstacle
@@ -49,36 +68,140 @@ NODE_NAME = "planning_node"
 DEFAULT_URDF = "maru1_upper_body.urdf"
 DEFAULT_SRDF = "maru1_upper_body.srdf"
 DEFAULT_SCENE = "scenes/maru13_desk_box.yaml"
+PLANNER_PREFIX = "planners"
 
 LATCHED = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL, reliability=ReliabilityPolicy.RELIABLE)
+JOINT_STATES_DEPTH = 10  # only the newest state matters; a deep queue of junk messages would only cost memory
 
-PARAMETERS = {
-    "robot_urdf": "",  # empty = the package's urdf/maru1_upper_body.urdf
-    "robot_srdf": "",  # empty = the package's urdf/maru1_upper_body.srdf
-    "package_dirs": [""],  # extra mesh search dirs (package:// URIs); [""] = none
-    "planning_frame": "base_link",
-    "default_group": "upper_body",
-    "default_planner": "RRTConnect",
-    "resolution": 0.02,  # rad: collision-check step along an edge
-    "collision_model": "exact",  # "exact" (coal) or "spheres" (fast; paths verified on the exact model)
-    "max_planning_time": 60.0,  # s: larger allowed_planning_time is answered INVALID_REQUEST
-    "default_attempts": 1,
-    "ik_timeout": 1.0,  # s: ComputeIK budget when the request gives none
-    "scene_file": "",  # empty = config/scenes/maru13_desk_box.yaml; "none" = empty scene; relative: cwd, then config/
-    "workers": 2,  # planning contexts (threads); more requests queue
-    "executor_threads": 4,
-    "marker_period": 1.0,  # s: markers are re-sent to new subscribers at this period
-}
+
+@dataclass
+class NodeSettings:
+    """The node's own settings (the planner's are ``PlannerConfig``'s); each is a ROS parameter."""
+
+    robot_urdf: str = param("", "URDF file; empty = the package's urdf/maru1_upper_body.urdf", read_only=True)
+    robot_srdf: str = param("", "SRDF file; empty = the package's urdf/maru1_upper_body.srdf", read_only=True)
+    package_dirs: list[str] = param(
+        default_factory=list, description="extra directories that resolve package:// mesh URIs", read_only=True
+    )
+    planning_frame: str = param(
+        "base_link", "frame of goal poses, obstacles, trajectories and markers (the URDF root)", read_only=True
+    )
+    default_group: str = param("upper_body", "planning group used when a request leaves group empty")
+    max_planning_time: float = param(
+        60.0,
+        "largest allowed_planning_time a request may ask for (s); more is INVALID_REQUEST",
+        lower=0.01,
+        upper=3600.0,
+    )
+    default_attempts: int = param(1, "num_attempts used when a request gives 0", lower=1, upper=1000)
+    ik_timeout: float = param(1.0, "compute_ik budget when the request gives none (s)", lower=0.001, upper=60.0)
+    scene_file: str = param(
+        "",
+        "start-up scene; empty = config/scenes/maru13_desk_box.yaml, none = empty scene; "
+        "a relative path is looked up in the working directory, then in the package's config/",
+        read_only=True,
+    )
+    workers: int = param(2, "planning threads, each with its own robot model, checker and planner", lower=1, upper=32)
+    queue_size: int = param(
+        16, "requests admitted to wait for a busy worker; beyond workers + queue_size: BUSY", lower=0, upper=1024
+    )
+    request_queue_depth: int = param(
+        256,
+        "QoS depth of the service request queues (requests the middleware holds until the node takes them)",
+        lower=1,
+        upper=100000,
+        read_only=True,
+    )
+    executor_threads: int = param(
+        4, "executor threads for callbacks (services never hold one while planning)", lower=2, upper=64, read_only=True
+    )
+    marker_period: float = param(
+        1.0, "how often a new ~/markers subscriber is looked for, to send it the scene (s)", lower=0.01, upper=60.0
+    )
+
+
+NODE_PARAMS: dict[str, ParamSpec] = dataclass_params(NodeSettings)
+
+
+def parameter_specs() -> dict[str, ParamSpec]:
+    """Every parameter of the node: its settings, ``PlannerConfig``'s, ``planners.<ID>.<name>`` per planner."""
+    specs = {**NODE_PARAMS, **PLANNER_CONFIG_PARAMS}
+    specs["default_planner"] = dataclasses.replace(specs["default_planner"], choices=tuple(PLANNERS))
+    for planner_id, planner in PLANNERS.items():
+        specs.update(parameters.prefixed(planner.params, f"{PLANNER_PREFIX}.{planner_id}"))
+    return specs
+
+
+def planner_config(values: dict[str, Any], base: PlannerConfig | None = None) -> PlannerConfig:
+    """``base`` (else the defaults) with the config fields and ``planners.<ID>.<name>`` found in ``values``."""
+    base = base or PlannerConfig()
+    fields = {name: value for name, value in values.items() if name in PLANNER_CONFIG_PARAMS}
+    planner_params = copy.deepcopy(base.planner_params)
+    for name, value in values.items():
+        if name.startswith(PLANNER_PREFIX + "."):
+            _, planner_id, key = name.split(".", 2)
+            planner_params.setdefault(planner_id, {})[key] = value
+    return dataclasses.replace(base, **fields, planner_params=planner_params)
 
 
 class PlanningContext:
     """Everything one worker thread needs to plan: its own robot, checker and planner."""
 
-    def __init__(self, robot, checker, planner):
+    def __init__(self, robot, checker, planner, scene_version: int):
         self.robot = robot
         self.checker = checker
         self.planner = planner
-        self.scene_version = -1
+        self.scene_version = scene_version
+
+
+class WorkerPool:
+    """Planning threads, one :class:`PlanningContext` each, behind a bounded admission count.
+
+    ``submit`` admits a job while fewer than ``len(contexts) + queue_size`` are planning or
+    waiting, else raises ``errors.Busy`` at once. ``close`` lets the admitted jobs finish,
+    then the threads end (the node swaps in a new pool when its planner settings change).
+    """
+
+    def __init__(self, contexts: list[PlanningContext], queue_size: int, name: str = "planner"):
+        self.queue_size = queue_size
+        self._jobs: queue.SimpleQueue[Callable[[PlanningContext], None] | None] = queue.SimpleQueue()
+        self._lock = threading.Lock()
+        self._admitted = 0
+        self._threads = [
+            threading.Thread(target=self._serve, args=(context,), name=f"{name}-{i}", daemon=True)
+            for i, context in enumerate(contexts)
+        ]
+        for thread in self._threads:
+            thread.start()
+
+    @property
+    def workers(self) -> int:
+        return len(self._threads)
+
+    def submit(self, job: Callable[[PlanningContext], None]) -> None:
+        """Queue ``job(context)`` for the next free worker; errors.Busy if the queue is full."""
+        with self._lock:
+            capacity = self.workers + self.queue_size
+            if self._admitted >= capacity:
+                raise errors.Busy(
+                    f"{self._admitted} requests are planning or waiting (workers {self.workers} + "
+                    f"queue_size {self.queue_size}); try again later"
+                )
+            self._admitted += 1
+        self._jobs.put(job)
+
+    def close(self) -> None:
+        """Finish the admitted jobs, then stop the threads (no new job may be submitted)."""
+        for _ in self._threads:
+            self._jobs.put(None)
+
+    def _serve(self, context: PlanningContext) -> None:
+        while (job := self._jobs.get()) is not None:
+            try:
+                job(context)
+            finally:
+                with self._lock:
+                    self._admitted -= 1
 
 
 class SceneStore:
@@ -135,55 +258,57 @@ class PlanningNode(Node):
     """Plan, IK and scene services for the upper-body arm planner."""
 
     def __init__(self, **kwargs):
+        """Raises ``errors.InvalidParameter`` (one line) for a parameter of the wrong type or out of range."""
         super().__init__(NODE_NAME, **kwargs)
-        for name, default in PARAMETERS.items():
-            self.declare_parameter(name, default)
+        self._specs = parameter_specs()
+        values = parameters.declare_parameters(self, self._specs)
+        self.settings = NodeSettings(**{name: values[name] for name in NODE_PARAMS})
+        self.config = _checked_config(lambda: planner_config(values))
         self._latest_joints: dict[str, float] = {}
         self._joints_lock = threading.Lock()
+        self.ignored_joint_names = 0  # /joint_states names the robot does not have (never stored)
         self._last_plan_markers = None
         self._marker_lock = threading.Lock()  # plan_markers uses self._robot's shared pinocchio data
         self._marker_subscribers = 0
 
-        self._scene = SceneStore(self._load_scene_dict())
-        self._contexts: queue.SimpleQueue[PlanningContext] = queue.SimpleQueue()
-        n_workers = max(1, self._param("workers"))
-        for _ in range(n_workers):
-            self._contexts.put(self._make_context())
         self._robot = self._make_robot()  # read-only use in the executor threads (names, markers)
-        self._workers = ThreadPoolExecutor(max_workers=n_workers, thread_name_prefix="planner")
+        self._joint_names = frozenset(self._robot.joint_names)
+        _check_group(self._robot, self.settings.default_group)
+        self._scene = SceneStore(self._load_scene_dict())
+        self._pool_lock = threading.Lock()
+        self._pool = self._make_pool(self.config, self.settings)
         self._make_interfaces()
+        parameters.add_on_set_parameters_callback(self, self._specs, self._apply_parameters)
         self.get_logger().info(
             f"ready: robot {len(self._robot.joint_names)} joints, groups {sorted(self._robot.groups)}, "
-            f"scene {len(self._scene.snapshot()[0].get('obstacles', []))} obstacles, {n_workers} workers"
+            f"scene {len(self._scene.snapshot()[0].get('obstacles', []))} obstacles, "
+            f"{self.settings.workers} workers, queue_size {self.settings.queue_size}"
         )
 
     # ------------------------------------------------------------ set-up
 
-    def _param(self, name: str):
-        return self.get_parameter(name).value
-
     def _robot_files(self) -> tuple[str, str, list[str]]:
-        urdf = self._param("robot_urdf") or str(urdf_path(DEFAULT_URDF))
-        srdf = self._param("robot_srdf") or str(urdf_path(DEFAULT_SRDF))
-        package_dirs = [d for d in self._param("package_dirs") if d]
+        urdf = self.settings.robot_urdf or str(urdf_path(DEFAULT_URDF))
+        srdf = self.settings.robot_srdf or str(urdf_path(DEFAULT_SRDF))
+        package_dirs = [d for d in self.settings.package_dirs if d]
         return urdf, srdf, package_dirs
 
-    def _make_robot(self):
+    def _make_robot(self) -> RobotModel:
         urdf, srdf, package_dirs = self._robot_files()
         return RobotModel.from_urdf(urdf, srdf, package_dirs=package_dirs or None)
 
-    def _make_context(self) -> PlanningContext:
+    def _make_context(self, config: PlannerConfig) -> PlanningContext:
         robot = self._make_robot()
-        config = PlannerConfig(
-            resolution=self._param("resolution"),
-            default_planner=self._param("default_planner"),
-            collision_model=self._param("collision_model"),
-        )
-        planner = MotionPlanner.from_scene(robot, self._scene.scene(), config)
-        return PlanningContext(robot, planner.checker, planner)
+        scene_dict, version = self._scene.snapshot()
+        planner = MotionPlanner.from_scene(robot, Scene.from_dict(scene_dict), config)
+        return PlanningContext(robot, planner.checker, planner, version)
+
+    def _make_pool(self, config: PlannerConfig, settings: NodeSettings) -> WorkerPool:
+        contexts = [self._make_context(config) for _ in range(settings.workers)]
+        return WorkerPool(contexts, settings.queue_size)
 
     def _load_scene_dict(self) -> dict:
-        scene_file = self._param("scene_file")
+        scene_file = self.settings.scene_file
         if scene_file.lower() == "none":
             return Scene().to_dict()
         path = Path(scene_file) if scene_file else config_path(DEFAULT_SCENE)
@@ -193,12 +318,26 @@ class PlanningNode(Node):
 
     def _make_interfaces(self) -> None:
         services = ReentrantCallbackGroup()
-        self.create_service(PlanMotion, "plan_motion", self._on_plan_motion, callback_group=services)
-        self.create_service(ComputeIK, "compute_ik", self._on_compute_ik, callback_group=services)
-        self.create_service(ApplyScene, "apply_scene", self._on_apply_scene, callback_group=services)
-        self.create_service(GetScene, "get_scene", self._on_get_scene, callback_group=services)
+        # rclpy's service default (reliable, volatile, keep last) with a deeper queue: no request dropped
+        requests = QoSProfile(
+            depth=self.settings.request_queue_depth,
+            history=HistoryPolicy.KEEP_LAST,
+            reliability=ReliabilityPolicy.RELIABLE,
+            durability=DurabilityPolicy.VOLATILE,
+        )
+        for srv_type, name, callback in (
+            (PlanMotion, "plan_motion", self._on_plan_motion),
+            (ComputeIK, "compute_ik", self._on_compute_ik),
+            (ApplyScene, "apply_scene", self._on_apply_scene),
+            (GetScene, "get_scene", self._on_get_scene),
+        ):
+            self.create_service(srv_type, name, callback, qos_profile=requests, callback_group=services)
         self.create_subscription(
-            JointState, "/joint_states", self._on_joint_states, 50, callback_group=MutuallyExclusiveCallbackGroup()
+            JointState,
+            "/joint_states",
+            self._on_joint_states,
+            JOINT_STATES_DEPTH,
+            callback_group=MutuallyExclusiveCallbackGroup(),
         )
         self.create_subscription(
             SceneObstacle,
@@ -212,29 +351,57 @@ class PlanningNode(Node):
         description = self.create_publisher(String, "robot_description", LATCHED)
         description.publish(String(data=Path(self._robot_files()[0]).read_text()))
         self._description_pub = description
-        self.create_timer(
-            self._param("marker_period"), self._on_marker_timer, callback_group=MutuallyExclusiveCallbackGroup()
+        self._marker_timer = self.create_timer(
+            self.settings.marker_period, self._on_marker_timer, callback_group=MutuallyExclusiveCallbackGroup()
+        )
+
+    # ------------------------------------------------------------ run-time parameter changes
+
+    def _apply_parameters(self, changes: dict[str, Any]) -> None:
+        """Apply accepted parameter changes (read-only ones never get here: rclpy rejects them).
+
+        A planner setting or ``workers`` builds a new worker pool first (raising rejects the
+        change, nothing is applied); requests already admitted finish on the old one.
+        """
+        settings = dataclasses.replace(self.settings, **{k: v for k, v in changes.items() if k in NODE_PARAMS})
+        config = _checked_config(lambda: planner_config(changes, self.config))
+        _check_group(self._robot, settings.default_group)
+        rebuild = config != self.config or settings.workers != self.settings.workers
+        pool = self._make_pool(config, settings) if rebuild else None
+        with self._pool_lock:
+            self.settings, self.config = settings, config
+            if pool is not None:
+                self._pool, old = pool, self._pool
+                old.close()
+            self._pool.queue_size = settings.queue_size
+        self._marker_timer.timer_period_ns = int(settings.marker_period * 1e9)
+        self.get_logger().info(
+            "parameters changed: "
+            + ", ".join(f"{k}={v!r}" for k, v in changes.items())
+            + (f" (planning contexts rebuilt: {settings.workers} workers)" if rebuild else "")
         )
 
     # ------------------------------------------------------------ worker pool
 
     def _in_worker(self, fn, *args) -> Future:
-        """Run ``fn(context, *args)`` on a planning worker; an rclpy Future a coroutine can await."""
+        """Run ``fn(context, *args)`` on a planning worker; an rclpy Future a coroutine can await.
+
+        Raises ``errors.Busy`` at once when the admission queue is full.
+        """
         future = Future(executor=self.executor)
 
-        def run():
-            context = self._contexts.get()
+        def job(context: PlanningContext) -> None:
             try:
                 self._sync_scene(context)
                 future.set_result(fn(context, *args))
             except BaseException as exc:  # noqa: BLE001 - handed to the awaiting callback
                 future.set_exception(exc)
             finally:
-                self._contexts.put(context)
                 if self.executor is not None:
                     self.executor.wake()
 
-        self._workers.submit(run)
+        with self._pool_lock:
+            self._pool.submit(job)
         return future
 
     def _sync_scene(self, context: PlanningContext) -> None:
@@ -248,13 +415,26 @@ class PlanningNode(Node):
     # ------------------------------------------------------------ topics
 
     def _on_joint_states(self, msg: JointState) -> None:
-        try:
-            values = conv.joint_state_values(msg, "/joint_states")
-        except errors.MaruError as exc:
-            self.get_logger().warning(f"ignoring /joint_states: {exc}", throttle_duration_sec=5.0)
+        """Merge the robot's joints of ``msg`` into the latest state; other names are counted, never stored."""
+        if len(msg.name) != len(msg.position):
+            self.get_logger().warning(
+                f"ignoring /joint_states: {len(msg.name)} names but {len(msg.position)} positions",
+                throttle_duration_sec=5.0,
+            )
             return
+        known = self._joint_names
+        values = {n: float(v) for n, v in zip(msg.name, msg.position) if n in known and math.isfinite(v)}
+        ignored = len(msg.name) - len(values)
         with self._joints_lock:
             self._latest_joints.update(values)
+            self.ignored_joint_names += ignored
+        if ignored:
+            unknown = itertools.islice((name for name in msg.name if name not in known), 3)
+            self.get_logger().info(
+                f"/joint_states: ignored {ignored} unknown or non-finite joint values "
+                f"({self.ignored_joint_names} so far), e.g. {', '.join(repr(n[:40]) for n in unknown)}",
+                throttle_duration_sec=10.0,
+            )
 
     def latest_joint_state(self) -> dict[str, float]:
         with self._joints_lock:
@@ -262,7 +442,7 @@ class PlanningNode(Node):
 
     def _on_scene_obstacle(self, msg: SceneObstacle) -> None:
         try:
-            self._scene.apply([msg], clear=False, frame=self._param("planning_frame"))
+            self._scene.apply([msg], clear=False, frame=self.settings.planning_frame)
         except errors.MaruError as exc:
             self.get_logger().warning(f"ignoring /planning_scene_obstacles update: {exc}")
             return
@@ -277,7 +457,7 @@ class PlanningNode(Node):
     def _publish_markers(self) -> None:
         if self._marker_pub.get_subscription_count() == 0:
             return
-        frame = self._param("planning_frame")
+        frame = self.settings.planning_frame
         markers = scene_markers(self._scene.snapshot()[0], frame, self.get_clock().now().to_msg())
         with self._marker_lock:
             if self._last_plan_markers is not None:
@@ -290,7 +470,8 @@ class PlanningNode(Node):
         started = time.perf_counter()
         try:
             motion_request = self._motion_request(request)
-            result = await self._in_worker(_plan_in_context, motion_request)
+            deadline = time.monotonic() + motion_request.time_budget
+            result = await self._in_worker(_plan_in_context, motion_request, deadline)
         except Exception as exc:  # noqa: BLE001 - every failure becomes an error code
             response.error = conv.error_msg(exc, source="node")
             self._log_failure("plan_motion", response.error)
@@ -302,12 +483,12 @@ class PlanningNode(Node):
             self._log_failure("plan_motion", response.error)
             return response
         stamp = self.get_clock().now().to_msg()
-        response.trajectory = conv.trajectory_msg(result.trajectory, self._param("planning_frame"), stamp)
+        response.trajectory = conv.trajectory_msg(result.trajectory, self.settings.planning_frame, stamp)
         # publishing (and marker FK) happens after the answer has gone out
         self.executor.create_task(self._publish_plan, response.trajectory, result.trajectory, motion_request.start)
         self.get_logger().info(
-            f"plan_motion {request.group or self._param('default_group')} "
-            f"{response.stats.planner_id}: {len(response.trajectory.points)} points, "
+            f"plan_motion {motion_request.group} {response.stats.planner_id}: "
+            f"{len(response.trajectory.points)} points, "
             f"core {response.planning_time:.3f} s, in node {time.perf_counter() - started:.3f} s"
         )
         return response
@@ -323,14 +504,15 @@ class PlanningNode(Node):
                 )
             self._publish_markers()
 
-    def _motion_request(self, request: PlanMotion.Request):
+    def _motion_request(self, request: PlanMotion.Request) -> MotionRequest:
         """Core ``MotionRequest`` of a ``PlanMotion`` request (raises typed errors for bad fields)."""
+        settings = self.settings
         budget = float(request.allowed_planning_time)
         if not math.isfinite(budget) or budget <= 0.0:
             raise errors.InvalidRequest(f"allowed_planning_time must be > 0 s, got {budget}")
-        if budget > self._param("max_planning_time"):
+        if budget > settings.max_planning_time:
             raise errors.InvalidRequest(
-                f"allowed_planning_time {budget} s exceeds max_planning_time {self._param('max_planning_time')} s"
+                f"allowed_planning_time {budget} s exceeds max_planning_time {settings.max_planning_time} s"
             )
         start = self._start_state(request.start_state)
         goal_joints = None
@@ -338,20 +520,20 @@ class PlanningNode(Node):
             goal_joints = conv.named_values(request.goal_joint_names, request.goal_positions, "goal")
         goal_poses = None
         if request.goal_poses or request.goal_links:
-            goal_poses = conv.pose_goals(request.goal_poses, request.goal_links, self._param("planning_frame"))
+            goal_poses = conv.pose_goals(request.goal_poses, request.goal_links, settings.planning_frame)
         if goal_joints is None and goal_poses is None:
             raise errors.InvalidRequest("no goal: give goal_joint_names + goal_positions or goal_poses + goal_links")
         if goal_joints is not None and goal_poses is not None:
             raise errors.InvalidRequest("give either a joint goal or pose goals, not both")
         return MotionRequest(
-            group=request.group or self._param("default_group"),
+            group=request.group or settings.default_group,
             start=start,
             goal_joints=goal_joints,
             goal_poses=goal_poses,
-            planner_id=request.planner_id or self._param("default_planner"),
+            planner_id=request.planner_id or self.config.default_planner,
             time_budget=budget,
             seed=None if request.seed < 0 else int(request.seed),
-            attempts=int(request.num_attempts) if request.num_attempts > 0 else self._param("default_attempts"),
+            attempts=int(request.num_attempts) if request.num_attempts > 0 else settings.default_attempts,
             velocity_scaling=_scaling(request.max_velocity_scaling_factor, "max_velocity_scaling_factor"),
             acceleration_scaling=_scaling(request.max_acceleration_scaling_factor, "max_acceleration_scaling_factor"),
         )
@@ -366,13 +548,14 @@ class PlanningNode(Node):
 
     async def _on_compute_ik(self, request: ComputeIK.Request, response: ComputeIK.Response):
         try:
-            targets = conv.pose_goals(request.poses, request.links, self._param("planning_frame"))
+            targets = conv.pose_goals(request.poses, request.links, self.settings.planning_frame)
             if not targets:
                 raise errors.InvalidRequest("no poses: give poses + links")
             seed, strict = self._ik_seed(request.seed_state)
-            timeout = request.timeout if request.timeout > 0 else self._param("ik_timeout")
-            group = request.group or self._param("default_group")
-            q = await self._in_worker(_ik_in_context, group, targets, seed, strict, timeout, request.avoid_collisions)
+            timeout = request.timeout if request.timeout > 0 else self.settings.ik_timeout
+            group = request.group or self.settings.default_group
+            deadline = time.monotonic() + timeout
+            q = await self._in_worker(_ik_in_context, group, targets, seed, strict, deadline, request.avoid_collisions)
         except Exception as exc:  # noqa: BLE001
             response.error = conv.error_msg(exc, source="node")
             self._log_failure("compute_ik", response.error)
@@ -390,7 +573,7 @@ class PlanningNode(Node):
     def _on_apply_scene(self, request: ApplyScene.Request, response: ApplyScene.Response):
         try:
             response.obstacle_names = self._scene.apply(
-                list(request.obstacles), clear=request.clear, frame=self._param("planning_frame")
+                list(request.obstacles), clear=request.clear, frame=self.settings.planning_frame
             )
         except Exception as exc:  # noqa: BLE001
             response.error = conv.error_msg(exc, source="scene")
@@ -403,7 +586,7 @@ class PlanningNode(Node):
 
     def _on_get_scene(self, _request: GetScene.Request, response: GetScene.Response):
         scene_dict, _ = self._scene.snapshot()
-        frame = self._param("planning_frame")
+        frame = self.settings.planning_frame
         response.obstacles = [conv.obstacle_to_msg(o, frame) for o in scene_dict.get("obstacles", [])]
         response.scene_yaml = Scene.from_dict(scene_dict).to_yaml()
         return response
@@ -412,8 +595,24 @@ class PlanningNode(Node):
         self.get_logger().warning(f"{service}: {conv.code_name(error.code)}: {error.message}")
 
     def destroy_node(self):
-        self._workers.shutdown(wait=False, cancel_futures=True)
+        with self._pool_lock:
+            self._pool.close()
         return super().destroy_node()
+
+
+def _checked_config(build: Callable[[], PlannerConfig]) -> PlannerConfig:
+    """``build()``; a value PlannerConfig refuses becomes InvalidParameter (naming it)."""
+    try:
+        return build()
+    except ValueError as exc:
+        raise errors.InvalidParameter(str(exc)) from None
+
+
+def _check_group(robot: RobotModel, group: str) -> None:
+    if group not in robot.groups:
+        raise errors.InvalidParameter(
+            f"parameter 'default_group' = {group!r} is not a group of the robot; known: {', '.join(robot.groups)}"
+        )
 
 
 def _scaling(value: float, field: str) -> float:
@@ -424,34 +623,41 @@ def _scaling(value: float, field: str) -> float:
     return float(value)
 
 
-def _plan_in_context(context: PlanningContext, motion_request):
-    return context.planner.plan(motion_request)
+def _time_left(deadline: float, budget_name: str) -> float:
+    """Seconds to ``deadline``; PlanningTimedOut if the request used its budget waiting for a worker."""
+    left = deadline - time.monotonic()
+    if left <= 0.0:
+        raise errors.PlanningTimedOut(f"the {budget_name} ran out while the request waited for a worker", source="node")
+    return left
 
 
-def _ik_in_context(context: PlanningContext, group, targets, seed, strict, timeout, avoid_collisions) -> np.ndarray:
+def _plan_in_context(context: PlanningContext, motion_request: MotionRequest, deadline: float):
+    budget = _time_left(deadline, "allowed_planning_time")
+    return context.planner.plan(dataclasses.replace(motion_request, time_budget=budget))
+
+
+def _ik_in_context(context: PlanningContext, group, targets, seed, strict, deadline, avoid_collisions) -> np.ndarray:
+    _time_left(deadline, "IK timeout")
     robot = context.robot
     q_seed = conv.configuration(robot, seed, strict=strict)
     is_valid = context.checker.is_valid if avoid_collisions else None
-    return solve_ik(robot, targets, q_seed, group, deadline=time.monotonic() + timeout, is_valid=is_valid)
+    return solve_ik(robot, targets, q_seed, group, deadline=deadline, is_valid=is_valid)
 
 
 class BackgroundPlanningNode:
     """``planning_node`` spun by its own executor in a daemon thread of this process.
 
     For demos and scripts that want the node without a subprocess; rclpy must already be
-    initialised (after ``configure_loopback_dds()``). Keyword arguments override parameters::
+    initialised. Keyword arguments override parameters::
 
         with BackgroundPlanningNode(default_planner="PRM", scene_file="none") as planning:
             ...  # call its services, e.g. with maru_planner.ros.planning_client.PlanningClient
     """
 
-    def __init__(self, namespace: str = "", **parameters):
-        from rclpy.parameter import Parameter
-
-        overrides = [Parameter(name, value=value) for name, value in parameters.items()]
-        self.node = PlanningNode(namespace=namespace, parameter_overrides=overrides)
-        threads = max(2, self.node.get_parameter("executor_threads").value)
-        self.executor = MultiThreadedExecutor(num_threads=threads)
+    def __init__(self, namespace: str = "", **overrides: Any):
+        parameter_overrides = [Parameter(name, value=value) for name, value in overrides.items()]
+        self.node = PlanningNode(namespace=namespace, parameter_overrides=parameter_overrides)
+        self.executor = MultiThreadedExecutor(num_threads=self.node.settings.executor_threads)
         self.executor.add_node(self.node)
         self._thread = threading.Thread(target=self.executor.spin, name="planning_node", daemon=True)
         self._thread.start()
@@ -468,24 +674,38 @@ class BackgroundPlanningNode:
         self.stop()
 
 
-def main(args=None) -> None:
-    """Entry point of ``ros2 run maru_planner planning_node`` (and ``python -m``)."""
-    configure_loopback_dds()
-    rclpy.init(args=args)
-    node = None
+def main(args: list[str] | None = None) -> int:
+    """Entry point of ``ros2 run maru_planner planning_node`` (and ``python -m``); exit code 2 on bad start-up input."""
+    network = network_from_environment()
+    logger = rclpy.logging.get_logger(NODE_NAME)
+    try:
+        rclpy.init(args=args)
+    except RuntimeError as exc:  # rcl's RCLError, e.g. a params file that is not valid YAML
+        logger.fatal(f"cannot start: {_one_line(exc)}")
+        return 2
     try:
         node = PlanningNode()
-        executor = MultiThreadedExecutor(num_threads=max(2, node.get_parameter("executor_threads").value))
-        executor.add_node(node)
+    except (errors.MaruError, OSError, ValueError) as exc:  # parameters, robot or scene files
+        logger.fatal(f"cannot start: {_one_line(exc)}")
+        rclpy.try_shutdown()
+        return 2
+    node.get_logger().info(network)
+    executor = MultiThreadedExecutor(num_threads=node.settings.executor_threads)
+    executor.add_node(node)
+    try:
         executor.spin()
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
-        if node is not None:
-            node.destroy_node()
-        if rclpy.ok():
-            rclpy.try_shutdown()
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+def _one_line(exc: BaseException, limit: int = 300) -> str:
+    text = " ".join(str(exc).split()) or type(exc).__name__
+    return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())
