@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 import pytest
 from planning_toys import BoxWorldChecker, ToyRobot, maze_checker
@@ -121,6 +123,14 @@ def test_tiny_velocity_scaling_stays_within_the_point_cap(method):
     assert traj.duration > 1e4  # 1e-4 of the speed: the motion really is that slow
     assert_within_limits(traj, limits, jerk=method == "ruckig")
     assert np.array_equal(traj.positions[-1], ZIGZAG[-1])
+
+
+@pytest.mark.parametrize("method", ["toppra", "ruckig"])
+def test_past_the_deadline_no_blend_is_certified_and_every_corner_stops(method):
+    traj, report = parameterize(ZIGZAG, method, deadline=time.monotonic() - 1.0)
+    assert report.method == method and report.blends == 0 and report.stops == 3
+    assert timing.deviation_from_path(traj.positions, ZIGZAG).max() <= 1e-9
+    assert_within_limits(traj, LIMITS3, jerk=method == "ruckig")
 
 
 def test_zero_deviation_means_rest_at_every_corner():

@@ -237,7 +237,7 @@ class MotionPlanner:
             stats.collision_checks = int(self.checker.check_count - checks0)
 
         t_par = time.monotonic()
-        result.trajectory = self._time_parameterize(req, method, path, start_full, indices, stats)
+        result.trajectory = self._time_parameterize(req, method, path, start_full, indices, deadline, stats)
         stats.parameterize_time = time.monotonic() - t_par
         result.path = path
         stats.waypoints = len(path)
@@ -253,8 +253,12 @@ class MotionPlanner:
             f"trajectory {result.trajectory.duration:.2f} s ({stats.time_parameterization})"
         )
 
-    def _time_parameterize(self, req, method: str, path, start_full, indices, stats: PlanStats) -> Trajectory:
-        """``path`` timed by ``method`` (:mod:`~maru_planner.planning.timing`); blends re-checked on the exact model."""
+    def _time_parameterize(self, req, method: str, path, start_full, indices, deadline, stats) -> Trajectory:
+        """``path`` timed by ``method`` (:mod:`~maru_planner.planning.timing`); blends re-checked on the exact model.
+
+        Blends still unchecked at ``deadline`` (the request's budget) become stops, so a tight budget
+        gets a slower trajectory rather than a timeout.
+        """
         checker = self.exact_checker or self.checker
 
         def curve_free(states: np.ndarray) -> bool:
@@ -278,6 +282,7 @@ class MotionPlanner:
             max_deviation=self.config.blend_deviation,
             dt=self.config.trajectory_dt,
             max_points=self.config.max_trajectory_points,
+            deadline=deadline,
         )
         stats.time_parameterization = report.method
         return trajectory

@@ -7,6 +7,7 @@ is at most the requested deviation (and ``l`` at most half of either adjacent se
 straight parts of the blended curve lie on the certified path; every blend is re-checked with
 ``curve_free`` at a joint step of :data:`CERTIFY_STEP`. A blend that collides is retried with a
 quarter of its deviation, twice; then the motion stops at that corner (the path is split there).
+Past an optional deadline no blend is certified any more, so the corners left stop.
 
 ``toppra`` computes the time-optimal path velocity along the blended curve under
 ``velocity × scaling`` and ``acceleration × scaling`` (TOPP-RA, constant path acceleration
@@ -226,11 +227,13 @@ def parameterize(
     max_deviation: float,
     dt: float = 0.05,
     max_points: int = 10_000,
+    deadline: float | None = None,
 ) -> tuple[Trajectory, TimingReport]:
     """Trajectory through ``path`` (rows: group configurations) by ``method`` (module doc).
 
     ``curve_free(Q)`` is True when every row of ``Q`` is collision-free; it re-checks blends.
-    ``max_deviation`` (rad) bounds the distance of the blended curve from each corner.
+    ``max_deviation`` (rad) bounds the distance of the blended curve from each corner. After
+    ``deadline`` (``time.monotonic()``) no more blends are checked: the corners left stop.
     """
     if method not in METHODS:
         raise errors.InvalidRequest(f"time_parameterization must be one of {', '.join(METHODS)}, got {method!r}")
@@ -243,11 +246,21 @@ def parameterize(
         return _trapezoid(waypoints, joint_names, limits, dt, max_points), TimingReport("trapezoid")
     try:
         build = _toppra if method == "toppra" else _ruckig
-        sections, report = build(waypoints, limits, curve_free, max_deviation)
+        checked = curve_free if deadline is None else _until(deadline, curve_free)
+        sections, report = build(waypoints, limits, checked, max_deviation)
     except _ParameterizationFailed as exc:
         report = TimingReport("trapezoid", fallbacks=[f"{method}: {exc}"])
         return _trapezoid(waypoints, joint_names, limits, dt, max_points), report
     return _sample(sections, joint_names, waypoints[-1], dt, max_points), report
+
+
+def _until(deadline: float, curve_free: CurveFree) -> CurveFree:
+    """``curve_free`` that answers False (not certified) once ``deadline`` has passed."""
+
+    def free(states: np.ndarray) -> bool:
+        return time.monotonic() < deadline and curve_free(states)
+
+    return free
 
 
 def _distinct(path: np.ndarray) -> np.ndarray:
@@ -288,7 +301,7 @@ def _certified_half_lengths(
             report.certify_checks += len(samples)
             if curve_free(samples):
                 break
-            report.fallbacks.append(f"blend at waypoint {k} collides at deviation {deviation:.3g} rad")
+            report.fallbacks.append(f"blend at waypoint {k} not certified at deviation {deviation:.3g} rad")
             half[k] = 0.0
             deviation /= BLEND_SHRINK if attempt < BLEND_RETRIES else 1.0
     report.certify_time += time.monotonic() - t0
@@ -459,7 +472,7 @@ def _ruckig(waypoints, limits: Limits, curve_free: CurveFree, max_deviation: flo
             break
         last = attempt >= BLEND_RETRIES
         for k in failing:
-            report.fallbacks.append(f"ruckig blend at waypoint {k} collides or deviates at {deviation[k]:.3g} rad")
+            report.fallbacks.append(f"ruckig blend at waypoint {k} not certified at deviation {deviation[k]:.3g} rad")
             deviation[k] = 0.0 if last else deviation[k] / BLEND_SHRINK
     else:
         raise _ParameterizationFailed(f"ruckig: no certified motion near waypoint(s) {failing}, even at rest there")
