@@ -237,7 +237,7 @@ class MotionPlanner:
             stats.collision_checks = int(self.checker.check_count - checks0)
 
         t_par = time.monotonic()
-        result.trajectory = self._time_parameterize(req, method, path, start_full, indices, deadline, stats)
+        result.trajectory = self._time_parameterize(req, method, path, start_full, indices, stats, deadline)
         stats.parameterize_time = time.monotonic() - t_par
         result.path = path
         stats.waypoints = len(path)
@@ -253,11 +253,11 @@ class MotionPlanner:
             f"trajectory {result.trajectory.duration:.2f} s ({stats.time_parameterization})"
         )
 
-    def _time_parameterize(self, req, method: str, path, start_full, indices, deadline, stats) -> Trajectory:
+    def _time_parameterize(self, req, method: str, path, start_full, indices, stats, deadline=None) -> Trajectory:
         """``path`` timed by ``method`` (:mod:`~maru_planner.planning.timing`); blends re-checked on the exact model.
 
-        Blends still unchecked at ``deadline`` (the request's budget) become stops, so a tight budget
-        gets a slower trajectory rather than a timeout.
+        Blends still unchecked at ``deadline`` (the request's budget; None: no limit) become stops, so a
+        tight budget gets a slower trajectory rather than a timeout.
         """
         checker = self.exact_checker or self.checker
 
