@@ -6,6 +6,7 @@ import time
 
 import numpy as np
 import pytest
+import toppra.algorithm
 from planning_toys import BoxWorldChecker, ToyRobot, maze_checker
 
 from maru_planner import errors
@@ -122,6 +123,15 @@ def test_tiny_velocity_scaling_stays_within_the_point_cap(method):
     assert len(traj.times) <= 500
     assert traj.duration > 1e4  # 1e-4 of the speed: the motion really is that slow
     assert_within_limits(traj, limits, jerk=method == "ruckig")
+    assert np.array_equal(traj.positions[-1], ZIGZAG[-1])
+
+
+@pytest.mark.parametrize("method", ["toppra", "ruckig"])
+def test_when_toppra_fails_numerically_the_trapezoids_are_used(method, monkeypatch):
+    monkeypatch.setattr(toppra.algorithm.TOPPRA, "compute_parameterization", lambda *args, **kw: (None, None, None))
+    traj, report = parameterize(ZIGZAG, method)
+    assert report.method == "trapezoid" and report.fallbacks and "toppra" in report.fallbacks[0]
+    assert_within_limits(traj, LIMITS3)
     assert np.array_equal(traj.positions[-1], ZIGZAG[-1])
 
 
