@@ -536,6 +536,8 @@ class PlanningNode(Node):
             attempts=int(request.num_attempts) if request.num_attempts > 0 else settings.default_attempts,
             velocity_scaling=_scaling(request.max_velocity_scaling_factor, "max_velocity_scaling_factor"),
             acceleration_scaling=_scaling(request.max_acceleration_scaling_factor, "max_acceleration_scaling_factor"),
+            time_parameterization=request.time_parameterization,
+            jerk_scaling=_scaling(request.max_jerk_scaling_factor, "max_jerk_scaling_factor"),
         )
 
     def _start_state(self, msg: JointState) -> dict[str, float]:
