@@ -137,6 +137,15 @@ def test_on_set_applies_checked_changes_and_rejects_the_rest_with_a_reason(make_
     assert len(applied) == 2
 
 
+def test_an_optional_parameter_cannot_be_unset_at_run_time(make_node):
+    node = make_node(verify_resolution=0.01)
+    parameters.declare_parameters(node, SPECS)
+    parameters.add_on_set_parameters_callback(node, SPECS, lambda changes: None)
+    result = node.set_parameters([Parameter("verify_resolution", Parameter.Type.NOT_SET)])[0]
+    assert not result.successful and "cannot be unset" in result.reason
+    assert node.has_parameter("verify_resolution") and node.get_parameter("verify_resolution").value == 0.01
+
+
 def test_prefixed_specs_are_declared_under_their_namespace(make_node):
     planner = {"goal_bias": ParamSpec("goal_bias", 0.05, "goal sampling share", lower=0.0, upper=1.0)}
     specs = parameters.prefixed(planner, "planners.RRT")

@@ -160,6 +160,9 @@ def add_on_set_parameters_callback(
     """
 
     def on_set(changed: list[Parameter]) -> SetParametersResult:
+        unset = [p.name for p in changed if p.name in specs and p.type_ == Parameter.Type.NOT_SET]
+        if unset:  # rclpy would undeclare them
+            return SetParametersResult(successful=False, reason=f"parameter {unset[0]!r} cannot be unset at run time")
         try:
             accepted = {p.name: _checked(specs[p.name], p.value) for p in changed if p.name in specs}
             if accepted:

@@ -487,7 +487,7 @@ class PlanningNode(Node):
         # publishing (and marker FK) happens after the answer has gone out
         self.executor.create_task(self._publish_plan, response.trajectory, result.trajectory, motion_request.start)
         self.get_logger().info(
-            f"plan_motion {motion_request.group} {response.stats.planner_id}: "
+            f"plan_motion {motion_request.group} {response.stats.planner_id} on {result.stats.collision_model}: "
             f"{len(response.trajectory.points)} points, "
             f"core {response.planning_time:.3f} s, in node {time.perf_counter() - started:.3f} s"
         )
