@@ -11,6 +11,8 @@ from planning_toys import BoxWorldChecker, ToyRobot, maze_checker
 
 from maru_planner import errors
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig, PlanStatus, timing
+from maru_planner.planning.problems import PROBLEMS
+from maru_planner.ros.planning_conversions import code_name, duration_seconds
 
 TOL = 1e-6
 NAMES3 = ["a", "b", "c"]
@@ -228,3 +230,59 @@ def test_the_planner_caps_the_points_of_a_very_slow_trajectory():
 def test_bad_time_parameterization_fields_are_invalid_requests(field, value):
     result = maze_planner().plan(maze_request(**{field: value}))
     assert result.status is PlanStatus.INVALID_REQUEST and field in result.message
+
+
+# --- through planning_node (PlanMotion.time_parameterization) ------------------------------------
+MARU13_JOINTS = ["waist_yaw"] + [f"r_arm_j{i}" for i in range(1, 7)] + [f"l_arm_j{i}" for i in range(1, 7)]
+MARU1_JERK = float(timing.default_jerk_limits([4.0])[0])  # every Maru-1 joint: 4 rad/s² -> 40 rad/s³
+
+
+@pytest.fixture(scope="module")
+def plan_motion(node_process, rclpy_session):
+    """Send the paper's 13-DOF problem (seed 3, so always the same path) to a running planning_node."""
+    from conftest import SpinningNode
+
+    from maru_planner.paths import config_path
+    from maru_planner.ros.planning_client import PlanningClient, plan_request
+
+    args = ["--ros-args", "--params-file", str(config_path("planner.yaml"))]
+    node = node_process("maru_planner.ros.planning_node", args)
+    tester = SpinningNode("trajectory_tests")
+    client = PlanningClient(node=tester.node)
+    assert client.plan_client.wait_for_service(timeout_sec=120.0), node.log()
+    client.wait_until_ready(timeout=120.0)
+    problem = PROBLEMS["maru13"]
+
+    def send(**fields):
+        request = plan_request(problem.goal_dict(MARU13_JOINTS), start=problem.start_dict(MARU13_JOINTS),
+                               planner_id="RRTConnect", time_budget=20.0, seed=3)  # fmt: skip
+        for name, value in fields.items():
+            setattr(request, name, value)
+        return client.call(client.plan_client, request, 60.0)
+
+    yield send
+    tester.destroy()
+    assert node.alive(), "planning_node died:\n" + node.log()
+
+
+def _duration(response) -> float:
+    return duration_seconds(response.trajectory.points[-1].time_from_start)
+
+
+@pytest.mark.ros
+def test_plan_motion_times_by_the_requested_method_and_defaults_to_toppra(plan_motion):
+    from maru_planner_interfaces.msg import PlanningError
+
+    default, trapezoid = plan_motion(), plan_motion(time_parameterization="trapezoid")
+    ruckig_response = plan_motion(time_parameterization="ruckig", max_jerk_scaling_factor=0.5)
+    for response in (default, trapezoid, ruckig_response):
+        assert response.error.code == PlanningError.SUCCESS, code_name(response.error.code) + response.error.message
+    assert _duration(default) < 0.9 * _duration(trapezoid)  # the same path (seed 3), blended corners
+    points = ruckig_response.trajectory.points
+    times = np.array([duration_seconds(p.time_from_start) for p in points])
+    accelerations = np.array([p.accelerations for p in points])
+    jerk = np.abs(np.diff(accelerations, axis=0)) / np.diff(times)[:, None]
+    assert np.max(jerk) / (0.5 * MARU1_JERK) <= 1 + 1e-6
+
+    bad = plan_motion(time_parameterization="bang-bang")
+    assert bad.error.code == PlanningError.INVALID_REQUEST and "time_parameterization" in bad.error.message
