@@ -135,6 +135,19 @@ def chord_deviation(times: np.ndarray, acceleration_bound: np.ndarray) -> np.nda
     return np.abs(np.asarray(acceleration_bound, dtype=float)) * dt * dt / 8.0
 
 
+def polyline_deviation(samples: np.ndarray) -> np.ndarray:
+    """Per joint, how far a curve leaves the chords between ``samples`` taken at equal parameter steps.
+
+    Exact for a curve whose second derivative is constant between samples (a parabolic blend: its second
+    differences are that derivative times the step squared, and a chord is off by an eighth of it); for
+    other smooth curves sampled finely, an estimate. Pass it as ``deviation`` to ``certify_path``.
+    """
+    samples = np.atleast_2d(np.asarray(samples, dtype=float))
+    if len(samples) < 3:
+        return np.zeros(samples.shape[1])
+    return np.abs(np.diff(samples, n=2, axis=0)).max(axis=0) / 8.0
+
+
 @dataclass
 class _Pairs:
     """The checker's pairs as arrays, for one geometry model (rebuilt when the scene changes)."""
@@ -221,6 +234,8 @@ class PathCertifier:
         self._rot = np.empty((self._model.njoints, 3, 3))
         self._pos = np.empty((self._model.njoints, 3))
         self._pairs: _Pairs | None = None
+        # Compile (or load from numba's cache) the kernel now: inside the first request it took ~1.5 s of its budget.
+        self._bounds_centers(np.asarray(robot.neutral(), dtype=float)[None])
 
     # ---------------------------------------------------------------- public --
     def certify_segment(
@@ -307,10 +322,15 @@ class PathCertifier:
         run.a = np.concatenate([run.a[keep], mid[keep] + reach[keep]])
         run.b = np.concatenate([mid[keep] - reach[keep], run.b[keep]])
 
-    def _bounds(self, configs: np.ndarray, pairs: _Pairs, config_of: np.ndarray, pair: np.ndarray) -> np.ndarray:
-        """Bounding-volume lower bound of each row's pair distance at its configuration."""
+    def _bounds_centers(self, configs: np.ndarray) -> np.ndarray:
+        """World centres of the robot geometries' bounding spheres at each configuration."""
         centers = np.empty((len(configs), self._n_robot, 3))
         _geometry_centers_nb(configs, *self._tree, self._joint, self._local, self._rot, self._pos, centers)
+        return centers
+
+    def _bounds(self, configs: np.ndarray, pairs: _Pairs, config_of: np.ndarray, pair: np.ndarray) -> np.ndarray:
+        """Bounding-volume lower bound of each row's pair distance at its configuration."""
+        centers = self._bounds_centers(configs)
         first, second, obstacle = pairs.first[pair], pairs.second[pair], pairs.obstacle[pair]
         bound = np.empty(len(pair))
         env = np.flatnonzero(obstacle)
@@ -432,6 +452,7 @@ def certify_and_repair(
     local_planner: LocalPlanner,
     deadline: float,
     *,
+    margin: float | None = None,
     max_repairs: int = 3,
     certify_deadline: float | None = None,
 ) -> CertifiedPath:
@@ -439,12 +460,13 @@ def certify_and_repair(
 
     ``local_planner(qa, qb, margin, deadline)`` returns full configurations from ``qa`` to ``qb`` (None if it
     finds none); its path is certified like the rest. A failing segment is re-planned between the nearest
-    waypoints around it that keep the margin. A start or goal closer than ``safety_margin`` lowers the
-    margin of this path to half its clearance (nothing nearer can be certified). Repairs stop at
-    ``deadline``; certification itself at ``certify_deadline`` (None: no limit).
+    waypoints around it that keep the margin. ``margin`` (m; None = ``certifier.safety_margin``): a start or
+    goal closer than that lowers the margin of this path to half its clearance (nothing nearer can be
+    certified). Repairs stop at ``deadline``; certification itself at ``certify_deadline`` (None: no limit).
     """
     path = np.atleast_2d(np.asarray(path, dtype=float))
-    margin, done, repairs, relaxed = certifier.safety_margin, 0, 0, False
+    margin = certifier.safety_margin if margin is None else float(margin)
+    done, repairs, relaxed = 0, 0, False
     total = Certificate(valid=False, margin=margin)
     while True:
         cert = certifier.certify_path(path[done:], certify_deadline, margin=margin)

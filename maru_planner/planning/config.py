@@ -58,7 +58,8 @@ class PlannerConfig:
     )
     max_refinements: int = param(
         2,
-        "re-plans at half the previous resolution after a path fails the exact re-check (same budget)",
+        "re-plans after a path fails the exact re-check, in the same budget: local repairs of the failing "
+        "segment when certifying, else whole re-plans at half the previous resolution",
         lower=0,
         upper=20,
     )
@@ -80,6 +81,21 @@ class PlannerConfig:
         "most samples in a trajectory: the sample period grows past trajectory_dt when a slow motion needs more",
         lower=2,
         upper=1_000_000,
+    )
+    certify: bool = param(
+        True,
+        "prove every returned arm path collision-free on the exact model and repair failing segments "
+        "(docs/certification.md); false = discrete checks only",
+    )
+    safety_margin: float = param(
+        0.01,
+        "clearance (m) a certified path keeps from every obstacle and checked link pair (MoveIt's padding); "
+        "a start or goal closer than that lowers it to half their clearance",
+        lower=0.0,
+        upper=0.5,
+    )
+    certify_timeout: float = param(
+        1.0, "longest certification (s) of one plan, past the request's time budget if need be", lower=1e-3, upper=60.0
     )
 
     def __post_init__(self) -> None:

@@ -13,6 +13,8 @@ requests therefore queue; a node wanting parallel planning would need separate p
 from __future__ import annotations
 
 import contextlib
+import dataclasses
+import itertools
 import math
 import secrets
 import threading
@@ -26,7 +28,12 @@ from ompl import util as ou
 
 from maru_planner import errors
 from maru_planner.planning import postprocess, timing
-from maru_planner.planning.checkers import collision_model_of, default_exact_checker, make_checkers
+from maru_planner.planning.checkers import (
+    collision_model_of,
+    default_exact_checker,
+    is_sphere_checker,
+    make_checkers,
+)
 from maru_planner.planning.config import PlannerConfig
 from maru_planner.planning.pose_goal import solve_pose_goal
 from maru_planner.planning.registry import (
@@ -84,6 +91,12 @@ class MotionPlanner:
     ``config.verify_step`` rad; a path that fails is re-planned at half the motion resolution in the
     time left, up to ``config.max_refinements`` times, and never returned as a success.
     ``stats.verified``, ``verify_time`` and ``replans`` say how that went.
+
+    With a pinocchio robot (``config.certify``, the default) every returned path is certified instead
+    (``docs/certification.md``): proven collision-free on the exact model between its waypoints, keeping
+    ``safety_margin``; a failing segment is re-planned locally, up to ``max_refinements`` times in the time
+    left, before the request fails. ``stats.certified``, ``certify_time``, ``min_clearance`` and ``repairs``
+    report it (on a sphere checker ``verified``/``verify_time``/``replans`` too).
     """
 
     def __init__(self, robot, checker, config: PlannerConfig | None = None, scene=None, exact_checker=None):
@@ -93,6 +106,7 @@ class MotionPlanner:
         if exact_checker is None:
             exact_checker = default_exact_checker(robot, checker)
         self.exact_checker = exact_checker  # None: the plan's own checker is the exact model
+        self.certifier = self._make_certifier()
         self._lock = threading.RLock()
         self._scene_epoch = 0
         self._roadmaps: dict[tuple, Roadmap] = {}
@@ -126,7 +140,9 @@ class MotionPlanner:
         t0 = time.monotonic()
         with self._lock:
             result = self._plan_once(request, t0, self.config.resolution)
-            if self.exact_checker is not None:
+            if self.certifier is not None:
+                result = self._certify(request, result, t0)
+            elif self.exact_checker is not None:
                 result = self._verify(request, result, t0)
         result.stats.total_time = time.monotonic() - t0
         return result
@@ -147,6 +163,90 @@ class MotionPlanner:
             result.message = f"internal error: {type(exc).__name__}: {exc}"
             result.error = exc
         return result
+
+    # --- certification (docs/certification.md) -----------------------------------------------
+    def _make_certifier(self):
+        """A PathCertifier on the exact model, or None (certification off, or no pinocchio geometry to prove on)."""
+        exact = self.exact_checker or self.checker
+        if not self.config.certify or not hasattr(exact, "geometry_model"):
+            return None
+        # lazy: certification loads numba (batched kinematics); planners on toy checkers never need it
+        from maru_planner.collision.certify import PathCertifier
+
+        return PathCertifier(self.robot, exact, self.config.safety_margin)
+
+    def _certify(self, request: MotionRequest, result: MotionResult, t0: float) -> MotionResult:
+        """Certify ``result``'s path; repair failing segments locally in the time left, else fail the request."""
+        from maru_planner.collision.certify import certify_and_repair  # loaded by _make_certifier already
+
+        if not result.success:
+            return result
+        stats = result.stats
+        repaired = certify_and_repair(
+            self.certifier,
+            self._full_path(request, result),
+            self._repair_planner(request, stats.seed or 0),
+            t0 + float(request.time_budget),
+            margin=_safety_margin(request, self.config),
+            max_repairs=self.config.max_refinements,
+            certify_deadline=time.monotonic() + self.config.certify_timeout,
+        )
+        certificate = repaired.certificate
+        stats.certified, stats.repairs = repaired.path is not None, repaired.repairs
+        stats.certify_time, stats.min_clearance = certificate.seconds, certificate.min_clearance
+        if is_sphere_checker(self.checker):
+            _record_verification(result, certificate, repaired.repairs)
+        if repaired.path is None:
+            _set_error(result, errors.PlanningFailed(
+                f"path failed verification on the exact model: segment {certificate.first_failing_segment} "
+                f"not certified ({certificate.reason}) after {repaired.repairs} repair(s)",
+                source="planner",
+            ))  # fmt: skip
+            result.path, result.trajectory = None, None
+        elif repaired.repairs:
+            self._replace_path(request, result, repaired.path, t0 + float(request.time_budget))
+        return result
+
+    def _repair_planner(self, request: MotionRequest, seed: int):
+        """The local planner of a repair: RRTConnect between two waypoints of the request's group.
+
+        It plans on the exact model padded by the margin, at the verification step (``config.verify_step``).
+        """
+        from maru_planner.collision import CollisionChecker  # lazy like make_checkers: exact model only
+
+        config = dataclasses.replace(
+            self.config, resolution=self.config.verify_step, certify=False, time_parameterization="trapezoid"
+        )
+        names = self.robot.joint_names
+        group = [names[i] for i in self.robot.group_joint_indices(request.group)]
+        attempt = itertools.count(1)
+
+        def plan_between(qa: np.ndarray, qb: np.ndarray, margin: float, deadline: float) -> np.ndarray | None:
+            checker = CollisionChecker(self.robot, self.certifier.checker.scene, padding=margin)
+            local = MotionPlanner(self.robot, checker, config)
+            sub = MotionRequest(
+                request.group, start=dict(zip(names, qa, strict=True)),
+                goal_joints={n: float(qb[names.index(n)]) for n in group}, planner_id="RRTConnect",
+                time_budget=max(deadline - time.monotonic(), 1e-3), seed=seed + next(attempt),
+            )  # fmt: skip
+            found = local.plan(sub)
+            return local._full_path(sub, found) if found.success else None
+
+        return plan_between
+
+    def _replace_path(self, request: MotionRequest, result: MotionResult, full_path: np.ndarray, deadline) -> None:
+        """Make the repaired ``full_path`` the result's path: new waypoints, trajectory and path statistics."""
+        stats = result.stats
+        indices = [self.robot.joint_names.index(n) for n in result.joint_names]
+        path = full_path[:, indices]
+        method = request.time_parameterization or self.config.time_parameterization
+        t_par = time.monotonic()
+        result.trajectory = self._time_parameterize(request, method, path, full_path[0], indices, stats, deadline)
+        stats.parameterize_time += time.monotonic() - t_par
+        result.path = path
+        stats.waypoints = len(path)
+        stats.path_length = postprocess.path_length(path)
+        stats.smoothness = postprocess.smoothness(path)
 
     def _verify(self, request: MotionRequest, result: MotionResult, t0: float) -> MotionResult:
         """Re-check ``result``'s path on the exact model; re-plan at half the step while it fails (class doc)."""
@@ -205,6 +305,7 @@ class MotionPlanner:
             raise errors.InvalidRequest(
                 f"time_parameterization must be one of {', '.join(timing.METHODS)}, got {method!r}"
             )
+        _safety_margin(req, self.config)
         seed = int(req.seed) if req.seed is not None else secrets.randbelow(2**31 - 1)
         if not 0 <= seed < 2**63:
             raise errors.InvalidRequest(f"seed must be in [0, 2^63), got {seed}")
@@ -470,6 +571,28 @@ class MotionPlanner:
         path, _checks = postprocess.shortcut(raw, edges.edge_valid, rng, deadline, self.config.simplify_max_tries)
         stats.simplify_time = time.monotonic() - t_simp
         return path
+
+
+def _record_verification(result: MotionResult, certificate, repairs: int) -> None:
+    """A sphere plan's exact re-check is its certification: the verification fields report it."""
+    from maru_planner.collision.spheres import PathVerification  # loaded with the sphere checker
+
+    stats = result.stats
+    stats.verified, stats.verify_time, stats.replans = stats.certified, certificate.seconds, repairs
+    failing = certificate.first_failing_segment
+    result.verification = PathVerification(stats.certified, failing, certificate.checks)
+
+
+def _safety_margin(request: MotionRequest, config: PlannerConfig) -> float:
+    """The request's safety margin (m), else the configuration's; InvalidRequest unless finite and >= 0."""
+    margin = config.safety_margin if getattr(request, "safety_margin", None) is None else request.safety_margin
+    try:
+        margin = float(margin)
+    except (TypeError, ValueError) as exc:
+        raise errors.InvalidRequest(f"safety_margin must be a number (m), got {margin!r}") from exc
+    if not (math.isfinite(margin) and margin >= 0.0):
+        raise errors.InvalidRequest(f"safety_margin must be a finite number >= 0 m, got {margin}")
+    return margin
 
 
 def _set_error(result: MotionResult, exc: errors.MaruError) -> None:

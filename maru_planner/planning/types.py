@@ -70,7 +70,8 @@ class MotionRequest:
     first). ``seed=None`` draws a random seed (reported in the stats). ``time_parameterization``
     is "toppra", "ruckig" or "trapezoid" (:mod:`~maru_planner.planning.timing`); empty = the
     planner's ``PlannerConfig.time_parameterization``. ``jerk_scaling`` scales the jerk limits
-    ("ruckig" only).
+    ("ruckig" only). ``safety_margin`` (m): the clearance the certified path keeps from every
+    obstacle and link pair (``docs/certification.md``); None = ``PlannerConfig.safety_margin``.
     """
 
     group: str
@@ -86,6 +87,7 @@ class MotionRequest:
     simplify: bool = True
     time_parameterization: str = ""
     jerk_scaling: float = 1.0
+    safety_margin: float | None = None
 
 
 @dataclass
@@ -140,6 +142,10 @@ class PlanStats:
     verify_time: float = 0.0  # s spent re-checking paths on the exact model
     replans: int = 0  # re-plans at a finer resolution after a path failed that check
     time_parameterization: str = ""  # the method that made the trajectory (a blended one may fall back)
+    certified: bool = False  # the path is proven collision-free on the exact model (docs/certification.md)
+    certify_time: float = 0.0  # s spent certifying (all attempts)
+    min_clearance: float = math.inf  # m: smallest distance measured while certifying the returned path
+    repairs: int = 0  # segments that failed certification and were re-planned locally
 
     def to_dict(self) -> dict:
         return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in asdict(self).items()}

@@ -341,7 +341,7 @@ def trajectory_positions(msg: JointTrajectory) -> tuple[list[str], np.ndarray, n
     return list(msg.joint_names), times, positions
 
 
-STATS_FIELDS_INT = ("nodes", "edges", "collision_checks", "waypoints", "seed")
+STATS_FIELDS_INT = ("nodes", "edges", "collision_checks", "waypoints", "seed", "repairs")
 STATS_FIELDS_FLOAT = (
     "path_length",
     "smoothness",
@@ -351,6 +351,8 @@ STATS_FIELDS_FLOAT = (
     "simplify_time",
     "parameterize_time",
     "total_time",
+    "certify_time",
+    "min_clearance",
 )
 
 
@@ -360,6 +362,7 @@ def stats_msg(stats) -> PlannerStats:
     if stats is None:
         return msg
     msg.planner_id = str(getattr(stats, "planner_id", "") or "")
+    msg.certified = bool(getattr(stats, "certified", False))
     for field in STATS_FIELDS_INT:
         value = getattr(stats, field, None)
         if value is None:
