@@ -75,7 +75,7 @@ class Case:
         out[:, self.indices] = states
         return out
 
-    def curve_free(self, states: np.ndarray) -> bool:
+    def curve_free(self, states: np.ndarray, _chord_deviation: np.ndarray) -> bool:
         t0 = time.thread_time()
         free = self.exact_checker.first_invalid(self.full(states)) < 0
         self.check_cpu += time.thread_time() - t0

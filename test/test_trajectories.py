@@ -20,7 +20,7 @@ ZIGZAG = np.array([[0.0, 0.0, 0.0], [1.0, 0.3, 0.1], [1.2, 1.3, -0.2], [2.2, 1.5
 LIMITS3 = timing.Limits.scaled([1.0, 1.5, 2.0], [2.0, 3.0, 4.0])
 
 
-def always_free(_states: np.ndarray) -> bool:
+def always_free(_states: np.ndarray, _deviation: np.ndarray) -> bool:
     return True
 
 
@@ -34,7 +34,7 @@ def parameterize(path, method, *, limits=LIMITS3, **options):
 def never_off_path(path: np.ndarray):
     """A curve check rejecting anything farther than 1e-9 rad from ``path`` (every blend collides)."""
 
-    def free(states: np.ndarray) -> bool:
+    def free(states: np.ndarray, _deviation: np.ndarray) -> bool:
         return bool(np.all(timing.deviation_from_path(states, path) <= 1e-9))
 
     return free
@@ -98,10 +98,10 @@ def test_a_colliding_blend_is_shrunk_then_the_motion_stops_at_that_corner():
     middle = corner + 0.25 * timing.blend_half_length(ZIGZAG, 2, 0.3) * turn
     box = BoxWorldChecker([(middle[:2] - 0.02, middle[:2] + 0.02)])
 
-    def free(states):
+    def free(states, _deviation):
         return box.first_invalid(states) < 0
 
-    assert free(np.vstack([np.linspace(a, b, 200) for a, b in zip(ZIGZAG[:-1], ZIGZAG[1:], strict=True)]))
+    assert box.first_invalid(np.vstack([np.linspace(a, b, 200) for a, b in zip(ZIGZAG[:-1], ZIGZAG[1:])])) < 0
     for method in ("toppra", "ruckig"):
         traj, report = parameterize(ZIGZAG, method, curve_free=free, max_deviation=0.3)
         assert any("waypoint 2" in reason for reason in report.fallbacks), report.fallbacks
@@ -116,6 +116,26 @@ def test_a_colliding_blend_is_shrunk_then_the_motion_stops_at_that_corner():
         for q in ZIGZAG:  # every waypoint is reached (at rest)
             k = np.argmin(np.linalg.norm(stopped.positions - q, axis=1))
             assert np.linalg.norm(stopped.positions[k] - q) < 1e-9 and np.allclose(stopped.velocities[k], 0.0)
+
+
+@pytest.mark.parametrize("method", ["toppra", "ruckig"])
+def test_each_check_gets_states_within_the_step_and_a_bound_on_the_chord_error(method):
+    calls = []
+
+    def recording(states, deviation):
+        calls.append((states, deviation))
+        return True
+
+    parameterize(ZIGZAG, method, curve_free=recording, certify_step=0.02)
+    assert calls
+    for states, deviation in calls:
+        assert np.max(np.abs(np.diff(states, axis=0))) <= 0.02 + 1e-12
+        # a chord between samples taken at equal steps is off the curve by |second difference| / 8 (parabola:
+        # exactly, toppra's blends), at most acceleration limit x interval^2 / 8 (any curve within it, ruckig)
+        chord_error = np.abs(np.diff(states, n=2, axis=0)).max(axis=0) / 8.0
+        assert np.all(deviation >= chord_error - 1e-12)
+        if method == "toppra":
+            assert np.allclose(deviation, chord_error, rtol=1e-6, atol=1e-15)
 
 
 @pytest.mark.parametrize("method", timing.METHODS)

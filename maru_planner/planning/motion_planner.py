@@ -362,7 +362,8 @@ class MotionPlanner:
         """
         checker = self.exact_checker or self.checker
 
-        def curve_free(states: np.ndarray) -> bool:
+        def curve_free(states: np.ndarray, _chord_deviation: np.ndarray) -> bool:
+            # the states alone, timing.CERTIFY_STEP apart: the chords between them are not certified
             full = np.repeat(start_full[None], len(states), axis=0)
             full[:, indices] = states
             return checker.first_invalid(full) < 0

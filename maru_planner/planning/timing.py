@@ -4,8 +4,11 @@
 first replace each corner by a parabolic blend: a quadratic Bézier from ``P − l·u_in`` through
 control point ``P`` to ``P + l·u_out``, whose distance from the corner, ``l·|u_out − u_in| / 4``,
 is at most the requested deviation (and ``l`` at most half of either adjacent segment). The
-straight parts of the blended curve lie on the certified path; every blend is re-checked with
-``curve_free`` at a joint step of :data:`CERTIFY_STEP`. A blend that collides is retried with a
+straight parts of the blended curve lie on the certified path; every blend is re-checked by
+``curve_free(states, deviation)``: its samples at most ``certify_step`` apart (default
+:data:`CERTIFY_STEP`) and, per joint, how far the curve leaves the chords between them (exact for
+a parabola: ``|p''|·h²/8``), for a checker that certifies the chords continuously with that much
+more margin; a checker of the states alone needs the fine default step. A blend that collides is retried with a
 quarter of its deviation, twice; then the motion stops at that corner (the path is split there).
 Past an optional deadline no blend is certified any more, so the corners left stop.
 
@@ -55,7 +58,7 @@ BLEND_INTERVALS = 3
 RATIO_TOL = 1e-9
 RUCKIG_DURATION = 100.0  # s: longer sections are computed sped up and played back slower (_RuckigPieces)
 
-CurveFree = Callable[[np.ndarray], bool]
+CurveFree = Callable[[np.ndarray, np.ndarray], bool]  # (states, chord deviation per joint) -> collision-free
 
 
 @dataclass(frozen=True)
@@ -161,11 +164,13 @@ class BlendedPath(toppra.interpolator.AbstractGeometricPath):
             return self.dd[piece].copy()
         raise ValueError(f"order must be 0, 1 or 2, got {order}")
 
-    def blend_samples(self, piece: int, step: float) -> np.ndarray:
-        """Points along blend ``piece`` at most ``step`` apart (|p'| ≤ 1, so a path step bounds the joint step)."""
+    def blend_chords(self, piece: int, step: float) -> tuple[np.ndarray, np.ndarray]:
+        """Points along blend ``piece`` at most ``step`` apart (|p'| ≤ 1, so a path step bounds the joint
+        step) and, per joint, how far the parabola leaves the chords between them (|p''|·h²/8)."""
         s0, s1 = self.starts[piece], self.starts[piece + 1]
         ss = np.linspace(s0, s1, max(2, math.ceil((s1 - s0) / step) + 1))
-        return self.at(ss, np.full(len(ss), piece), 0)
+        h = ss[1] - ss[0]
+        return self.at(ss, np.full(len(ss), piece), 0), np.abs(self.dd[piece]) * h * h / 8.0
 
     def grid(self) -> tuple[np.ndarray, np.ndarray]:
         """toppra grid points (every piece boundary included) and the piece of each grid interval."""
@@ -228,12 +233,15 @@ def parameterize(
     dt: float = 0.05,
     max_points: int = 10_000,
     deadline: float | None = None,
+    certify_step: float = CERTIFY_STEP,
 ) -> tuple[Trajectory, TimingReport]:
     """Trajectory through ``path`` (rows: group configurations) by ``method`` (module doc).
 
-    ``curve_free(Q)`` is True when every row of ``Q`` is collision-free; it re-checks blends.
-    ``max_deviation`` (rad) bounds the distance of the blended curve from each corner. After
-    ``deadline`` (``time.monotonic()``) no more blends are checked: the corners left stop.
+    ``curve_free(Q, deviation)`` is True when the curve through the rows of ``Q`` (at most
+    ``certify_step`` apart in every joint), which leaves the straight chords between consecutive rows
+    by at most ``deviation[j]`` in joint j, is collision-free; it re-checks blends. ``max_deviation``
+    (rad) bounds the distance of the blended curve from each corner. After ``deadline``
+    (``time.monotonic()``) no more blends are checked: the corners left stop.
     """
     if method not in METHODS:
         raise errors.InvalidRequest(f"time_parameterization must be one of {', '.join(METHODS)}, got {method!r}")
@@ -246,21 +254,25 @@ def parameterize(
         return _trapezoid(waypoints, joint_names, limits, dt, max_points), TimingReport("trapezoid")
     try:
         build = _toppra if method == "toppra" else _ruckig
-        checked = curve_free if deadline is None else _until(deadline, curve_free)
-        sections, report = build(waypoints, limits, checked, max_deviation)
+        sections, report = build(waypoints, limits, _Check(curve_free, certify_step, deadline), max_deviation)
     except _ParameterizationFailed as exc:
         report = TimingReport("trapezoid", fallbacks=[f"{method}: {exc}"])
         return _trapezoid(waypoints, joint_names, limits, dt, max_points), report
     return _sample(sections, joint_names, waypoints[-1], dt, max_points), report
 
 
-def _until(deadline: float, curve_free: CurveFree) -> CurveFree:
-    """``curve_free`` that answers False (not certified) once ``deadline`` has passed."""
+@dataclass(frozen=True)
+class _Check:
+    """The caller's curve check, its sample step, and the deadline after which nothing is certified."""
 
-    def free(states: np.ndarray) -> bool:
-        return time.monotonic() < deadline and curve_free(states)
+    curve_free: CurveFree
+    step: float
+    deadline: float | None
 
-    return free
+    def __call__(self, states: np.ndarray, deviation: np.ndarray) -> bool:
+        if self.deadline is not None and time.monotonic() >= self.deadline:
+            return False
+        return self.curve_free(states, deviation)
 
 
 def _distinct(path: np.ndarray) -> np.ndarray:
@@ -286,7 +298,7 @@ class _ParameterizationFailed(Exception):
 
 # --- blended corners, certified --------------------------------------------------------------
 def _certified_half_lengths(
-    waypoints: np.ndarray, max_deviation: float, curve_free: CurveFree, report: TimingReport
+    waypoints: np.ndarray, max_deviation: float, check: _Check, report: TimingReport
 ) -> np.ndarray:
     """Blend size per waypoint (0 at the ends and at stops), every blend re-checked (module doc)."""
     half = np.zeros(len(waypoints))
@@ -297,9 +309,9 @@ def _certified_half_lengths(
             half[k] = blend_half_length(waypoints, k, deviation)
             if half[k] == 0.0:
                 break
-            samples = _single_blend(waypoints, k, half[k]).blend_samples(1, CERTIFY_STEP)
+            samples, chords = _single_blend(waypoints, k, half[k]).blend_chords(1, check.step)
             report.certify_checks += len(samples)
-            if curve_free(samples):
+            if check(samples, chords):
                 break
             report.fallbacks.append(f"blend at waypoint {k} not certified at deviation {deviation:.3g} rad")
             half[k] = 0.0
@@ -392,9 +404,9 @@ class _PathVelocity:
         )
 
 
-def _toppra(waypoints, limits: Limits, curve_free: CurveFree, max_deviation: float):
+def _toppra(waypoints, limits: Limits, check: _Check, max_deviation: float):
     report = TimingReport("toppra")
-    half = _certified_half_lengths(waypoints, max_deviation, curve_free, report)
+    half = _certified_half_lengths(waypoints, max_deviation, check, report)
     return [_toppra_section(BlendedPath(w, h), limits) for w, h in _sections(waypoints, half)], report
 
 
@@ -459,7 +471,7 @@ class _RuckigPieces:
         return q, qd / self.time_scale, qdd / self.time_scale**2
 
 
-def _ruckig(waypoints, limits: Limits, curve_free: CurveFree, max_deviation: float):
+def _ruckig(waypoints, limits: Limits, check: _Check, max_deviation: float):
     report = TimingReport("ruckig")
     deviation = np.full(len(waypoints), max_deviation)
     deviation[[0, -1]] = 0.0
@@ -467,7 +479,7 @@ def _ruckig(waypoints, limits: Limits, curve_free: CurveFree, max_deviation: flo
         half = np.array([blend_half_length(waypoints, k, deviation[k]) if 0 < k < len(waypoints) - 1 else 0.0
                          for k in range(len(waypoints))])  # fmt: skip
         sections = [_ruckig_section(BlendedPath(w, h), limits) for w, h in _sections(waypoints, half)]
-        failing = _failing_corners(sections, waypoints, half, max_deviation, curve_free, report)
+        failing = _failing_corners(sections, waypoints, half, max_deviation, check, limits, report)
         if not failing:
             break
         last = attempt >= BLEND_RETRIES
@@ -542,20 +554,22 @@ def _reachable_speed(length: float, direction: np.ndarray, limits: Limits) -> fl
     return v
 
 
-def _failing_corners(sections, waypoints, half, max_deviation, curve_free: CurveFree, report) -> list[int]:
-    """Interior waypoints whose Ruckig motion leaves the path by more than allowed or collides there."""
+def _failing_corners(sections, waypoints, half, max_deviation, check: _Check, limits: Limits, report) -> list[int]:
+    """Interior waypoints whose Ruckig motion leaves the path by more than allowed or collides there.
+
+    A piece that stays on the path (a straight one) needs no check; one that leaves it is checked whole.
+    """
     t0 = time.monotonic()
     failing = set()
     for pieces, blend_of in sections:
         for trajectory, corner in zip(pieces.trajectories, blend_of, strict=True):
-            q = _dense(trajectory, pieces.peak_speed * pieces.time_scale)
-            deviation = deviation_from_path(q, waypoints)
-            off = deviation > 1e-9
-            if not off.any():
+            q, chords = _dense(trajectory, pieces, check.step, limits)
+            off_path = deviation_from_path(q, waypoints)
+            if off_path.max() <= 1e-9:
                 continue
-            report.certify_checks += int(off.sum())
-            if deviation.max() > max_deviation + 1e-9 or not curve_free(q[off]):
-                failing.add(int(corner) if corner >= 0 else _nearest_corner(q[off], waypoints))
+            report.certify_checks += len(q)
+            if off_path.max() > max_deviation + 1e-9 or not check(q, chords):
+                failing.add(int(corner) if corner >= 0 else _nearest_corner(q[off_path > 1e-9], waypoints))
     report.certify_time += time.monotonic() - t0
     return sorted(k for k in failing if 0 < k < len(waypoints) - 1)
 
@@ -568,13 +582,14 @@ def _nearest_corner(points: np.ndarray, waypoints: np.ndarray) -> int:
     return int(np.argmin(d)) + 1
 
 
-def _dense(trajectory, peak_speed: float) -> np.ndarray:
-    """Positions along one Ruckig trajectory at most :data:`CERTIFY_STEP` apart in every joint
-
-    (``peak_speed``: the largest joint speed it may reach, in its own time units).
-    """
-    n = max(2, math.ceil(trajectory.duration * peak_speed / CERTIFY_STEP) + 1)
-    return np.array([trajectory.at_time(t)[0] for t in np.linspace(0.0, trajectory.duration, n)])
+def _dense(trajectory, pieces: _RuckigPieces, step: float, limits: Limits) -> tuple[np.ndarray, np.ndarray]:
+    """Positions along one of ``pieces``' Ruckig trajectories at most ``step`` apart in every joint, and per
+    joint how far it can leave the chords between them (acceleration limit × interval² / 8)."""
+    duration = trajectory.duration * pieces.time_scale  # real seconds
+    n = max(2, math.ceil(duration * pieces.peak_speed / step) + 1)
+    q = np.array([trajectory.at_time(t)[0] for t in np.linspace(0.0, trajectory.duration, n)])
+    interval = duration / (n - 1)
+    return q, limits.acceleration * interval * interval / 8.0
 
 
 # --- sampling ---------------------------------------------------------------------------------
