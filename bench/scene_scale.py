@@ -7,8 +7,8 @@ Robot and problem: Maru-1's 13-DOF paper problem (``maru13``: desk + box). Scene
 
 - ``far N``: the problem's scene plus N small boxes, spheres and cylinders 2 to 20 robot reaches away
   in every direction (e.g. a building's map loaded as obstacles): they should cost almost nothing;
-- ``clutter N``: the problem's scene plus N 1 cm spheres on the desk's and the box's surfaces and on a
-  wall behind the robot, like a depth camera's point cloud of them (the plan stays possible).
+- ``clutter N``: the problem's scene plus N 1 cm spheres spread over the desk's and the box's top faces and
+  a wall behind the robot, like a depth camera's point cloud of them (the plan stays possible).
 
 Per scene: ``scene`` = ``Scene.from_dict`` (validation of every obstacle), ``exact build`` /
 ``spheres build`` = the checkers' build (reach culling, AABB tree / grid), ``exact check`` /
@@ -78,10 +78,14 @@ def surface_points(rng: np.random.Generator, n: int, obstacle: dict) -> np.ndarr
 
 
 def clutter_obstacles(rng: np.random.Generator, n: int, base: dict) -> list[dict]:
-    """``n`` 1 cm spheres: on the top faces of the scene's boxes (two thirds) and on a wall behind the robot."""
+    """``n`` 1 cm spheres, evenly spread (per area) over the top faces of the scene's boxes and a wall behind
+    the robot, like a depth camera's point cloud of them."""
     boxes = [o for o in base["obstacles"] if o["type"] == "box"]
-    on_boxes = [surface_points(rng, (2 * n) // (3 * len(boxes)), box) for box in boxes]
-    wall = rng.uniform([-0.7, -1.2, -1.0], [-0.68, 1.2, 1.0], (n - sum(len(p) for p in on_boxes), 3))
+    wall_area = 2.4 * 2.0
+    areas = np.array([o["size"][0] * o["size"][1] for o in boxes] + [wall_area])
+    counts = rng.multinomial(n, areas / areas.sum())
+    on_boxes = [surface_points(rng, int(k), box) for k, box in zip(counts[:-1], boxes)]
+    wall = rng.uniform([-0.7, -1.2, -1.0], [-0.68, 1.2, 1.0], (int(counts[-1]), 3))
     points = np.concatenate([*on_boxes, wall])
     return [{"name": f"pt{i}", "type": "sphere", "radius": 0.01, "pose": {"xyz": p}} for i, p in
             enumerate(points.tolist())]  # fmt: skip

@@ -80,26 +80,103 @@ VALID, COLLIDING, AMBIGUOUS = 0, 1, 2
 
 
 @njit(cache=True, inline="always")
+def cluster_vs_obstacle(
+    c, k, reach, padding, s_inner, s_radius, c_start, world, cworld,
+    box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact,
+):  # fmt: skip
+    """0: cluster ``c`` (bound + ``reach``) clears obstacle ``k``; 1: an outer sphere touches it; 2: an inner ball."""
+    if point_obstacle_distance(cworld[c], k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r) >= reach:
+        return 0
+    touched = 0
+    for s in range(c_start[c], c_start[c + 1]):
+        d = point_obstacle_distance(world[s], k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r)
+        if exact[k] and d < s_inner[s] + padding:
+            return 2
+        if d < s_radius[s] + padding:
+            touched = 1
+    return touched
+
+
+@njit(cache=True, inline="always")
 def group_vs_obstacle(
     g, k, padding, s_inner, s_radius, c_start, c_radius, g_radius, g_clusters, world, gworld, cworld,
     box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact,
 ):  # fmt: skip
-    """0: group ``g``'s outer spheres clear obstacle ``k``; 1: some touch it; COLLIDING (via 2): an inner ball does."""
+    """0: group ``g``'s outer spheres clear obstacle ``k``; 1: some touch it; 2: an inner ball does."""
     gd = point_obstacle_distance(gworld[g], k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r)
     if gd >= g_radius[g] + padding:
         return 0
     touched = 0
     for c in range(g_clusters[g], g_clusters[g + 1]):
-        cd = point_obstacle_distance(cworld[c], k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r)
-        if cd >= c_radius[c] + padding:
-            continue
-        for s in range(c_start[c], c_start[c + 1]):
-            d = point_obstacle_distance(world[s], k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r)
-            if exact[k] and d < s_inner[s] + padding:
-                return 2
-            if d < s_radius[s] + padding:
-                touched = 1
+        hit = cluster_vs_obstacle(
+            c, k, c_radius[c] + padding, padding, s_inner, s_radius, c_start, world, cworld,
+            box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact,
+        )  # fmt: skip
+        if hit == 2:
+            return 2
+        touched = max(touched, hit)
     return touched
+
+
+@njit(cache=True)
+def _scene_by_grid(
+    padding, s_inner, s_radius, c_start, c_radius, g_joint, g_clusters, world, cworld,
+    box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact, grid_i, grid_f, amb, mark,
+):  # fmt: skip
+    """Robot-vs-scene part of :func:`classify_state` through the grid: the number of (group, obstacle) pairs
+    written to ``amb``, or -1 when an inner ball is hit (COLLIDING).
+
+    ``mark[0]`` drops an obstacle listed in several cells of one cluster's query, ``mark[1]`` a pair that
+    several clusters of one group touch; their last entries are running tags.
+    """
+    n_obs = mark.shape[1] - 1
+    nx, ny, nz = grid_i[0], grid_i[1], grid_i[2]
+    cell_start, items, big = unpack_grid(grid_i)
+    h, ox, oy, oz = grid_f[0], grid_f[1], grid_f[2], grid_f[3]
+    n_amb = 0
+    for g in range(g_joint.shape[0]):
+        if g_joint[g] == 0:  # fixed to the world: like the exact checker, never tested against the scene
+            continue
+        mark[1, n_obs] += 1
+        pair_tag = mark[1, n_obs]
+        for c in range(g_clusters[g], g_clusters[g + 1]):
+            mark[0, n_obs] += 1
+            tag = mark[0, n_obs]
+            reach = c_radius[c] + padding
+            i0, i1 = _cell_range(cworld[c, 0] - reach, cworld[c, 0] + reach, ox, h, nx)
+            j0, j1 = _cell_range(cworld[c, 1] - reach, cworld[c, 1] + reach, oy, h, ny)
+            l0, l1 = _cell_range(cworld[c, 2] - reach, cworld[c, 2] + reach, oz, h, nz)
+            for i in range(i0, i1 + 1):
+                for j in range(j0, j1 + 1):
+                    for l in range(l0, l1 + 1):
+                        cell = (i * ny + j) * nz + l
+                        for idx in range(cell_start[cell], cell_start[cell + 1]):
+                            k = items[idx]
+                            if mark[0, k] == tag:
+                                continue
+                            mark[0, k] = tag
+                            hit = cluster_vs_obstacle(
+                                c, k, reach, padding, s_inner, s_radius, c_start, world, cworld,
+                                box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact,
+                            )  # fmt: skip
+                            if hit == 2:
+                                return -1
+                            if hit == 1 and mark[1, k] != pair_tag and n_amb < amb.shape[0]:
+                                mark[1, k] = pair_tag
+                                amb[n_amb, 0], amb[n_amb, 1], amb[n_amb, 2] = 0, g, k
+                                n_amb += 1
+            for k in big:
+                hit = cluster_vs_obstacle(
+                    c, k, reach, padding, s_inner, s_radius, c_start, world, cworld,
+                    box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact,
+                )  # fmt: skip
+                if hit == 2:
+                    return -1
+                if hit == 1 and mark[1, k] != pair_tag and n_amb < amb.shape[0]:
+                    mark[1, k] = pair_tag
+                    amb[n_amb, 0], amb[n_amb, 1], amb[n_amb, 2] = 0, g, k
+                    n_amb += 1
+    return n_amb
 
 
 @njit(cache=True)
@@ -108,13 +185,12 @@ def classify_state(
     s_joint, s_center, s_radius, s_inner, g_start, g_joint, g_center, g_radius, self_pairs, padding,
     c_start, c_joint, c_center, c_radius, g_clusters,
     box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact, grid_i, grid_f,
-    rot, pos, world, gworld, cworld, amb, mark, buffer,
+    rot, pos, world, gworld, cworld, amb, mark,
 ):  # fmt: skip
     """VALID, COLLIDING or AMBIGUOUS for one configuration, and the number of ambiguous pairs.
 
-    Each moving group is tested against the obstacles in the grid cells its bounding sphere overlaps
-    (:func:`build_grid`; all obstacles when the grid is empty); ``mark`` (n_obs + 1, last = a running
-    tag) drops repeats, ``buffer`` (n_obs) holds the candidates.
+    With a grid (:func:`build_grid`) each moving cluster of spheres meets the obstacles listed in the cells
+    its bounding sphere overlaps (:func:`_scene_by_grid`); without, each moving group meets every obstacle.
 
     COLLIDING: an *inner* ball (contained in the link) is within ``padding`` of an obstacle (whose primitive
     is ``exact``, not just a bound) or of an
@@ -129,36 +205,17 @@ def classify_state(
     n_obs = box_c.shape[0] + sph_c.shape[0] + cyl_c.shape[0]
     n_groups = g_joint.shape[0]
     n_amb = 0
-    nx, ny, nz = grid_i[0], grid_i[1], grid_i[2]
-    cell_start, items, big = unpack_grid(grid_i)
-    h, ox, oy, oz = grid_f[0], grid_f[1], grid_f[2], grid_f[3]
-    for g in range(n_groups):
+    if grid_i[0] > 0:
+        n_amb = _scene_by_grid(
+            padding, s_inner, s_radius, c_start, c_radius, g_joint, g_clusters, world, cworld,
+            box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact, grid_i, grid_f, amb, mark,
+        )  # fmt: skip
+        if n_amb < 0:
+            return COLLIDING, 0
+    for g in range(n_groups if grid_i[0] == 0 else 0):  # no grid (a small scene): every obstacle, every group
         if g_joint[g] == 0:  # fixed to the world: like the exact checker, never tested against the scene
             continue
-        n_cand = n_obs  # no grid (a small scene): every obstacle
-        if nx > 0:
-            mark[n_obs] += 1
-            tag = mark[n_obs]
-            r = g_radius[g] + padding
-            i0, i1 = _cell_range(gworld[g, 0] - r, gworld[g, 0] + r, ox, h, nx)
-            j0, j1 = _cell_range(gworld[g, 1] - r, gworld[g, 1] + r, oy, h, ny)
-            l0, l1 = _cell_range(gworld[g, 2] - r, gworld[g, 2] + r, oz, h, nz)
-            n_cand = 0
-            for i in range(i0, i1 + 1):
-                for j in range(j0, j1 + 1):
-                    for l in range(l0, l1 + 1):
-                        cell = (i * ny + j) * nz + l
-                        for idx in range(cell_start[cell], cell_start[cell + 1]):
-                            k = items[idx]
-                            if mark[k] != tag:
-                                mark[k] = tag
-                                buffer[n_cand] = k
-                                n_cand += 1
-            for b in big:
-                buffer[n_cand] = b
-                n_cand += 1
-        for t in range(n_cand):
-            k = t if nx == 0 else buffer[t]
+        for k in range(n_obs):
             hit = group_vs_obstacle(
                 g, k, padding, s_inner, s_radius, c_start, c_radius, g_radius, g_clusters, world, gworld, cworld,
                 box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact,
@@ -292,7 +349,7 @@ def scan_nb(Q, start, ri, rf, sf, grid_i, grid_f, amb, mark, stop_at_ambiguous):
     """First row >= ``start`` of ``Q`` that is not VALID: (row, status, n_ambiguous), or (-1, VALID, 0).
 
     ``ri``/``rf``/``sf``: :func:`pack_robot` and :func:`pack_scene` arrays; ``grid_i``/``grid_f``:
-    :func:`build_grid`'s; ``mark``: n_obs + 1 int64 kept across calls. With ``stop_at_ambiguous``
+    :func:`build_grid`'s; ``mark``: (2, n_obs + 1) int64 kept across calls. With ``stop_at_ambiguous``
     false, AMBIGUOUS rows are reported as COLLIDING (the pure sphere model).
     """
     (parent, kind, axis, prot, ppos, idx_q, s_joint, s_center, s_radius, s_inner, g_start, g_joint, g_center,
@@ -304,14 +361,13 @@ def scan_nb(Q, start, ri, rf, sf, grid_i, grid_f, amb, mark, stop_at_ambiguous):
     world = np.empty((s_joint.shape[0], 3))
     gworld = np.empty((g_joint.shape[0], 3))
     cworld = np.empty((c_joint.shape[0], 3))
-    buffer = np.empty(mark.shape[0], dtype=np.int64)
     for i in range(start, Q.shape[0]):
         status, n_amb = classify_state(
             Q[i], parent, kind, axis, prot, ppos, idx_q,
             s_joint, s_center, s_radius, s_inner, g_start, g_joint, g_center, g_radius, self_pairs, padding,
             c_start, c_joint, c_center, c_radius, g_clusters,
             box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact, grid_i, grid_f,
-            rot, pos, world, gworld, cworld, amb, mark, buffer,
+            rot, pos, world, gworld, cworld, amb, mark,
         )  # fmt: skip
         if status == COLLIDING:
             return i, COLLIDING, 0

@@ -180,7 +180,7 @@ class SphereCollisionChecker:
         self._scene_args = self.primitives.as_tuple()
         self._packed_scene = _kernels.pack_scene(*self._scene_args) if self.use_numba else None
         self._grid = self._build_grid()
-        self._mark = np.zeros(len(self.primitives.names) + 1, dtype=np.int64)
+        self._mark = np.zeros((2, len(self.primitives.names) + 1), dtype=np.int64)
         self._scene_version = getattr(scene, "version", None)
         self._amb = np.zeros((self.spheres.n_groups * max(1, len(self.primitives.names)) + len(self.self_pairs), 3),
                              dtype=np.int64)
@@ -192,12 +192,12 @@ class SphereCollisionChecker:
         return bool(self._grid[0][0] > 0)
 
     def _build_grid(self) -> tuple[np.ndarray, np.ndarray]:
-        """Grid broad phase over the reachable obstacles, cells about one robot geometry's bound across."""
+        """Grid broad phase over the reachable obstacles, cells about one robot sphere cluster's bound across."""
         if not self.use_numba or len(self.primitives.names) < self.grid_min_obstacles:
             return _kernels.NO_GRID
         lo, hi = self.primitives.boxes()
-        moving = self.spheres.group_joint != 0
-        cell = float(np.median(self.spheres.group_radius[moving])) if moving.any() else 0.1
+        moving = self.spheres.cluster_joint != 0
+        cell = float(np.median(self.spheres.cluster_radius[moving])) if moving.any() else 0.1
         cell = max(cell, float((hi.max(axis=0) - lo.min(axis=0)).max()) / 64.0, 1e-3)
         return _kernels.build_grid(lo - self.padding, hi + self.padding, cell, GRID_MAX_CELLS)
 
