@@ -9,7 +9,8 @@ call (plus the planner's own file).
 
 Built in: ``RRT`` (OMPL RRT, goal bias 0), ``GoalBiasedRRT`` (OMPL RRT, goal bias 0.05 = OMPL's
 default), ``RRTConnect``, ``PRM`` (OMPL's, roadmap kept between queries, see
-:mod:`maru_planner.planning.roadmap`) and ``RCRRT`` (ours, :mod:`maru_planner.planning.rc_rrt`).
+:mod:`maru_planner.planning.roadmap`), ``RCRRT`` (ours, :mod:`maru_planner.planning.rc_rrt`) and
+``CompiledRRTConnect`` (ours, numba on the sphere model, :mod:`maru_planner.planning.compiled_rrtc`).
 Parameters are set through OMPL's parameter mechanism under OMPL's own names
 (:mod:`maru_planner.planning.planner_params`).
 """
@@ -25,6 +26,7 @@ from ompl import geometric as og
 
 from maru_planner.errors import InvalidPlanner, InvalidRequest
 from maru_planner.params import ParamSpec, check_params
+from maru_planner.planning.compiled_rrtc import COMPILED_RRTC_PARAMS, CompiledRRTConnect
 from maru_planner.planning.planner_params import ompl_params
 from maru_planner.planning.rc_rrt import RCRRT, RCRRT_PARAMS
 from maru_planner.planning.space import EdgeChecker
@@ -198,5 +200,14 @@ register(
         _rcrrt,
         RCRRT_PARAMS,
         frozenset({"tree", "resolution_complete"}),
+    )
+)
+register(
+    ArmPlannerSpec(
+        "CompiledRRTConnect",
+        "RRT-Connect compiled with numba on the sphere model (VAMP-style); OMPL RRTConnect on other checkers",
+        CompiledRRTConnect.create,
+        COMPILED_RRTC_PARAMS,
+        frozenset({"tree"}),
     )
 )

@@ -1,0 +1,230 @@
+"""CompiledRRTConnect: RRT-Connect whose whole search loop runs in one numba kernel, as an ``ompl.base.Planner``.
+
+The search (:mod:`maru_planner.planning.rrtc_kernel`) plans on the sphere model of a
+:class:`~maru_planner.collision.SphereCollisionChecker`: trees, nearest neighbours, extend/connect
+and edge checks at the facade's motion resolution never leave compiled code, except
+
+* every few hundred edges, to evaluate OMPL's termination condition;
+* for an edge whose states the spheres leave ambiguous (outer spheres touch, no inner ball does):
+  when the checker confirms on the exact model (``confirm=True``, its default), those states go to
+  ``checker.first_invalid`` and the edge gets the checker's own answer. So an edge is valid exactly
+  when the sphere checker says so (``confirm=False``: the pure, conservative sphere model).
+
+The path goes into the ProblemDefinition like any OMPL planner's, so ``SimpleSetup`` and the
+facade's exact verification apply unchanged. Samples come from a generator seeded by ``seed`` or,
+unset, by a draw from OMPL's seeded RNG: same seed, same path.
+
+**Other checkers** (the exact pinocchio/coal checker, the tests' toy checkers, no edge checker): the
+kernel cannot call them, so the planner falls back to OMPL's ``RRTConnect`` with the same ``range``
+on the SpaceInformation's validators (``compiled`` tells which ran). Falling back rather than
+rejecting keeps the id usable from every entry point (``maru-plan``, the node) whatever the
+collision model.
+"""
+
+from __future__ import annotations
+
+from functools import partial
+from typing import Any
+
+import numpy as np
+from ompl import base as ob
+from ompl import geometric as og
+from ompl import util as ou
+
+from maru_planner.params import ParamSpec
+from maru_planner.planning.checkers import is_sphere_checker
+from maru_planner.planning.planner_params import PlannerParams
+from maru_planner.planning.space import EdgeChecker
+
+COMPILED_RRTC_PARAMS: dict[str, ParamSpec] = {
+    spec.name: spec
+    for spec in (
+        ParamSpec("range", 0.0, "max extension (rad, L2); 0 = OMPL's automatic 20 % of the space extent", lower=0.0),
+        ParamSpec(
+            "seed",
+            None,
+            "seed of the sampler; unset: drawn from OMPL's seeded generator",
+            lower=0,
+            optional=True,
+            type=int,
+        ),  # fmt: skip
+    )
+}
+
+_CAPACITY = 1024  # initial nodes per tree; doubled when full
+_FIRST_EDGES = 64  # edges of the first kernel call between two termination checks ...
+_MAX_EDGES = 1024  # ... doubled per call up to this many
+
+
+class CompiledRRTConnect(ob.Planner):
+    """RRT-Connect in a numba kernel on a sphere checker (see module doc); ``params()``: ``COMPILED_RRTC_PARAMS``."""
+
+    def __init__(self, si: ob.SpaceInformation, edge_checker: EdgeChecker | None = None,
+                 name: str = "CompiledRRTConnect"):  # fmt: skip
+        super().__init__(si, name)
+        self._si = si
+        self._edges = edge_checker
+        self._values = {name: spec.default for name, spec in COMPILED_RRTC_PARAMS.items()}
+        self._params = PlannerParams(name)
+        for spec in COMPILED_RRTC_PARAMS.values():
+            self._params.declare_param(spec, partial(self._values.__setitem__, spec.name),
+                                       partial(self._values.__getitem__, spec.name))  # fmt: skip
+        self._seed_rng = ou.RNG()
+        self._fallback: og.RRTConnect | None = None
+        self._trees: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        self._data_states: list = []
+
+    @classmethod
+    def create(cls, si: ob.SpaceInformation, params: dict[str, Any], edge_checker: EdgeChecker | None):
+        """The registry's factory: a planner on ``si`` with ``params`` (already checked) set."""
+        planner = cls(si, edge_checker)
+        planner.params().set_params(params)
+        return planner
+
+    def params(self) -> PlannerParams:
+        """The declared parameters, as OMPL's ``Planner::params()`` (see :mod:`.planner_params`)."""
+        return self._params
+
+    @property
+    def compiled(self) -> bool:
+        """Whether solve() runs the compiled kernel (a sphere checker) rather than the OMPL fallback."""
+        return self._edges is not None and is_sphere_checker(self._edges.checker)
+
+    # --- hooks the MotionPlanner facade reads (maru_planner.planning.registry) ----------------
+    def graph_size(self) -> tuple[int, int]:
+        """(nodes, edges) of both trees (each tree has one node more than edges)."""
+        if self._fallback is not None:
+            data = ob.PlannerData(self._si)
+            self._fallback.getPlannerData(data)
+            return int(data.numVertices()), int(data.numEdges())
+        if self._trees is None:
+            return 0, 0
+        n = self._node_count()
+        return n, max(0, n - 2)
+
+    # --- OMPL planner interface ------------------------------------------------------------
+    def clear(self) -> None:
+        self._trees = None
+        self._fallback = None
+        self._data_states = []
+
+    def solve(self, ptc: ob.PlannerTerminationCondition) -> ob.PlannerStatus:
+        if not self.compiled:
+            return self._solve_fallback(ptc)
+        space = self._si.getStateSpace()
+        dim = space.getDimension()
+        inputs = self.getPlannerInputStates()
+        start_state, goal_state = inputs.nextStart(), inputs.nextGoal()
+        if start_state is None or goal_state is None:
+            missing = ob.PlannerStatus.INVALID_START if start_state is None else ob.PlannerStatus.INVALID_GOAL
+            return ob.PlannerStatus(missing)
+        start = np.array([start_state[i] for i in range(dim)])
+        goal = np.array([goal_state[i] for i in range(dim)])
+        path = self._search(start, goal, ptc)
+        if path is None:
+            return ob.PlannerStatus(ob.PlannerStatus.TIMEOUT)
+        solution = og.PathGeometric(self._si)
+        for q in path:
+            solution.append(self._ompl_state(q))
+        self.getProblemDefinition().addSolutionPath(solution, False, 0.0, self.getName())
+        return ob.PlannerStatus(ob.PlannerStatus.EXACT_SOLUTION)
+
+    def getPlannerData(self, data: ob.PlannerData) -> None:  # noqa: N802 (OMPL's name)
+        """Both trees: the start tagged as start, the goal as goal, parent→child edges."""
+        if self._fallback is not None:
+            self._fallback.getPlannerData(data)
+            return
+        if self._trees is None:
+            return
+        nodes, parent, st = self._trees
+        # PlannerData keeps pointers to the states: they must outlive it (owned by the planner).
+        self._data_states = []
+        for tree in (0, 1):
+            count = int(st[_kernel().N0 + tree])
+            states = [self._ompl_state(nodes[tree, i]) for i in range(count)]
+            self._data_states += states
+            add_root = data.addStartVertex if tree == 0 else data.addGoalVertex
+            ids = [add_root(ob.PlannerDataVertex(states[0]))]
+            ids += [data.addVertex(ob.PlannerDataVertex(s)) for s in states[1:]]
+            for i in range(1, count):
+                data.addEdge(ids[parent[tree, i]], ids[i])
+
+    # --- the search ------------------------------------------------------------------------
+    def _search(self, start: np.ndarray, goal: np.ndarray, ptc: ob.PlannerTerminationCondition) -> np.ndarray | None:
+        kernel = _kernel()
+        edges = self._edges
+        checker, gs = edges.checker, edges.gs
+        seed = self._values["seed"]
+        rng = kernel.seed_rng(int(seed if seed is not None else self._seed_rng.uniformInt(0, 2**31 - 2)))
+        max_range = float(self._values["range"]) or 0.2 * self._si.getMaximumExtent()
+        lower, upper = gs.lower, gs.upper
+        nodes, parent, st = kernel.new_state(start, goal, _CAPACITY)
+        self._trees = (nodes, parent, st)
+        q_new = np.empty(len(start))
+        amb_states = np.empty((int(np.ceil((upper - lower).max() / edges.resolution)) + 2, len(start)))
+        inputs = _kernel_inputs(checker)
+        indices = gs.indices.astype(np.int64)
+        verdict, batch = False, _FIRST_EDGES
+        while True:
+            code = kernel.run(
+                nodes,
+                parent,
+                st,
+                q_new,
+                amb_states,
+                verdict,
+                lower,
+                upper,
+                rng,
+                max_range,
+                edges.resolution,
+                gs.base,
+                indices,
+                *inputs,
+                checker.confirm,
+                batch,
+            )
+            checker.check_count += int(st[kernel.CHECKS])
+            st[kernel.CHECKS] = 0
+            if code == kernel.SOLVED:
+                return kernel.solution_path(nodes, parent, st)
+            if code == kernel.NEED_EXACT:
+                verdict = checker.first_invalid(gs.full(amb_states[: st[kernel.N_AMB]])) < 0
+            elif code == kernel.FULL:
+                nodes, parent = kernel.grow(nodes, parent)
+                self._trees = (nodes, parent, st)
+            batch = min(2 * batch, _MAX_EDGES)
+            if ptc():
+                return None
+
+    def _node_count(self) -> int:
+        st = self._trees[2]
+        return int(st[_kernel().N0] + st[_kernel().N1])
+
+    def _solve_fallback(self, ptc: ob.PlannerTerminationCondition) -> ob.PlannerStatus:
+        self._fallback = og.RRTConnect(self._si)
+        if self._values["range"] > 0:
+            self._fallback.setRange(float(self._values["range"]))
+        self._fallback.setProblemDefinition(self.getProblemDefinition())
+        self._fallback.setup()
+        return self._fallback.solve(ptc)
+
+    def _ompl_state(self, q: np.ndarray) -> Any:
+        state = self._si.allocState()
+        for i, v in enumerate(q):
+            state[i] = float(v)
+        return state
+
+
+def _kernel():
+    """The kernel module: imported on first use (numba loads with it; exact-only callers never need it)."""
+    # lazy: numba is only needed once a sphere checker exists, and then it is already loaded
+    from maru_planner.planning import rrtc_kernel
+
+    return rrtc_kernel
+
+
+def _kernel_inputs(checker) -> tuple[np.ndarray, ...]:
+    checker._sync()
+    ri, rf = checker._packed_robot
+    return ri, rf, checker._packed_scene, *checker._grid, checker._amb, checker._mark

@@ -1,0 +1,292 @@
+"""RRT-Connect as one numba kernel over the sphere collision model (the ideas of VAMP, in Python).
+
+The whole search loop runs compiled: two trees in preallocated arrays, brute-force nearest
+neighbours over each tree's contiguous node array, extend/connect steps of at most ``range``
+(L2, like OMPL's RRTConnect), and every edge checked at the motion resolution (L∞ step, the states
+of :func:`maru_planner.planning.space.edge_states`, computed the same way) in coarse-to-fine
+bisection order with an early exit on the first colliding state. The states go through the sphere
+checker's own compiled scan (:func:`maru_planner.collision.sphere_kernels.scan_nb`: forward
+kinematics, robot spheres against the scene primitives through its grid broad phase, the SRDF's
+self-collision pairs), so the answers are the sphere model's.
+
+The search is a resumable state machine (``st``, :data:`STATE_FIELDS`): :func:`run` proposes one
+edge at a time and applies its verdict, and returns to the caller
+
+* every ``max_edges`` edges (:data:`RUNNING`), so the caller can evaluate OMPL's termination
+  condition;
+* when a tree's arrays are full (:data:`FULL`): the caller grows them and calls again;
+* when the edge's states are only *ambiguous* on the sphere model (outer spheres touch, no inner
+  ball does) and ``confirm`` is set (:data:`NEED_EXACT`): the ambiguous states are in
+  ``amb_states[:st[N_AMB]]``, the caller decides them on the exact model and passes the edge's
+  verdict to the next call;
+* with a solution (:data:`SOLVED`): :func:`solution_path`.
+
+Deterministic: the samples come from a splitmix64 generator whose state (``rng``) the caller seeds.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from maru_planner.collision.sphere_kernels import AMBIGUOUS, COLLIDING, VALID, scan_nb
+
+SOLVED, RUNNING, NEED_EXACT, FULL = 0, 1, 2, 3  # what run() returns
+DIRECT, EXTEND, CONNECT = 0, 1, 2  # phases: the straight start-goal edge, extend toward a sample, connect
+
+#: Fields of the int64 search state ``st`` (index = position).
+STATE_FIELDS = ("phase", "tree", "from", "target", "pending", "reached", "n0", "n1", "checks", "n_amb",
+                "link0", "link1", "duplicate")  # fmt: skip
+(PHASE, TREE, FROM, TARGET, PENDING, REACHED, N0, N1, CHECKS, N_AMB, LINK0, LINK1, DUPLICATE) = range(len(STATE_FIELDS))
+
+
+def new_state(start: np.ndarray, goal: np.ndarray, capacity: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Trees (2, capacity, dim) holding the start (tree 0) and the goal (tree 1), parents, and ``st``."""
+    dim = len(start)
+    nodes = np.zeros((2, capacity, dim))
+    nodes[0, 0], nodes[1, 0] = start, goal
+    parent = np.full((2, capacity), -1, dtype=np.int64)
+    st = np.zeros(len(STATE_FIELDS), dtype=np.int64)
+    st[N0] = st[N1] = 1
+    st[PHASE] = DIRECT
+    return nodes, parent, st
+
+
+def grow(nodes: np.ndarray, parent: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The trees' arrays with twice the capacity (contents kept)."""
+    cap = nodes.shape[1]
+    bigger = np.zeros((2, 2 * cap, nodes.shape[2]))
+    bigger[:, :cap] = nodes
+    parents = np.full((2, 2 * cap), -1, dtype=np.int64)
+    parents[:, :cap] = parent
+    return bigger, parents
+
+
+def seed_rng(seed: int) -> np.ndarray:
+    """The generator state for :func:`run` (uint64 array of one)."""
+    return np.array([seed % 2**64], dtype=np.uint64)
+
+
+@njit(cache=True, inline="always")
+def _uniform(rng):
+    """splitmix64 step → float in [0, 1)."""
+    rng[0] += np.uint64(0x9E3779B97F4A7C15)
+    z = rng[0]
+    z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    z = z ^ (z >> np.uint64(31))
+    return float(z >> np.uint64(11)) * (1.0 / 9007199254740992.0)
+
+
+@njit(cache=True)
+def _nearest(tree_nodes, count, q):
+    best, best_d = 0, np.inf
+    dim = q.shape[0]
+    for i in range(count):
+        d = 0.0
+        for a in range(dim):
+            e = tree_nodes[i, a] - q[a]
+            d += e * e
+        if d < best_d:
+            best, best_d = i, d
+    return best
+
+
+@njit(cache=True)
+def _steer(q_from, q_to, max_range, out):
+    """Write into ``out`` the point at most ``max_range`` (L2) from ``q_from`` toward ``q_to``; True if it is q_to."""
+    dim = q_from.shape[0]
+    dist = 0.0
+    for a in range(dim):
+        e = q_to[a] - q_from[a]
+        dist += e * e
+    dist = np.sqrt(dist)
+    if dist <= max_range:
+        out[:] = q_to
+        return True
+    f = max_range / dist
+    for a in range(dim):
+        out[a] = q_from[a] + f * (q_to[a] - q_from[a])
+    return False
+
+
+@njit(cache=True)
+def bisection_order(n):
+    """Indices 0..n-1: the last (the edge's end), then midpoints of ever finer halves (checker.bisection_order
+    with include_first=False)."""
+    out = np.empty(n, dtype=np.int64)
+    out[0] = n - 1
+    filled = 1
+    lo = np.empty(2 * n + 1, dtype=np.int64)  # a queue of segments: each midpoint adds two
+    hi = np.empty(2 * n + 1, dtype=np.int64)
+    lo[0], hi[0] = -1, n - 1
+    head, tail = 0, 1
+    while head < tail:
+        a, b = lo[head], hi[head]
+        head += 1
+        if b - a < 2:
+            continue
+        m = (a + b) // 2
+        out[filled] = m
+        filled += 1
+        lo[tail], hi[tail] = a, m
+        tail += 1
+        lo[tail], hi[tail] = m, b
+        tail += 1
+    return out
+
+
+@njit(cache=True)
+def check_edge(qa, qb, resolution, base, indices, ri, rf, sf, grid_i, grid_f, amb, mark, confirm, amb_states, st):
+    """VALID, COLLIDING or AMBIGUOUS for the edge qa → qb (qa excluded) on the sphere model.
+
+    The edge's states, as full configurations (``base`` supplies the joints outside the group's
+    ``indices``), go in bisection order through the sphere checker's own scan (``scan_nb``, its
+    packed robot/scene/grid and work arrays ``amb``/``mark``). COLLIDING at the first colliding
+    state. With ``confirm``, states that are only ambiguous are copied to ``amb_states`` (``st[N_AMB]``
+    of them) and the edge is AMBIGUOUS if no state collides; without it an ambiguous state collides
+    (the pure, conservative sphere model).
+    """
+    dim = qa.shape[0]
+    steps = 0.0
+    for a in range(dim):
+        steps = max(steps, abs(qb[a] - qa[a]))
+    n = max(1, int(np.ceil(steps / resolution)))
+    states = np.empty((n, base.shape[0]))
+    order = bisection_order(n)
+    for r in range(n):
+        t = (order[r] + 1) / n
+        states[r] = base
+        for a in range(dim):
+            states[r, indices[a]] = qa[a] + t * (qb[a] - qa[a])
+    n_amb, row = 0, 0
+    while row < n:
+        hit, status, _ = scan_nb(states, row, ri, rf, sf, grid_i, grid_f, amb, mark, confirm)
+        if hit < 0:
+            st[CHECKS] += n - row
+            break
+        st[CHECKS] += hit + 1 - row
+        if status == COLLIDING:
+            return COLLIDING
+        for a in range(dim):
+            amb_states[n_amb, a] = states[hit, indices[a]]
+        n_amb += 1
+        row = hit + 1
+    st[N_AMB] = n_amb
+    return AMBIGUOUS if n_amb > 0 else VALID
+
+
+@njit(cache=True)
+def _add(nodes, parent, st, tree, q, par):
+    field = N0 + tree
+    i = st[field]
+    nodes[tree, i] = q
+    parent[tree, i] = par
+    st[field] = i + 1
+    return i
+
+
+@njit(cache=True)
+def _solved(st, tree, node, other):
+    """The trees meet: ``node`` of ``tree`` and ``other`` of the other tree."""
+    st[LINK0 + tree] = node
+    st[LINK0 + 1 - tree] = other
+    return SOLVED
+
+
+@njit(cache=True)
+def _propose(nodes, st, q_new, lower, upper, rng, max_range):
+    """The next edge: from node st[FROM] of tree st[TREE] to ``q_new`` (st[REACHED]: q_new is the target)."""
+    phase, tree = st[PHASE], st[TREE]
+    if phase == DIRECT:
+        q_new[:] = nodes[1, 0]
+        st[TREE], st[FROM], st[REACHED] = 0, 0, 1
+        return
+    if phase == EXTEND:
+        sample = np.empty(lower.shape[0])
+        for a in range(lower.shape[0]):
+            sample[a] = lower[a] + _uniform(rng) * (upper[a] - lower[a])
+        st[FROM] = _nearest(nodes[tree], st[N0 + tree], sample)
+        st[REACHED] = _steer(nodes[tree, st[FROM]], sample, max_range, q_new)
+        return
+    st[REACHED] = _steer(nodes[tree, st[FROM]], nodes[1 - tree, st[TARGET]], max_range, q_new)
+
+
+@njit(cache=True)
+def _apply(nodes, parent, st, q_new, valid):
+    """Update the trees and the phase with the verdict on the proposed edge; SOLVED or RUNNING."""
+    phase, tree = st[PHASE], st[TREE]
+    if phase == DIRECT:
+        if valid:
+            st[DUPLICATE] = 0
+            return _solved(st, 0, 0, 0)
+        st[PHASE], st[TREE] = EXTEND, 0
+        return RUNNING
+    if not valid:  # trapped: the other tree extends next (OMPL swaps the trees after each round)
+        st[PHASE], st[TREE] = EXTEND, (1 - tree if phase == EXTEND else tree)
+        return RUNNING
+    new = _add(nodes, parent, st, tree, q_new, st[FROM])
+    if phase == EXTEND:
+        other = 1 - tree
+        st[PHASE], st[TREE], st[TARGET] = CONNECT, other, new
+        st[FROM] = _nearest(nodes[other], st[N0 + other], q_new)
+        return RUNNING
+    if st[REACHED]:
+        st[DUPLICATE] = 1
+        return _solved(st, tree, new, st[TARGET])
+    st[FROM] = new
+    return RUNNING
+
+
+@njit(cache=True)
+def run(nodes, parent, st, q_new, amb_states, verdict, lower, upper, rng, max_range, resolution, base, indices,
+        ri, rf, sf, grid_i, grid_f, amb, mark, confirm, max_edges):  # fmt: skip
+    """Advance the search by at most ``max_edges`` edge checks; SOLVED, RUNNING, NEED_EXACT or FULL (module doc).
+
+    ``verdict``: the exact answer for the pending edge after a NEED_EXACT return (ignored otherwise);
+    ``ri`` … ``mark``: the sphere checker's kernel inputs (:func:`check_edge`).
+    """
+    if st[PENDING]:
+        st[PENDING] = 0
+        if _apply(nodes, parent, st, q_new, verdict) == SOLVED:
+            return SOLVED
+    cap = nodes.shape[1]
+    for _ in range(max_edges):
+        if st[N0] >= cap or st[N1] >= cap:
+            return FULL
+        _propose(nodes, st, q_new, lower, upper, rng, max_range)
+        tree = st[TREE]
+        status = check_edge(nodes[tree, st[FROM]], q_new, resolution, base, indices, ri, rf, sf, grid_i, grid_f,
+                            amb, mark, confirm, amb_states, st)  # fmt: skip
+        if status == AMBIGUOUS:
+            st[PENDING] = 1
+            return NEED_EXACT
+        if _apply(nodes, parent, st, q_new, status == VALID) == SOLVED:
+            return SOLVED
+    return RUNNING
+
+
+@njit(cache=True)
+def solution_path(nodes, parent, st):
+    """Waypoints start → goal of a SOLVED search: tree 0's branch to LINK0, then tree 1's from LINK1."""
+    n0 = 0
+    i = st[LINK0]
+    while i >= 0:
+        n0 += 1
+        i = parent[0, i]
+    first = parent[1, st[LINK1]] if st[DUPLICATE] else st[LINK1]
+    n1 = 0
+    i = first
+    while i >= 0:
+        n1 += 1
+        i = parent[1, i]
+    out = np.empty((n0 + n1, nodes.shape[2]))
+    i, k = st[LINK0], n0 - 1
+    while i >= 0:
+        out[k] = nodes[0, i]
+        i, k = parent[0, i], k - 1
+    i, k = first, n0
+    while i >= 0:
+        out[k] = nodes[1, i]
+        i, k = parent[1, i], k + 1
+    return out
