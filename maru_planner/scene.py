@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import time
 from collections import Counter, OrderedDict
 from pathlib import Path
 from typing import Any
@@ -156,6 +157,24 @@ def _is_file(text: str) -> bool:
 MAX_OBSTACLES = 500_000  # default size limit of a scene
 
 
+class BuildClock:
+    """Deadline of a scene build (``budget`` seconds, None = none), checked every ``every`` obstacles.
+
+    Running out raises InvalidScene naming the stage and how far it got.
+    """
+
+    def __init__(self, budget: float | None, total: int, every: int = 1024):
+        self.deadline = None if budget is None else time.monotonic() + float(budget)
+        self.budget, self.total, self.every = budget, total, every
+
+    def tick(self, done: int, stage: str) -> None:
+        if self.deadline is not None and done % self.every == 0 and time.monotonic() > self.deadline:
+            raise InvalidScene(
+                f"scene: the build ran out of its {self.budget:g} s budget while {stage} "
+                f"({done} of {self.total} obstacles); use a smaller scene or a larger build budget"
+            )
+
+
 class Scene:
     """An ordered set of named obstacles in ``frame`` (the robot's root frame), at most ``max_obstacles``."""
 
@@ -208,7 +227,11 @@ class Scene:
 
     # ---------------------------------------------------------------- I/O --
     @classmethod
-    def from_dict(cls, d: dict | None, base_dir: Path | None = None, *, max_obstacles: int = MAX_OBSTACLES) -> Scene:
+    def from_dict(
+        cls, d: dict | None, base_dir: Path | None = None, *, max_obstacles: int = MAX_OBSTACLES,
+        budget: float | None = None,
+    ) -> Scene:
+        """A scene from its dict form (at most ``max_obstacles``, read within ``budget`` seconds if given)."""
         if d is None:
             return cls(max_obstacles=max_obstacles)
         if not isinstance(d, dict):
@@ -221,14 +244,18 @@ class Scene:
             raise InvalidScene("scene: field 'obstacles' must be a list")
         if len(entries) > max_obstacles:
             raise InvalidScene(f"scene: {len(entries)} obstacles, more than the limit of {max_obstacles}")
-        obstacles = [Obstacle.from_dict(e, base_dir) for e in entries]
+        clock = BuildClock(budget, len(entries))
+        obstacles = []
+        for k, entry in enumerate(entries):
+            clock.tick(k, "reading obstacles")
+            obstacles.append(Obstacle.from_dict(entry, base_dir))
         dupes = sorted(name for name, count in Counter(o.name for o in obstacles).items() if count > 1)
         if dupes:
             raise InvalidScene(f"scene: duplicate obstacle name(s) {dupes}")
         return cls(obstacles, frame=str(d.get("frame", "base_link")), max_obstacles=max_obstacles)
 
     @classmethod
-    def from_yaml(cls, source: str | Path, *, max_obstacles: int = MAX_OBSTACLES) -> Scene:
+    def from_yaml(cls, source: str | Path, *, max_obstacles: int = MAX_OBSTACLES, budget: float | None = None) -> Scene:
         """Load from a YAML file path or a YAML string."""
         base_dir = None
         text = str(source)
@@ -243,7 +270,7 @@ class Scene:
             data = yaml.safe_load(text)
         except yaml.YAMLError as exc:
             raise InvalidScene(f"scene YAML does not parse: {exc}") from None
-        return cls.from_dict(data, base_dir, max_obstacles=max_obstacles)
+        return cls.from_dict(data, base_dir, max_obstacles=max_obstacles, budget=budget)
 
     def to_dict(self) -> dict:
         return {"frame": self.frame, "obstacles": [o.to_dict() for o in self.obstacles.values()]}

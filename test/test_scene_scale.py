@@ -158,3 +158,5 @@ def test_build_budget_stops_a_slow_build_with_one_line(maru1):
         with pytest.raises(InvalidScene, match=r"budget.*of 2100 obstacles") as err:
             make(maru1, scene, build_budget=0.0)
         assert "\n" not in str(err.value)
+    with pytest.raises(InvalidScene, match=r"budget.*reading obstacles.*of 2100"):
+        Scene.from_dict(scene.to_dict(), budget=0.0)

@@ -10,35 +10,17 @@
   manager-vs-manager query per check (``collides``), plus the diagnostics ``colliding_pairs`` and
   ``nearest`` on AABB-filtered pairs. A security margin (``padding``) inflates the obstacles' boxes,
   so pairs within the margin reach the narrow phase.
-- :class:`BuildClock`: the build's time budget; running out raises InvalidScene naming how far it got.
+Both builds tick a :class:`~maru_planner.scene.BuildClock` (the build's time budget).
 """
 
 from __future__ import annotations
-
-import time
 
 import coal
 import numpy as np
 import pinocchio as pin
 
-from maru_planner.errors import InvalidScene
 from maru_planner.robot.model import RobotModel
-from maru_planner.scene import Obstacle
-
-
-class BuildClock:
-    """Deadline of a scene build (``budget`` seconds, None = none), checked every ``every`` obstacles."""
-
-    def __init__(self, budget: float | None, total: int, every: int = 1024):
-        self.deadline = None if budget is None else time.monotonic() + float(budget)
-        self.budget, self.total, self.every = budget, total, every
-
-    def tick(self, done: int, stage: str) -> None:
-        if self.deadline is not None and done % self.every == 0 and time.monotonic() > self.deadline:
-            raise InvalidScene(
-                f"scene: building the collision scene ran out of its {self.budget:g} s budget while {stage} "
-                f"({done} of {self.total} obstacles); use a smaller scene or a larger build budget"
-            )
+from maru_planner.scene import BuildClock, Obstacle
 
 
 def robot_reach(robot: RobotModel) -> float:

@@ -30,9 +30,9 @@ import coal
 import numpy as np
 import pinocchio as pin
 
-from maru_planner.collision.broadphase import BuildClock, SceneTree, reachable_obstacles, robot_reach
+from maru_planner.collision.broadphase import SceneTree, reachable_obstacles, robot_reach
 from maru_planner.robot.model import RobotModel
-from maru_planner.scene import Obstacle, Scene
+from maru_planner.scene import BuildClock, Obstacle, Scene
 
 PAIR_LIST_LIMIT = 64  # reachable obstacles kept as pairs; beyond, the tree's per-check cost is lower
 

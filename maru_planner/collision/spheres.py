@@ -27,10 +27,10 @@ import numpy as np
 
 from maru_planner.collision import sphere_kernels as _kernels
 from maru_planner.collision.batch_fk import KinematicTree, batch_joint_poses, joint_poses_nb, sphere_centers_nb
-from maru_planner.collision.broadphase import BuildClock, robot_reach
+from maru_planner.collision.broadphase import robot_reach
 from maru_planner.collision.checker import self_collision_pairs
 from maru_planner.collision.sphere_model import SphereFitOptions, SphereModel, load_or_fit
-from maru_planner.scene import Obstacle, Scene
+from maru_planner.scene import BuildClock, Obstacle, Scene
 from maru_planner.shapes import KERNEL_KINDS, KernelPrimitive
 
 VALID, COLLIDING, AMBIGUOUS = 0, 1, 2  # same codes as sphere_kernels
