@@ -140,6 +140,11 @@ def by_primitive_type(type_name: str, where: str) -> ShapeSpec:
 # ------------------------------------------------------------------ validation --
 def numbers(where: str, field_name: str, value: Any, count: int) -> np.ndarray:
     """``count`` finite numbers from ``value``; InvalidScene naming ``where`` and the field otherwise."""
+    plain = [value] if type(value) in (float, int) else value  # plain Python numbers: no numpy round trip
+    if type(plain) in (list, tuple) and len(plain) == count and all(type(v) in (float, int) for v in plain):
+        if not all(math.isfinite(v) for v in plain):
+            raise InvalidScene(f"{where}: field '{field_name}' contains NaN or inf: {value!r}")
+        return np.array(plain, dtype=float)
     try:
         arr = np.asarray(value, dtype=float).reshape(-1)
     except (TypeError, ValueError):
