@@ -620,3 +620,75 @@ def test_trajectory_and_markers_are_published(client, tester):
 
 def _namespaces(marker_array) -> set[str]:
     return {m.ns for m in marker_array.markers if m.ns}
+
+
+# ---------------------------------------------------------------- load and hostile topics (issue 18)
+
+BURST = 64
+
+
+def test_a_burst_of_64_simultaneous_plans_loses_none(planner_node, tester, client):
+    """64 clients call plan_motion at once: each gets an answer, a plan or BUSY (admission queue full).
+
+    Every client's response reader sees the answers to all 64 (one reply topic per service), so
+    the clients keep a queue as deep as the burst (rclpy's default of 10 would drop their own)."""
+    from rclpy.qos import QoSProfile
+
+    from maru_planner.ros.planning_client import call_until_answered, plan_request
+    from maru_planner_interfaces.srv import PlanMotion
+
+    node = tester.node
+    deep = QoSProfile(depth=2 * BURST)
+    clients = [node.create_client(PlanMotion, "plan_motion", qos_profile=deep) for _ in range(BURST)]
+    for c in clients:
+        assert c.wait_for_service(timeout_sec=60.0)
+        call_until_answered(c, PlanMotion.Request(), timeout=60.0)  # both directions matched: nothing lost there
+    budget = 5.0
+    futures = [
+        c.call_async(plan_request(_easy_goal(PAPER_START, 0.2 + 0.002 * i), start=PAPER_START, time_budget=budget))
+        for i, c in enumerate(clients)
+    ]
+    answered = tester.wait_for(lambda: all(f.done() for f in futures), timeout=budget + 60.0)
+    codes = [f.result().error.code for f in futures if f.done()]
+    log = planner_node.log()
+    assert answered, (
+        f"{BURST - len(codes)} of {BURST} requests never answered; the node answered "
+        f"{log.count('plan_motion: BUSY')} BUSY and {log.count('points, core')} plans in all"
+    )
+    busy = [f.result().error.message for f in futures if f.result().error.code == _codes().BUSY]
+    assert set(codes) <= {_codes().SUCCESS, _codes().BUSY}, codes
+    assert codes.count(_codes().SUCCESS) >= 2, codes
+    assert all("queue_size" in message for message in busy), busy
+    for c in clients:
+        node.destroy_client(c)
+    _good_request_still_succeeds(client)
+
+
+def _rss_mb(pid: int) -> float:
+    for line in open(f"/proc/{pid}/status"):
+        if line.startswith("VmRSS:"):
+            return int(line.split()[1]) / 1024.0
+    raise AssertionError(f"no VmRSS for pid {pid}")
+
+
+def test_junk_joint_states_are_ignored_and_counted_never_stored(client, tester, joint_states, planner_node):
+    """A gripper joint, 50k junk names and NaN values on /joint_states: the robot's joints are still
+    taken from it, nothing else is kept (memory stays flat), and an empty start plans from the real joints."""
+    from sensor_msgs.msg import JointState
+
+    from maru_planner.ros.planning_conversions import joint_state_msg
+
+    moved = _easy_goal(PAPER_START, 0.12)
+    with_gripper = dict(moved, r_gripper_finger_joint=0.04)
+    joint_states.publish(joint_state_msg(list(with_gripper), list(with_gripper.values())))
+    rss_before = _rss_mb(planner_node.proc.pid)
+    junk = JointState(name=[f"junk_{i}" for i in range(50_000)], position=[0.0] * 50_000)
+    for _ in range(20):
+        joint_states.publish(junk)
+    joint_states.publish(JointState(name=list(moved), position=[math.nan] * len(moved)))
+    joint_states.publish(JointState(name=["waist_yaw"], position=[0.1, 0.2]))  # mismatched lengths
+    response = _plan_from_joint_states(client, tester, joint_states, moved, _easy_goal(PAPER_START, 0.35))
+    _assert_success(response)
+    assert _starts_at(response, moved)
+    assert "r_gripper_finger_joint" in planner_node.log() and "so far" in planner_node.log()
+    assert _rss_mb(planner_node.proc.pid) - rss_before < 50.0
