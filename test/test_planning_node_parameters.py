@@ -164,6 +164,30 @@ def test_parameters_carry_descriptors(params):
     assert params.describe("planners.PRM.max_nearest_neighbors").integer_range[0].from_value == 1
 
 
+def _flattened(params: dict, prefix: str = "") -> dict:
+    """``{"planners": {"RRT": {"range": 0.0}}}`` as ``{"planners.RRT.range": 0.0}`` (ROS's parameter names)."""
+    flat = {}
+    for key, value in params.items():
+        if isinstance(value, dict):
+            flat.update(_flattened(value, f"{prefix}{key}."))
+        else:
+            flat[f"{prefix}{key}"] = value
+    return flat
+
+
+def test_config_planner_yaml_restates_only_declared_defaults():
+    import yaml
+
+    from maru_planner.paths import config_path
+    from maru_planner.ros.planning_node import parameter_specs
+
+    section = yaml.safe_load(config_path("planner.yaml").read_text())["/**/planning_node"]["ros__parameters"]
+    specs = parameter_specs()
+    for name, value in _flattened(section).items():
+        assert name in specs, f"config/planner.yaml: {name} is not a parameter of planning_node"
+        assert specs[name].check(value) == specs[name].default, f"config/planner.yaml: {name} is not its default"
+
+
 # ---------------------------------------------------------------- run-time changes
 
 
