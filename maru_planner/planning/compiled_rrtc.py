@@ -162,7 +162,7 @@ class CompiledRRTConnect(ob.Planner):
         self._trees = (nodes, parent, st)
         q_new = np.empty(len(start))
         amb_states = np.empty((int(np.ceil((upper - lower).max() / edges.resolution)) + 2, len(start)))
-        inputs = _kernel_inputs(checker)
+        inputs = sphere_kernel_inputs(checker)
         indices = gs.indices.astype(np.int64)
         verdict, batch = False, _FIRST_EDGES
         while True:
@@ -224,7 +224,8 @@ def _kernel():
     return rrtc_kernel
 
 
-def _kernel_inputs(checker) -> tuple[np.ndarray, ...]:
+def sphere_kernel_inputs(checker) -> tuple[np.ndarray, ...]:
+    """The sphere checker's packed robot, scene, grid and work arrays, in the order ``rrtc_kernel.run`` takes them."""
     checker._sync()
     ri, rf = checker._packed_robot
     return ri, rf, checker._packed_scene, *checker._grid, checker._amb, checker._mark

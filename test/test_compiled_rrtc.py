@@ -1,0 +1,195 @@
+"""CompiledRRTConnect: the numba RRT-Connect kernel agrees with the sphere checker, is deterministic, solves the
+paper problems through the facade with certified paths, and falls back to OMPL on other checkers."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from ompl import base as ob
+from ompl import geometric as og
+
+from maru_planner.collision import CollisionChecker
+from maru_planner.collision.checker import bisection_order
+from maru_planner.collision.spheres import SphereCollisionChecker, verify_path
+from maru_planner.planning import PLANNERS, MotionPlanner, MotionRequest, PlannerConfig, PlanStatus
+from maru_planner.planning import rrtc_kernel as kernel
+from maru_planner.planning.compiled_rrtc import CompiledRRTConnect, sphere_kernel_inputs
+from maru_planner.planning.problems import PROBLEMS
+from maru_planner.planning.space import EdgeChecker, GroupSpace
+from maru_planner.robot import RobotModel, load_example_robot
+from maru_planner.scene import Obstacle, Scene
+
+ARM = [f"panda_joint{i}" for i in range(1, 8)]
+RESOLUTION = 0.05
+
+
+@pytest.fixture(scope="module")
+def panda():
+    return load_example_robot("panda")
+
+
+@pytest.fixture(scope="module")
+def maru1():
+    return RobotModel.maru1()
+
+
+def clutter(seed: int) -> Scene:
+    """Boxes, spheres and cylinders in the Panda's workspace."""
+    rng = np.random.default_rng(seed)
+    obstacles = []
+    for i in range(9):
+        pose = np.eye(4)
+        pose[:3, :3] = pin.rpy.rpyToMatrix(*rng.uniform(-np.pi, np.pi, 3))
+        pose[:3, 3] = rng.uniform([-0.6, -0.6, 0.0], [0.6, 0.6, 0.9])
+        kind = ("box", "sphere", "cylinder")[i % 3]
+        dims = {"box": {"size": tuple(rng.uniform(0.05, 0.3, 3))}, "sphere": {"radius": rng.uniform(0.03, 0.12)},
+                "cylinder": {"radius": rng.uniform(0.03, 0.1), "length": rng.uniform(0.1, 0.4)}}[kind]  # fmt: skip
+        obstacles.append(Obstacle(f"o{i}", kind, pose=pose, **dims))
+    return Scene(obstacles)
+
+
+def arm_space(robot) -> GroupSpace:
+    indices = robot.joint_indices(ARM)
+    return GroupSpace(ARM, indices, robot.lower_limits[indices], robot.upper_limits[indices], robot.neutral())
+
+
+def kernel_edge(checker, gs: GroupSpace, qa, qb) -> tuple[int, np.ndarray]:
+    """(VALID | COLLIDING | AMBIGUOUS, the ambiguous states) of the kernel's check of qa → qb."""
+    st = np.zeros(len(kernel.STATE_FIELDS), dtype=np.int64)
+    amb_states = np.empty((int(np.ceil(np.abs(qb - qa).max() / RESOLUTION)) + 1, gs.dim))
+    status = kernel.check_edge(np.asarray(qa, float), np.asarray(qb, float), RESOLUTION, gs.base,
+                               gs.indices.astype(np.int64), *sphere_kernel_inputs(checker), checker.confirm,
+                               amb_states, st)  # fmt: skip
+    return int(status), amb_states[: st[kernel.N_AMB]]
+
+
+def random_edges(gs: GroupSpace, n: int, seed: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Edges from random states, half of them short (a few states), half up to 1.5 rad long."""
+    rng = np.random.default_rng(seed)
+    edges = []
+    for i in range(n):
+        qa = rng.uniform(gs.lower, gs.upper)
+        length = 0.12 if i % 2 else 1.5
+        edges.append((qa, np.clip(qa + rng.uniform(-length, length, gs.dim), gs.lower, gs.upper)))
+    return edges
+
+
+# --- the kernel agrees with the sphere checker ---------------------------------------------
+def test_edge_answers_equal_the_pure_sphere_model(panda):
+    checker = SphereCollisionChecker(panda, clutter(1), confirm=False)
+    gs = arm_space(panda)
+    edges = EdgeChecker(gs, checker, RESOLUTION)
+    answers = [kernel_edge(checker, gs, qa, qb)[0] for qa, qb in random_edges(gs, 120, 2)]
+    expected = [edges.edge_valid(qa, qb) for qa, qb in random_edges(gs, 120, 2)]
+    assert [a == kernel.VALID for a in answers] == expected
+    assert kernel.AMBIGUOUS not in answers and 20 < sum(expected) < 100  # both kinds of edge were tested
+
+
+def test_single_states_equal_the_sphere_checker(panda):
+    checker = SphereCollisionChecker(panda, clutter(3), confirm=False)
+    gs = arm_space(panda)
+    rng = np.random.default_rng(4)
+    states = rng.uniform(gs.lower, gs.upper, (150, gs.dim))
+    short = [kernel_edge(checker, gs, q - 0.5 * RESOLUTION, q)[0] == kernel.VALID for q in states]  # one state: q
+    assert short == checker.are_valid(gs.full(states)).tolist()
+
+
+def test_with_confirmation_ambiguous_edges_get_the_checkers_exact_answer(panda):
+    checker = SphereCollisionChecker(panda, clutter(5))  # confirm=True: near contacts decided by coal
+    gs = arm_space(panda)
+    edges = EdgeChecker(gs, checker, RESOLUTION)
+    seen = set()
+    for qa, qb in random_edges(gs, 160, 6):
+        status, ambiguous = kernel_edge(checker, gs, qa, qb)
+        seen.add(status)
+        if status == kernel.AMBIGUOUS:
+            valid = checker.first_invalid(gs.full(ambiguous)) < 0
+        else:
+            valid = status == kernel.VALID
+        assert valid == edges.edge_valid(qa, qb)
+    assert seen == {kernel.VALID, kernel.COLLIDING, kernel.AMBIGUOUS}
+
+
+def test_edge_states_are_checked_in_bisection_order():
+    for n in (1, 2, 3, 7, 64, 100):
+        assert np.array_equal(kernel.bisection_order(n), bisection_order(n, include_first=False))
+
+
+# --- through the facade ----------------------------------------------------------------------
+def paper_request(robot: RobotModel, name: str, seed: int = 0, **kw) -> MotionRequest:
+    problem = PROBLEMS[name]
+    names = robot.groups[problem.group]
+    rest = {**dict(zip(robot.joint_names, robot.neutral(), strict=True)), **robot.named_states.get("home", {})}
+    start = {**rest, **problem.start_dict(names)}
+    return MotionRequest(problem.group, start=start, goal_joints=problem.goal_dict(names),
+                         planner_id="CompiledRRTConnect", time_budget=kw.pop("time_budget", 10.0), seed=seed,
+                         **kw)  # fmt: skip
+
+
+def full_path(robot: RobotModel, request: MotionRequest, path: np.ndarray) -> np.ndarray:
+    """The result's group path as full configurations (the other joints at their start values)."""
+    start = np.array([request.start[n] for n in robot.joint_names])
+    out = np.repeat(start[None], len(path), axis=0)
+    out[:, [robot.joint_names.index(n) for n in robot.groups[request.group]]] = path
+    return out
+
+
+@pytest.mark.parametrize("name", ["maru6", "maru13"])
+def test_solves_the_paper_problems_on_spheres_with_certified_paths(maru1, name):
+    scene = Scene.from_yaml(PROBLEMS[name].scene_path)
+    planner = MotionPlanner.from_scene(maru1, scene, PlannerConfig(collision_model="spheres"))
+    request = paper_request(maru1, name)
+    res = planner.plan(request)
+    assert res.status is PlanStatus.SUCCESS, res.message
+    assert res.stats.certified and res.stats.nodes >= 2 and res.stats.collision_checks > 0
+    assert verify_path(CollisionChecker(maru1, scene), full_path(maru1, request, res.path), 0.005).valid
+
+
+def test_same_seed_same_path_and_the_seed_parameter_decides(maru1):
+    scene = Scene.from_yaml(PROBLEMS["maru13"].scene_path)
+
+    def plan(seed: int, params: dict | None = None) -> np.ndarray:
+        config = PlannerConfig(collision_model="spheres", planner_params={"CompiledRRTConnect": params or {}})
+        res = MotionPlanner.from_scene(maru1, scene, config).plan(paper_request(maru1, "maru13", seed, simplify=False))
+        assert res.success, res.message
+        return res.path
+
+    assert np.array_equal(plan(3), plan(3))
+    assert np.array_equal(plan(3, {"seed": 11}), plan(4, {"seed": 11}))
+
+
+def test_a_goal_inside_an_obstacle_ends_at_the_termination_condition(panda):
+    """No edge can reach the goal: the kernel keeps returning to check the time, the trees stay readable."""
+    gs = arm_space(panda)
+    start = gs.base[gs.indices]
+    goal = np.clip(start + 0.8, gs.lower, gs.upper)
+    hand = panda.frame_pose(gs.full(goal), "panda_hand")[:3, 3]
+    checker = SphereCollisionChecker(panda, Scene([Obstacle("ball", "sphere", radius=0.1, pose=hand)]))
+    assert checker.is_valid(gs.full(start)) and not checker.is_valid(gs.full(goal))
+    ss = og.SimpleSetup(gs.space)
+    planner = CompiledRRTConnect(ss.getSpaceInformation(), EdgeChecker(gs, checker, RESOLUTION))
+    ss.setStartAndGoalStates(gs.to_state(start), gs.to_state(goal))
+    ss.setStateValidityChecker(lambda _state: True)  # let OMPL pass the goal on to the planner
+    ss.setPlanner(planner)
+    ss.solve(ob.timedPlannerTerminationCondition(0.3))
+    assert not ss.haveSolutionPath()
+    nodes, edges = planner.graph_size()
+    assert nodes > 2 and edges == nodes - 2
+    data = ob.PlannerData(ss.getSpaceInformation())
+    planner.getPlannerData(data)
+    assert (data.numVertices(), data.numEdges()) == (nodes, edges)
+
+
+def test_on_the_exact_checker_it_falls_back_to_ompl_rrtconnect(maru1):
+    scene = Scene.from_yaml(PROBLEMS["maru13"].scene_path)
+    planner = MotionPlanner.from_scene(maru1, scene, PlannerConfig(collision_model="exact"))
+    res = planner.plan(paper_request(maru1, "maru13", simplify=False))
+    assert res.success, res.message
+    assert res.stats.planner_id == "CompiledRRTConnect" and res.stats.nodes > 2
+    panda = load_example_robot("panda")
+    gs = arm_space(panda)
+    si = og.SimpleSetup(gs.space).getSpaceInformation()
+    assert not CompiledRRTConnect(si, EdgeChecker(gs, CollisionChecker(panda), RESOLUTION)).compiled
+    assert CompiledRRTConnect(si, EdgeChecker(gs, SphereCollisionChecker(panda), RESOLUTION)).compiled
+    assert "CompiledRRTConnect" in PLANNERS and PLANNERS["CompiledRRTConnect"].has("tree")
