@@ -1,7 +1,10 @@
 """Start planning_node with config/planner.yaml (ros2 launch maru_planner planning.launch.py).
 
 Arguments: ``params_file`` (default: the installed config/planner.yaml), ``namespace`` (services and
-topics are relative, so a namespace moves them), ``scene_file`` (overrides the yaml's scene).
+topics are relative, so a namespace moves them; the yaml is keyed ``/**/planning_node``, so it still
+applies), ``scene_file`` (overrides the yaml's scene). Networking comes from the environment the launch
+runs in (RMW_IMPLEMENTATION, ROS_AUTOMATIC_DISCOVERY_RANGE, ...); with none of it set the node stays on
+loopback (see docs/planning_node.md).
 """
 
 import os
