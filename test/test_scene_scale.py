@@ -108,6 +108,7 @@ def test_tree_agrees_with_every_pair(maru1, padding):
     tree = CollisionChecker(maru1, scene, padding=padding, pair_list_limit=0)
     pairs = CollisionChecker(maru1, scene, padding=padding, pair_list_limit=EVERY_PAIR)
     assert tree.scene_tree is not None and pairs.scene_tree is None and tree.n_pairs == pairs.n_pairs
+    assert len(tree.geometry_model.collisionPairs) == len(pairs.geometry_model.collisionPairs) == pairs.n_pairs
     Q = self_free_configs(maru1, 300, 5)
     clear = np.array([abs(pairs.clearance(q)) > 1e-4 for q in Q])  # skip GJK-borderline contacts
     valid = pairs.are_valid(Q)

@@ -154,9 +154,23 @@ class CollisionChecker:
     def _build(self) -> None:
         obstacles = list(self._scene.obstacles.values())
         clock = BuildClock(self.build_budget, len(obstacles))
-        reachable = reachable_obstacles(obstacles, self.reach, self.padding, clock)
-        listed = reachable if len(reachable) <= self.pair_list_limit else []
-        self.scene_tree = SceneTree(self.robot, reachable, self.padding, clock) if not listed and reachable else None
+        self._reachable = reachable_obstacles(obstacles, self.reach, self.padding, clock)
+        listed = self._reachable if len(self._reachable) <= self.pair_list_limit else []
+        tree = SceneTree(self.robot, self._reachable, self.padding, clock) if not listed and self._reachable else None
+        self.scene_tree = tree
+        self._geom_model, self._pair_names = self._pair_model(listed)
+        self._full_model = None if tree is not None else self._geom_model
+        self._geom_data = pin.GeometryData(self._geom_model)
+        for request in self._geom_data.collisionRequests:
+            request.security_margin = self.padding
+            request.enable_contact = False
+        self._scene_version = self._scene.version
+        manager = BROADPHASES[self.broadphase]
+        has_pairs = bool(self._pair_names)
+        self._manager = manager(self._model, self._geom_model, self._geom_data) if manager and has_pairs else None
+
+    def _pair_model(self, listed: list[Obstacle]) -> tuple[pin.GeometryModel, list[tuple[str, str]]]:
+        """Robot geometry + ``listed`` obstacles, with (moving link, obstacle) pairs first, then self pairs."""
         geom_model = self.robot.collision_model.copy()
         n_robot = geom_model.ngeoms
         names = [self._model.frames[g.parentFrame].name for g in geom_model.geometryObjects]
@@ -166,20 +180,11 @@ class CollisionChecker:
             geom_model.addGeometryObject(obj)
             names.append(obstacle.name)
         moving = [i for i in range(n_robot) if geom_model.geometryObjects[i].parentJoint != 0]
-        scene_pairs = [(i, k) for k in range(n_robot, geom_model.ngeoms) for i in moving]
-        pairs = scene_pairs + self._self_pairs
+        pairs = [(i, k) for k in range(n_robot, geom_model.ngeoms) for i in moving] + self._self_pairs
         geom_model.removeAllCollisionPairs()
         for i, j in pairs:
             geom_model.addCollisionPair(pin.CollisionPair(i, j))
-        self._geom_model = geom_model
-        self._geom_data = pin.GeometryData(geom_model)
-        for request in self._geom_data.collisionRequests:
-            request.security_margin = self.padding
-            request.enable_contact = False
-        self._pair_names = [(names[i], names[j]) for i, j in pairs]
-        self._scene_version = self._scene.version
-        manager = BROADPHASES[self.broadphase]
-        self._manager = manager(self._model, geom_model, self._geom_data) if manager and pairs else None
+        return geom_model, [(names[i], names[j]) for i, j in pairs]
 
     def _collides(self, q: np.ndarray) -> bool:
         if self._manager is not None:
@@ -208,9 +213,12 @@ class CollisionChecker:
 
     @property
     def geometry_model(self) -> pin.GeometryModel:
-        """Robot + scene geometry, its ``collisionPairs`` the checked pairs (current scene; do not modify)."""
+        """Robot + every reachable obstacle, its ``collisionPairs`` the checked pairs (current scene; do not
+        modify). With a scene tree this pair list is built on first use (obstacles x moving links)."""
         self._sync()
-        return self._geom_model
+        if self._full_model is None:
+            self._full_model = self._pair_model(self._reachable)[0]
+        return self._full_model
 
     # ------------------------------------------------------------- checks --
     def is_valid(self, q: np.ndarray) -> bool:
