@@ -189,3 +189,33 @@ def test_bad_maps_are_rejected_and_a_good_one_recovers(client):
     response = client.request()
     assert response.error_code == E.NONE and response.deciding_stage == "BAA"
     assert client.proc.alive()
+
+
+def test_budgets_hold_for_huge_footprints_maps_and_searches(client):
+    """No request holds the node past its budget + 0.5 s; what cannot fit is refused with an estimate."""
+    import numpy as np
+
+    from maru_planner.base.grid import OccupancyGrid
+    from maru_planner_interfaces.srv import PlanBasePath
+
+    E = PlanBasePath.Response
+    huge = [(50.0, 50.0), (-50.0, 50.0), (-50.0, -50.0), (50.0, -50.0)]
+    client.publish_map(map_msg(table1("easy")), "map 60 x 40 cells")
+    for planner_id in ("se2", "mspp", "astar", "tunnel", "biped_wall"):
+        response = client.request(planner_id=planner_id, footprint=huge, time_limit=5.0)
+        assert response.error_code in (E.START_OCCUPIED, E.INVALID_REQUEST), (planner_id, response.error_msg)
+        assert response.planning_time <= 5.5
+    big = OccupancyGrid(np.random.default_rng(0).random((2000, 2000)) < 0.001, 0.05)
+    client.publish_map(map_msg(big), "map 2000 x 2000 cells")
+    refused = client.request(start=(10.0, 10.0, 0.0), goal=(90.0, 90.0, 0.0), planner_id="se2", footprint=huge,
+                             time_limit=5.0)
+    assert refused.error_code in (E.INVALID_REQUEST, E.START_OCCUPIED, E.TIMEOUT), refused.error_msg
+    assert refused.planning_time <= 5.5
+    too_big = client.request(start=(10.0, 10.0, 0.0), goal=(90.0, 90.0, 0.0), planner_id="se2", time_limit=1.0)
+    assert too_big.error_code == E.INVALID_REQUEST and "GB, over the 2 GB limit" in too_big.error_msg
+    for planner_id in ("biped_wall", "biped_track", "mspp_local", "tunnel"):
+        slow = client.request(start=(10.0, 10.0, 0.0), goal=(90.0, 90.0, 0.0), planner_id=planner_id, time_limit=1.0)
+        assert slow.error_code in (E.TIMEOUT, E.NONE, E.NO_VALID_PATH), (planner_id, slow.error_msg)
+        assert slow.planning_time <= 1.5, (planner_id, slow.planning_time)
+    client.publish_map(map_msg(table1("easy")), "map 60 x 40 cells")
+    assert client.request().error_code == E.NONE and client.proc.alive()

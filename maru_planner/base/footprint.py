@@ -16,7 +16,7 @@ from maru_planner.base.budget import Deadline, check_bytes, unlimited
 from maru_planner.errors import InvalidRequest
 
 EDGE_TOLERANCE = 1e-9
-_CHUNK_POINTS = 1 << 20  # points tested per numpy call while rasterising (bounds the temporaries)
+_CHUNK_POINTS = 1 << 16  # points tested per numpy call while rasterising (bounds temporaries and deadline lag)
 
 
 def as_polygon(footprint) -> np.ndarray:

@@ -39,7 +39,7 @@ from maru_planner.base.budget import Deadline, check_map_cells, unlimited
 from maru_planner.errors import InvalidMap, InvalidRequest
 
 # Inflation works on strips of this many rows (plus the radius on each side), checking the deadline between.
-_INFLATE_STRIP_ROWS = 256
+_INFLATE_STRIP_ROWS = 128
 
 # Pixel values map_saver writes (trinary mode).
 PGM_FREE = 254

@@ -96,6 +96,14 @@ def make_planner(planner_id: str, footprint: Sequence | np.ndarray | None, **par
     return entry.factory(footprint if entry.has(USES_FOOTPRINT) else None, **values)
 
 
+def warm_up() -> None:
+    """Load every planner's compiled kernels once (a long-running caller's first request then pays no JIT load)."""
+    grid = OccupancyGrid(np.pad(np.zeros((8, 8), bool), 1, constant_values=True), 0.1)
+    footprint = np.array([[0.1, 0.05], [-0.1, 0.05], [-0.1, -0.05], [0.1, -0.05]])
+    for planner_id in planner_ids():
+        plan(planner_id, grid, (0.25, 0.25, 0.0), (0.75, 0.75, 1.0), footprint)
+
+
 def plan(
     planner_id: str,
     grid: OccupancyGrid | None,

@@ -395,14 +395,20 @@ def segment_is_free(occupied: np.ndarray, a, b) -> bool:
     return True
 
 
-def shortcut_cells(occupied: np.ndarray, cells: list) -> list:
-    """Keep only the turning points: from each anchor, the farthest cell still in line of sight."""
+def shortcut_cells(occupied: np.ndarray, cells: list, deadline: Deadline | None = None) -> list:
+    """Keep only the turning points: from each anchor, the farthest cell still in line of sight.
+
+    When ``deadline`` passes, the rest of the chain is kept as it is (still a valid path).
+    """
     if len(cells) <= 2:
         return list(cells)
+    deadline = deadline or unlimited()
     out = [cells[0]]
     anchor = 0
     j = 1
     while j < len(cells):
+        if deadline.expired():
+            return out + list(cells[anchor + 1 :])
         if segment_is_free(occupied, cells[anchor], cells[j]):
             j += 1
             continue
@@ -450,7 +456,7 @@ class TunnelPlanner:
                 _check_endpoint(occupied, cell, name)
             return self._search(occupied, start, goal, attempts, stats, deadline or unlimited(), t0)
         except MaruError as error:
-            return self._finish(error, str(error), [], attempts, occupied, stats, t0)
+            return self._finish(error, str(error), [], attempts, occupied, stats, t0, unlimited())
 
     def _search(self, occupied, start, goal, attempts, stats, deadline, t0) -> CellPlan:
         p = self.params
@@ -462,7 +468,7 @@ class TunnelPlanner:
                 attempts.append(attempt)
                 if cells is not None:
                     return self._finish(None, f"path found with big cells of {size}×{size}",
-                                        cells, attempts, occupied, stats, t0)
+                                        cells, attempts, occupied, stats, t0, deadline)
                 if attempt.failed_stage == "TFP" or size > p.min_big_cell_size:
                     break
                 if len(blocked) >= p.max_virtual_obstacles:
@@ -497,10 +503,10 @@ class TunnelPlanner:
         attempt = Attempt(bg.size, None, bg.to_rc(tunnel), lumped, bg.to_rc(thin), _as_array(cells), virtual)
         return attempt, cells
 
-    def _finish(self, error, message, cells, attempts, occupied, stats: TunnelStats, t0) -> CellPlan:
+    def _finish(self, error, message, cells, attempts, occupied, stats: TunnelStats, t0, deadline) -> CellPlan:
         waypoints = cells
         if cells and self.params.shortcut:
-            waypoints = shortcut_cells(occupied, cells)
+            waypoints = shortcut_cells(occupied, cells, deadline)
         stats.expansions = stats.tfp_expansions + stats.pfp_expansions
         stats.planning_time = time.perf_counter() - t0
         return CellPlan(error, message, _as_array(cells), _as_array(waypoints), attempts, stats)

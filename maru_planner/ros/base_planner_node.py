@@ -88,6 +88,7 @@ class BasePlannerNode(Node):
         super().__init__("base_planner_node", **kwargs)
         self.config = BaseNodeConfig(**parameters.declare_parameters(self, NODE_SPECS))
         check_config(self.config)
+        registry.warm_up()
         self.grid: OccupancyGrid | None = None
         self.map_msg: OccupancyGridMsg | None = None
         self.map_error = "no map received yet on " + self.config.map_topic

@@ -24,7 +24,10 @@ import numpy as np
 from scipy import ndimage
 
 from maru_planner.base.biped.world import BipedRobot, BipedWorld, Box3D, grid_shape
+from maru_planner.base.budget import Deadline, unlimited
 from maru_planner.base.grid import OccupancyGrid
+
+_STRIP_ROWS = 128  # rows per distance transform when the clearance is capped
 
 STEPPABLE, LINE, VIRTUAL, LINE_AND_VIRTUAL, OVERHEAD = "steppable", "line", "virtual", "line+virtual", "overhead"
 
@@ -69,11 +72,27 @@ class BipedMap2D:
     def cell_to_world(self, row: float, col: float) -> tuple[float, float]:
         return self.origin[0] + (col + 0.5) * self.resolution, self.origin[1] + (row + 0.5) * self.resolution
 
-    def clearance(self) -> np.ndarray:
-        """Metres from each cell centre to the nearest obstacle cell's edge (map border counts as obstacle)."""
-        padded = np.pad(~self.occupied, 1, constant_values=False)
-        dist = ndimage.distance_transform_edt(padded)[1:-1, 1:-1] * self.resolution
-        return np.maximum(dist - self.resolution / 2, 0.0)
+    def clearance(self, cap: float = math.inf, deadline: Deadline | None = None) -> np.ndarray:
+        """Metres from each cell centre to the nearest obstacle cell's edge (map border counts as obstacle).
+
+        Values above ``cap`` come out as ``cap``: with a finite cap the transform runs in strips of
+        rows (each seeing the obstacles within ``cap`` around it) and checks ``deadline`` between them.
+        """
+        deadline = deadline or unlimited()
+        free = ~self.occupied
+        height = free.shape[0]
+        reach = height if not math.isfinite(cap) else int(math.ceil(cap / self.resolution)) + 2
+        out = np.empty(free.shape)
+        for top in range(0, height, _STRIP_ROWS):
+            deadline.check_now("computing the clearance")
+            bottom = min(top + _STRIP_ROWS, height)
+            lo, hi = max(top - reach, 0), min(bottom + reach, height)
+            pad_top, pad_bottom = int(lo == 0), int(hi == height)
+            padded = np.pad(free[lo:hi], ((pad_top, pad_bottom), (1, 1)), constant_values=False)
+            dist = ndimage.distance_transform_edt(padded)[pad_top : pad_top + hi - lo, 1:-1]
+            strip = dist[top - lo : bottom - lo] * self.resolution - self.resolution / 2
+            out[top:bottom] = np.minimum(np.maximum(strip, 0.0), cap)
+        return out
 
     def to_occupancy_grid(self):
         """As a ``maru_planner.base.grid.OccupancyGrid`` (for the CLI, the node and A*)."""

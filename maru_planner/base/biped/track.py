@@ -34,11 +34,12 @@ from maru_planner.base.biped.world import BipedRobot
 from maru_planner.base.budget import Deadline
 from maru_planner.base.common import wrap_angle
 from maru_planner.base.planner import Endpoint, PlanRun
-from maru_planner.errors import InvalidRequest, NoPath, TooLarge
+from maru_planner.errors import InvalidRequest, NoPath, PlanningTimedOut, TooLarge
 from maru_planner.params import param
 
 # Qhull cannot be interrupted: more obstacle-boundary points than this are refused up front.
-MAX_VORONOI_POINTS = 200_000
+MAX_VORONOI_POINTS = 100_000
+_VORONOI_SECONDS_PER_POINT = 1e-4  # a generous Qhull time per point (about 2e-5 s measured on a loaded machine)
 
 
 @dataclass
@@ -83,9 +84,11 @@ def _boundary_points(m: BipedMap2D) -> np.ndarray:
 
 
 class ClearanceLookup:
-    def __init__(self, m: BipedMap2D):
+    """Clearance of a map's cells (capped at ``cap`` metres) looked up at points and along segments."""
+
+    def __init__(self, m: BipedMap2D, cap: float = math.inf, deadline: Deadline | None = None):
         self.m = m
-        self.values = m.clearance()
+        self.values = m.clearance(cap, deadline)
 
     def at(self, pts: np.ndarray) -> np.ndarray:
         pts = np.asarray(pts, dtype=float).reshape(-1, 2)
@@ -112,12 +115,17 @@ def build_track_graph(m: BipedMap2D, robot: BipedRobot, clearance: ClearanceLook
     if len(pts) > MAX_VORONOI_POINTS:
         raise TooLarge(f"the map has {len(pts)} obstacle-boundary points, over the track planner's limit of "
                        f"{MAX_VORONOI_POINTS}: use a coarser map")
+    needed = len(pts) * _VORONOI_SECONDS_PER_POINT
+    if deadline.remaining() < needed:  # Qhull cannot be interrupted: start it only with time to finish
+        raise PlanningTimedOut(f"not enough budget left for the Voronoi diagram of {len(pts)} points "
+                               f"(about {needed:.2f} s, {max(deadline.remaining(), 0.0):.2f} s left)")
     vor = Voronoi(pts)
+    deadline.check_now("building the track graph")
     verts = vor.vertices
     vclear = clearance.at(verts)
     adjacency: dict = {}
     for (pi, pj), (va, vb) in zip(vor.ridge_points, vor.ridge_vertices):
-        deadline.check("building the track graph")
+        deadline.check_now("building the track graph")
         if va < 0 or vb < 0 or va == vb:
             continue
         if np.linalg.norm(pts[pi] - pts[pj]) < robot.gait_width + m.resolution:
@@ -197,7 +205,8 @@ class TrackFollowingPlanner(BipedPlanner):
 
     def _search(self, m: BipedMap2D, checker, start, goal, run: PlanRun) -> np.ndarray:
         robot, p, stats, layers = self.robot, self.params, run.stats, run.layers
-        clearance = ClearanceLookup(m)
+        # the turning rule and the gait width never ask for more than K (+ a cell)
+        clearance = ClearanceLookup(m, robot.corner_distance + m.resolution, run.deadline)
         verts, adjacency = build_track_graph(m, robot, clearance, run.deadline)
         layers["track_vertices"], layers["track_edges"] = verts, _edge_array(verts, adjacency)
         half = robot.gait_width / 2

@@ -29,22 +29,19 @@ import dataclasses
 import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import dijkstra
 
 from maru_planner.base.biped.geometry import RectangleChecker
 from maru_planner.base.biped.mapping import BipedMap2D
 from maru_planner.base.biped.space import BipedPlanner, BipedSpace, BipedStats
 from maru_planner.base.biped.world import BipedRobot
-from maru_planner.base.budget import check_bytes
+from maru_planner.base.budget import Deadline, unlimited
 from maru_planner.base.common import wrap_angle
+from maru_planner.base.kernels import heap_grow, heap_pop, heap_push, now
 from maru_planner.base.planner import Endpoint, PlanRun
 from maru_planner.errors import InvalidRequest, NoPath
 from maru_planner.params import param
-
-# Memory of the cost-to-go graph per map cell: 4 edge directions x (row, col, weight) + CSR copy.
-_GRAPH_BYTES_PER_CELL = 4 * 24 * 2
 
 
 @dataclass
@@ -87,32 +84,60 @@ class WallStats(BipedStats):
     jammed_steps: int = 0
 
 
-def cost_to_go(passable: np.ndarray, goal_cell, cell_cost: np.ndarray | None = None) -> np.ndarray:
-    """Octile wavefront cost from ``goal_cell`` over ``passable`` cells (inf elsewhere).
+def cost_to_go(passable: np.ndarray, goal_cell, cell_cost: np.ndarray | None = None,
+               deadline: Deadline | None = None) -> np.ndarray:
+    """Octile wavefront cost from ``goal_cell`` over ``passable`` cells (inf elsewhere), 8-connected, no corner cutting.
 
     A move costs its length times the mean ``cell_cost`` of its two cells (1 by default).
+    Raises PlanningTimedOut when ``deadline`` passes.
     """
+    passable = np.ascontiguousarray(passable, dtype=np.bool_)
+    costs = np.ones(passable.shape) if cell_cost is None else np.ascontiguousarray(cell_cost, dtype=float)
+    deadline = deadline or unlimited()
+    dist, finished = _wavefront_kernel(passable, costs, int(goal_cell[0]), int(goal_cell[1]), deadline.at)
+    if not finished:
+        deadline.raise_timeout(f"the cost-to-go wavefront over {passable.shape[1]} x {passable.shape[0]} cells")
+    return dist
+
+
+@numba.njit(cache=True, nogil=True)
+def _wavefront_kernel(passable, costs, gr, gc, deadline_at):
+    """Dijkstra from (gr, gc); returns (distances, False when the deadline passed first)."""
     h, w = passable.shape
-    check_bytes(float(h * w * _GRAPH_BYTES_PER_CELL), f"the cost-to-go graph over {w} x {h} cells",
-                "use a coarser map")
-    index = np.arange(h * w).reshape(h, w)
-    rows, cols, weights = [], [], []
-    for dr, dc in ((0, 1), (1, 0), (1, 1), (1, -1)):
-        c0, c1 = max(0, -dc), w - max(0, dc)
-        here = (slice(0, h - dr), slice(c0, c1))
-        there = (slice(dr, h), slice(c0 + dc, c1 + dc))
-        ok = passable[here] & passable[there]
-        if dr and dc:  # no corner cutting
-            ok &= passable[dr:h, c0:c1] & passable[0 : h - dr, c0 + dc : c1 + dc]
-        rows.append(index[here][ok])
-        cols.append(index[there][ok])
-        step = np.full(int(ok.sum()), math.hypot(dr, dc))
-        if cell_cost is not None:
-            step *= 0.5 * (cell_cost[here][ok] + cell_cost[there][ok])
-        weights.append(step)
-    graph = coo_matrix((np.concatenate(weights), (np.concatenate(rows), np.concatenate(cols))), shape=(h * w, h * w))
-    dist = dijkstra(graph.tocsr(), directed=False, indices=int(index[goal_cell]))
-    return dist.reshape(h, w)
+    dist = np.full((h, w), np.inf)
+    closed = np.zeros((h, w), dtype=np.bool_)
+    keys, gs, ids = np.empty(1024), np.empty(1024), np.empty(1024, dtype=np.int64)
+    dist[gr, gc] = 0.0
+    size = heap_push(keys, gs, ids, 0, 0.0, 0.0, gr * w + gc)
+    pops = 0
+    while size > 0:
+        node, d, size = heap_pop(keys, gs, ids, size)
+        r, c = node // w, node % w
+        if closed[r, c]:
+            continue
+        closed[r, c] = True
+        pops += 1
+        if (pops & 4095) == 0 and now() > deadline_at:
+            return dist, False
+        for dr in range(-1, 2):
+            for dc in range(-1, 2):
+                nr, nc = r + dr, c + dc
+                if (dr == 0 and dc == 0) or nr < 0 or nc < 0 or nr >= h or nc >= w:
+                    continue
+                if not passable[nr, nc] or closed[nr, nc]:
+                    continue
+                step = 1.0
+                if dr != 0 and dc != 0:
+                    if not (passable[r + dr, c] and passable[r, c + dc]):
+                        continue
+                    step = math.sqrt(2.0)
+                nd = d + step * (0.5 * (costs[r, c] + costs[nr, nc]))
+                if nd < dist[nr, nc]:
+                    dist[nr, nc] = nd
+                    if size == keys.shape[0]:
+                        keys, gs, ids = heap_grow(keys, gs, ids)
+                    size = heap_push(keys, gs, ids, size, nd, nd, nr * w + nc)
+    return dist, True
 
 
 class VirtualWallPlanner(BipedPlanner):
@@ -219,13 +244,15 @@ class VirtualWallPlanner(BipedPlanner):
         robot = self.robot
         trace = {"theta_cw": [], "theta_ccw": [], "xi": [], "widening": [], "damping": []}
         run.layers["trace"] = trace
-        clearance = m.clearance()
+        # passability and the centring cost look at clearances up to K only
+        clearance = m.clearance(robot.corner_distance + m.resolution, run.deadline)
         passable = clearance >= min(robot.gait_length, robot.gait_width) / 2 - 1e-9
         goal_cell = m.world_to_cell(goal[0], goal[1])
         passable[goal_cell] = True
         # Narrow cells cost more, so the descent keeps to the middle of passages narrower than K.
         shortfall = np.clip(robot.corner_distance - clearance, 0.0, None) / m.resolution
-        field = cost_to_go(passable, goal_cell, 1.0 + self.params.centering * shortfall)
+        run.deadline.check_now("virtual-wall set-up")
+        field = cost_to_go(passable, goal_cell, 1.0 + self.params.centering * shortfall, run.deadline)
         run.layers["cost_to_go"] = field
         start_cell = m.world_to_cell(start[0], start[1])
         if not np.isfinite(field[start_cell]) and self._reference_heading(field, m, start) is None:
