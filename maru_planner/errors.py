@@ -6,6 +6,14 @@ names what is wrong (the joint, obstacle, link or field).
 
 from __future__ import annotations
 
+MESSAGE_LIMIT = 300  # characters of an error message a node or CLI passes on (a bad value is quoted as an excerpt)
+
+
+def one_line(message: object, limit: int = MESSAGE_LIMIT) -> str:
+    """``message`` as one line of at most ``limit`` characters (whitespace runs collapsed, the rest cut)."""
+    text = " ".join(str(message).split())
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
 
 class MaruError(Exception):
     """Base of all maru_planner errors."""

@@ -135,19 +135,6 @@ def chord_deviation(times: np.ndarray, acceleration_bound: np.ndarray) -> np.nda
     return np.abs(np.asarray(acceleration_bound, dtype=float)) * dt * dt / 8.0
 
 
-def polyline_deviation(samples: np.ndarray) -> np.ndarray:
-    """Per joint, how far a curve leaves the chords between ``samples`` taken at equal parameter steps.
-
-    Exact for a curve whose second derivative is constant between samples (a parabolic blend: its second
-    differences are that derivative times the step squared, and a chord is off by an eighth of it); for
-    other smooth curves sampled finely, an estimate. Pass it as ``deviation`` to ``certify_path``.
-    """
-    samples = np.atleast_2d(np.asarray(samples, dtype=float))
-    if len(samples) < 3:
-        return np.zeros(samples.shape[1])
-    return np.abs(np.diff(samples, n=2, axis=0)).max(axis=0) / 8.0
-
-
 @dataclass
 class _Pairs:
     """The checker's pairs as arrays, for one geometry model (rebuilt when the scene changes)."""

@@ -56,6 +56,10 @@ from maru_planner.planning.types import (
 )
 
 OMPL_LOCK = threading.RLock()
+REPAIR_RESOLUTION = 0.02  # rad: the coarsest motion step of a repair's local search
+# Slowest scaling a request may ask for (10,000x the full-speed duration); far below it the time
+# parameterisations overflow (1e-300 gave NaN durations and internal errors).
+MIN_SCALING = 1e-4
 ou.setLogLevel(ou.LOG_WARN)  # OMPL's INFO chatter would mix into CLI output
 
 
@@ -210,12 +214,14 @@ class MotionPlanner:
     def _repair_planner(self, request: MotionRequest, seed: int):
         """The local planner of a repair: RRTConnect between two waypoints of the request's group.
 
-        It plans on the exact model padded by the margin, at the verification step (``config.verify_step``).
+        It plans on the exact model padded by the margin, at ``config.resolution`` or :data:`REPAIR_RESOLUTION`
+        if finer (a coarse search's gaps are what certification caught).
         """
         from maru_planner.collision import CollisionChecker  # lazy like make_checkers: exact model only
 
+        resolution = min(self.config.resolution, REPAIR_RESOLUTION)
         config = dataclasses.replace(
-            self.config, resolution=self.config.verify_step, certify=False, time_parameterization="trapezoid"
+            self.config, resolution=resolution, certify=False, time_parameterization="trapezoid"
         )
         names = self.robot.joint_names
         group = [names[i] for i in self.robot.group_joint_indices(request.group)]
@@ -298,8 +304,8 @@ class MotionPlanner:
             raise errors.InvalidRequest(f"attempts must be >= 1, got {req.attempts}")
         for name in ("velocity_scaling", "acceleration_scaling", "jerk_scaling"):
             value = float(getattr(req, name))
-            if not (math.isfinite(value) and 0.0 < value <= 1.0):
-                raise errors.InvalidRequest(f"{name} must be in (0, 1], got {value}")
+            if not (math.isfinite(value) and MIN_SCALING <= value <= 1.0):
+                raise errors.InvalidRequest(f"{name} must be in [{MIN_SCALING:g}, 1], got {value:.3g}")
         method = req.time_parameterization or self.config.time_parameterization
         if method not in timing.METHODS:
             raise errors.InvalidRequest(
@@ -355,19 +361,12 @@ class MotionPlanner:
         )
 
     def _time_parameterize(self, req, method: str, path, start_full, indices, stats, deadline=None) -> Trajectory:
-        """``path`` timed by ``method`` (:mod:`~maru_planner.planning.timing`); blends re-checked on the exact model.
+        """``path`` timed by ``method`` (:mod:`~maru_planner.planning.timing`), blends checked by :meth:`_curve_check`.
 
         Blends still unchecked at ``deadline`` (the request's budget; None: no limit) become stops, so a
         tight budget gets a slower trajectory rather than a timeout.
         """
-        checker = self.exact_checker or self.checker
-
-        def curve_free(states: np.ndarray, _chord_deviation: np.ndarray) -> bool:
-            # the states alone, timing.CERTIFY_STEP apart: the chords between them are not certified
-            full = np.repeat(start_full[None], len(states), axis=0)
-            full[:, indices] = states
-            return checker.first_invalid(full) < 0
-
+        curve_free, certify_step = self._curve_check(req, start_full, indices, deadline)
         limits = timing.Limits.scaled(
             np.asarray(self.robot.velocity_limits)[indices],
             np.asarray(self.robot.acceleration_limits)[indices],
@@ -385,9 +384,40 @@ class MotionPlanner:
             dt=self.config.trajectory_dt,
             max_points=self.config.max_trajectory_points,
             deadline=deadline,
+            certify_step=certify_step,
+            sample_deadline=deadline,
         )
         stats.time_parameterization = report.method
         return trajectory
+
+    def _curve_check(self, req, start_full, indices, deadline) -> tuple[timing.CurveFree, float]:
+        """How blended corners are checked, and the joint step of their samples.
+
+        With a certifier, like the path: proven clear by the request's safety margin, continuously along
+        chords ``config.resolution`` apart, the margin grown by how far the curve leaves them. Otherwise
+        the exact checker at the states alone, :data:`timing.CERTIFY_STEP` apart.
+        """
+
+        def full(states: np.ndarray) -> np.ndarray:
+            out = np.repeat(start_full[None], len(states), axis=0)
+            out[:, indices] = states
+            return out
+
+        if self.certifier is not None:
+            margin = _safety_margin(req, self.config)
+
+            def certified(states: np.ndarray, chord_deviation: np.ndarray) -> bool:
+                deviation = np.zeros(len(start_full))
+                deviation[indices] = chord_deviation
+                return self.certifier.certify_path(full(states), deadline, margin=margin, deviation=deviation).valid
+
+            return certified, self.config.resolution
+        checker = self.exact_checker or self.checker
+
+        def free(states: np.ndarray, _chord_deviation: np.ndarray) -> bool:
+            return checker.first_invalid(full(states)) < 0
+
+        return free, timing.CERTIFY_STEP
 
     # --- request validation -----------------------------------------------------------------
     def _check_values(self, values: dict, what: str) -> dict[int, float]:

@@ -234,6 +234,7 @@ def parameterize(
     max_points: int = 10_000,
     deadline: float | None = None,
     certify_step: float = CERTIFY_STEP,
+    sample_deadline: float | None = None,
 ) -> tuple[Trajectory, TimingReport]:
     """Trajectory through ``path`` (rows: group configurations) by ``method`` (module doc).
 
@@ -241,7 +242,8 @@ def parameterize(
     ``certify_step`` apart in every joint), which leaves the straight chords between consecutive rows
     by at most ``deviation[j]`` in joint j, is collision-free; it re-checks blends. ``max_deviation``
     (rad) bounds the distance of the blended curve from each corner. After ``deadline``
-    (``time.monotonic()``) no more blends are checked: the corners left stop.
+    (``time.monotonic()``) no more blends are checked: the corners left stop. Sampling the
+    sections raises PlanningTimedOut once ``sample_deadline`` has passed (a caller's hard budget).
     """
     if method not in METHODS:
         raise errors.InvalidRequest(f"time_parameterization must be one of {', '.join(METHODS)}, got {method!r}")
@@ -258,7 +260,7 @@ def parameterize(
     except _ParameterizationFailed as exc:
         report = TimingReport("trapezoid", fallbacks=[f"{method}: {exc}"])
         return _trapezoid(waypoints, joint_names, limits, dt, max_points), report
-    return _sample(sections, joint_names, waypoints[-1], dt, max_points), report
+    return _sample(sections, joint_names, waypoints[-1], dt, max_points, sample_deadline), report
 
 
 @dataclass(frozen=True)
@@ -593,18 +595,34 @@ def _dense(trajectory, pieces: _RuckigPieces, step: float, limits: Limits) -> tu
 
 
 # --- sampling ---------------------------------------------------------------------------------
-def _sample(sections, joint_names, end: np.ndarray, dt: float, max_points: int) -> Trajectory:
-    """Concatenate the sections sampled every ``dt`` (or coarser: at most ``max_points`` points)."""
+SAMPLE_CHUNK = 128  # points sampled between two looks at the deadline (a ruckig point: up to ~1 ms)
+
+
+def _sample(sections, joint_names, end: np.ndarray, dt: float, max_points: int, deadline: float | None = None
+            ) -> Trajectory:  # fmt: skip
+    """Concatenate the sections sampled every ``dt`` (or coarser: at most ``max_points`` points).
+
+    PlanningTimedOut when ``deadline`` passes while sampling (10,000 ruckig points take ~1 s).
+    """
     durations = np.array([section.duration for section in sections])
     period = max(dt, durations.sum() / max(1, max_points - 1 - len(sections)))
     times, pos, vel, acc = [np.zeros(1)], [], [], []
     t0 = 0.0
     for index, (section, duration) in enumerate(zip(sections, durations, strict=True)):
         t = np.linspace(0.0, duration, max(1, math.ceil(duration / period)) + 1)
-        q, qd, qdd = section.state(t if index == 0 else t[1:])
+        q, qd, qdd = _state_in_chunks(section, t if index == 0 else t[1:], deadline)
         pos.append(q), vel.append(qd), acc.append(qdd)
         times.append(t0 + t[1:])
         t0 += duration
     positions, velocities = np.vstack(pos), np.vstack(vel)
     positions[-1], velocities[-1] = end, 0.0
     return Trajectory(list(joint_names), np.concatenate(times), positions, velocities, np.vstack(acc))
+
+
+def _state_in_chunks(section, t: np.ndarray, deadline: float | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    parts = []
+    for first in range(0, len(t), SAMPLE_CHUNK):
+        if deadline is not None and time.monotonic() > deadline:
+            raise errors.PlanningTimedOut(f"the budget ran out while sampling {len(t)} trajectory points")
+        parts.append(section.state(t[first : first + SAMPLE_CHUNK]))
+    return tuple(np.concatenate([part[j] for part in parts]) for j in range(3))  # type: ignore[return-value]

@@ -83,7 +83,9 @@ def error_msg(exc: BaseException | None = None, *, source: str = "") -> Planning
     if exc is None:
         return PlanningError(code=PlanningError.SUCCESS, message="", source=source)
     message = str(exc) if isinstance(exc, errors.MaruError) else f"{type(exc).__name__}: {exc}"
-    return PlanningError(code=error_code(exc), message=message, source=getattr(exc, "source", source) or source)
+    return PlanningError(
+        code=error_code(exc), message=errors.one_line(message), source=getattr(exc, "source", source) or source
+    )
 
 
 def result_error_msg(result) -> PlanningError:
@@ -97,7 +99,7 @@ def result_error_msg(result) -> PlanningError:
     status = getattr(result.status, "name", str(result.status))
     code = STATUS_CODES.get(status, PlanningError.INTERNAL_ERROR)
     source = getattr(result.error, "source", "") if result.error is not None else "planner"
-    return PlanningError(code=code, message=result.message or status, source=source or "planner")
+    return PlanningError(code=code, message=errors.one_line(result.message or status), source=source or "planner")
 
 
 # ---------------------------------------------------------------- joint values
@@ -191,7 +193,7 @@ def pose_to_matrix(pose, what: str = "pose") -> np.ndarray:
     values = [p.x, p.y, p.z, o.x, o.y, o.z, o.w]
     if not all(math.isfinite(v) for v in values):
         raise errors.InvalidRequest(f"{what}: position/orientation has a NaN or infinite value")
-    norm = math.sqrt(o.x**2 + o.y**2 + o.z**2 + o.w**2)
+    norm = math.hypot(o.x, o.y, o.z, o.w)  # no overflow for huge components (a sum of squares raised)
     if norm < 1e-9:
         raise errors.InvalidRequest(f"{what}: orientation quaternion is zero")
     transform = np.eye(4)
