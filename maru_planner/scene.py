@@ -97,10 +97,14 @@ class Obstacle:
             raise InvalidScene(f"obstacle {name!r}: field 'name' must be a non-empty string")
         where = f"obstacle '{name}'"
         self.name = name
-        self.spec: ShapeSpec = shape(type, where)
         self.type: str = type
         self.pose = pose_matrix(pose, where)
-        self.dimensions = validate(self.spec, where, dimensions)
+        self.dimensions = validate(shape(type, where), where, dimensions)
+
+    @property
+    def spec(self) -> ShapeSpec:
+        """The shape's table entry (looked up, not stored: obstacles pickle as plain data)."""
+        return shape(self.type, f"obstacle '{self.name}'")
 
     def __getattr__(self, field_name: str) -> Any:
         dimensions = self.__dict__.get("dimensions", {})

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import pickle
+
 import numpy as np
 import pytest
 
@@ -93,3 +95,9 @@ def test_one_line_yaml_string_and_file_path(tmp_path):
     assert list(Scene.from_yaml(str(path)).obstacles) == ["desk", "ball", "post"]
     with pytest.raises(InvalidScene, match="not found"):
         Scene.from_yaml(str(tmp_path / "missing.yaml"))
+
+
+def test_obstacles_pickle_as_plain_data():
+    scene = Scene.from_yaml(YAML)
+    again = pickle.loads(pickle.dumps(scene))
+    assert again.to_dict() == scene.to_dict() and again.obstacles["post"].length == 1.0
