@@ -1,0 +1,109 @@
+"""planning_node against hostile requests and topics (issue 18), through real rclpy clients.
+
+Property-based (hypothesis, fixed seed, bounded examples): every PlanMotion, ComputeIK and
+ApplyScene request and every /joint_states and /planning_scene_obstacles message drawn from
+``hostile_inputs`` gets an answer within its budget + 0.5 s with a proper code and a one-line
+message, never INTERNAL_ERROR, a traceback or a dead node; after each batch a known-good request
+still succeeds. RSS grows by at most 50 MB over 10,000 junk /joint_states messages.
+The 64-client burst is test_planning_node's.
+"""
+
+from __future__ import annotations
+
+import pytest
+from hostile_inputs import (
+    PLANNING_LIMITS,
+    PlanningNodeTarget,
+    apply_scene_requests,
+    report_counts,
+    rss_mb,
+    run_batch,
+    scene_obstacles,
+    tally,
+)
+
+pytestmark = pytest.mark.ros
+
+TARGET = "planning_node"
+EXAMPLES = {"plan": 260, "ik": 120, "scene": 120, "scene_topic": 80, "joint_states": 80}
+JUNK_MESSAGES = 10_000
+RSS_GROWTH_MB = 50.0
+MEASURED: list[str] = []  # lines printed with the counts
+
+
+@pytest.fixture(scope="module")
+def node(node_process, rclpy_session, request):
+    from conftest import SpinningNode
+
+    from maru_planner.paths import config_path
+    from maru_planner.robot import RobotModel
+
+    limits = [arg for name, value in PLANNING_LIMITS.items() for arg in ("-p", f"{name}:={value}")]
+    process = node_process("maru_planner.ros.planning_node",
+                           ["--ros-args", "--params-file", str(config_path("planner.yaml")), *limits])  # fmt: skip
+    spinning = SpinningNode("hostile_planning_client")
+    target = PlanningNodeTarget(spinning, process, RobotModel.maru1())
+    target.connect()
+    yield target
+    report_counts(request, [TARGET], MEASURED)
+    spinning.destroy()
+    assert process.alive(), process.log()[-3000:]
+
+
+def _still_serving(node) -> None:
+    assert node.process.alive(), node.process.log()[-3000:]
+    response = node.good_plan()
+    assert response.error.code == 1, f"known-good plan failed: {response.error.message}"
+
+
+def test_hostile_plan_requests(node):
+    run_batch(TARGET, node.plan_requests(), node.send_plan, EXAMPLES["plan"])
+    _still_serving(node)
+
+
+def test_hostile_ik_requests(node):
+    run_batch(TARGET, node.ik_requests(), node.send_ik, EXAMPLES["ik"])
+    _still_serving(node)
+
+
+def test_hostile_scene_requests(node):
+    try:
+        run_batch(TARGET, apply_scene_requests(), node.send_scene, EXAMPLES["scene"])
+    finally:
+        node.restore_scene()
+    _still_serving(node)
+
+
+def test_hostile_scene_topic(node):
+    names = ["fuzz_a", "fuzz_b", "desk", "box"]
+    try:
+        run_batch(TARGET, scene_obstacles(names), lambda m: node.publish(node.scene_topic, m), EXAMPLES["scene_topic"])
+    finally:
+        node.restore_scene()
+    _still_serving(node)
+
+
+def test_hostile_joint_states_are_never_stored(node):
+    run_batch(TARGET, node.joint_state_messages(), lambda m: node.publish(node.joint_states, m),
+              EXAMPLES["joint_states"])  # fmt: skip
+    assert node.good_state_is_used(), "a plan with an empty start never started at the published state"
+
+
+def test_rss_over_10000_junk_joint_states(node):
+    from maru_planner.ros.planning_conversions import joint_state_msg
+
+    assert node.good_state_is_used()
+    before = rss_mb(node.process.proc.pid)
+    for i in range(JUNK_MESSAGES):
+        names = [f"junk_{i}_{k}" for k in range(100)] + ["waist_yaw"]
+        node.joint_states.publish(joint_state_msg(names, [0.1 * k for k in range(100)] + [float("nan")]))
+    assert node.good_state_is_used(), "the node no longer takes /joint_states after the junk"
+    after = rss_mb(node.process.proc.pid)
+    MEASURED.append(f"planning_node RSS {before:.1f} MB -> {after:.1f} MB over {JUNK_MESSAGES} junk /joint_states")
+    assert after - before <= RSS_GROWTH_MB
+
+
+def test_no_broken_invariant_and_enough_inputs(node):
+    record = tally(TARGET)
+    assert record.broken == 0, record.failures
+    assert record.inputs >= sum(EXAMPLES.values()) * 0.9
