@@ -16,20 +16,24 @@ from __future__ import annotations
 
 import contextlib
 import io
+import itertools
 import math
+import re
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
-from pathlib import Path
+from pathlib import Path as FilePath
 
 import yaml
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Point32, PoseStamped
 from hypothesis import HealthCheck, Phase, given, seed, settings
 from hypothesis import strategies as st
-from nav_msgs.msg import OccupancyGrid
+from nav_msgs.msg import OccupancyGrid, Odometry, Path
 from sensor_msgs.msg import JointState
 from shape_msgs.msg import SolidPrimitive
+from test_reactive_node import OBSTACLE, ReactiveClient, _odom, reactive_params_file, shipped_params, synthetic_scan
+from test_reactive_properties import laser_scans
 
 from maru_planner.ros.planning_client import PlanningClient
 from maru_planner.ros.planning_conversions import joint_state_msg, trajectory_positions
@@ -561,7 +565,7 @@ def biped_worlds(draw):
     return doc
 
 
-def write_document(path: Path, document) -> Path:
+def write_document(path: FilePath, document) -> FilePath:
     """A generated document as a file: YAML of a structure, or raw text as it is."""
     path.write_text(document if isinstance(document, str) else yaml.safe_dump(document, allow_unicode=True))
     return path
@@ -617,8 +621,8 @@ def cli_outcome(main: Callable[[list[str]], int], argv: list[str], prog: str, co
 class LogWatch:
     """New output of a node's log since the last look (for tracebacks)."""
 
-    def __init__(self, log_path: Path):
-        self.log_path = Path(log_path)
+    def __init__(self, log_path: FilePath):
+        self.log_path = FilePath(log_path)
         self.offset = 0
 
     def new_text(self) -> str:
@@ -631,7 +635,7 @@ class LogWatch:
 
 def rss_mb(pid: int) -> float:
     """Resident set size of process ``pid`` (MB), from /proc/<pid>/status."""
-    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+    for line in FilePath(f"/proc/{pid}/status").read_text().splitlines():
         if line.startswith("VmRSS:"):
             return int(line.split()[1]) / 1024.0
     raise RuntimeError(f"no VmRSS for process {pid}")
@@ -842,6 +846,100 @@ class BaseNodeTarget:
             if response is not None and response.error_code == PlanBasePath.Response.NONE:
                 return True
         return False
+
+
+# ---------------------------------------------------------------- reactive_node
+
+REACTIVE_GOAL = (4.0, 0.0, 0.0)
+REACTIVE_NS = "/hostile_reactive"
+
+
+@st.composite
+def hostile_paths(draw):
+    """nav_msgs/Path: a few plausible points with hostile values, or very many, in any frame."""
+    msg = Path()
+    msg.header.frame_id = draw(names_from(["odom", "", "map"]))
+    count = draw(st.one_of(st.integers(0, 8), st.sampled_from([2_000, 5_000])))
+    step = draw(hostile_floats(st.floats(0.1, 1.0)))
+    for k in range(count):
+        pose = PoseStamped()
+        pose.header.frame_id = msg.header.frame_id
+        pose.pose.position.x = k * step
+        pose.pose.position.y = draw(HOSTILE_FLOAT) if k < 8 and draw(st.booleans()) else 0.0
+        pose.pose.orientation.w = 1.0
+        msg.poses.append(pose)
+    return msg
+
+
+@st.composite
+def hostile_odometry(draw):
+    msg = Odometry()
+    msg.header.frame_id = draw(names_from(["odom", ""]))
+    msg.child_frame_id = draw(names_from(["base_link", ""]))
+    msg.header.stamp.sec = draw(st.integers(0, 2**31 - 1))
+    p, o, t = msg.pose.pose.position, msg.pose.pose.orientation, msg.twist.twist
+    p.x, p.y = draw(hostile_floats(st.floats(-1, 1))), draw(hostile_floats(st.floats(-1, 1)))
+    o.z, o.w = draw(hostile_floats(st.just(0.0))), draw(hostile_floats(st.just(1.0)))
+    t.linear.x, t.angular.z = draw(HOSTILE_FLOAT), draw(HOSTILE_FLOAT)
+    return msg
+
+
+def reactive_messages() -> st.SearchStrategy:
+    """(topic, message) for every topic reactive_node subscribes: goal_pose, plan, scan, odom."""
+    return st.one_of(
+        hostile_poses(["odom", "", "map"], near=REACTIVE_GOAL).map(lambda m: ("goal", m)),
+        hostile_paths().map(lambda m: ("plan", m)),
+        laser_scans().map(lambda m: ("scan", m)),
+        hostile_odometry().map(lambda m: ("odom", m)),
+    )
+
+
+class ReactiveNodeTarget:
+    """reactive_node's topics, through the reactive tests' client (sim time, one namespace)."""
+
+    name = "reactive_node"
+
+    def __init__(self, spinning, process):
+        self.spinning, self.process = spinning, process
+        self.watch = LogWatch(process.log_path)
+        self.client = ReactiveClient(spinning, namespace=REACTIVE_NS, process=process)
+        c = self.client
+        self.publishers = {"goal": c.goal_pub, "plan": c.plan_pub, "scan": c.scan_pub, "odom": c.odom_pub}
+        self._stamps = (1000.0 + 0.1 * k for k in itertools.count())
+
+    @staticmethod
+    def node_arguments(params_dir: FilePath) -> list[str]:
+        params = reactive_params_file(params_dir, scan_reliability="reliable", status_period=0.3, use_sim_time=True,
+                                      scan_timeout=600.0, warn_throttle_period=1.0)  # fmt: skip
+        return ["--ros-args", "-r", f"__ns:={REACTIVE_NS}", "-r", f"/clock:={REACTIVE_NS}/clock",
+                "--params-file", str(params)]  # fmt: skip
+
+    def connect(self) -> None:
+        self.client.wait_connected()
+        self.send_good_goal()
+
+    def send_good_goal(self) -> None:
+        from maru_planner.ros import reactive_conversions as conv
+
+        goal = conv.pose_stamped_msg(REACTIVE_GOAL, "odom", 0.0)
+        self.client.send_and_confirm(self.client.goal_pub, goal, self.process, "goal (")
+
+    def send(self, topic_message) -> Outcome:
+        topic, message = topic_message
+        self.publishers[topic].publish(message)
+        alive, traceback = self.process.alive(), "Traceback" in self.watch.new_text()
+        return Outcome(proper_error=True, crash=not alive, traceback=traceback, detail=f"published {topic}")
+
+    def callback_errors(self) -> int:
+        found = re.findall(r"\bcallback errors (\d+)", self.process.log())
+        return int(found[-1]) if found else -1
+
+    def good_step(self):
+        """Good odometry + scan after the good goal: the command must move the base, within the limits."""
+        stamp = next(self._stamps)
+        twist = self.client.step(_odom((0.0, 0.0, 0.0), stamp), synthetic_scan(stamp, [OBSTACLE]))
+        limits = shipped_params()
+        return 0.0 < twist.linear.x <= limits["max_linear"] + 1e-9 and abs(twist.angular.z) <= limits["max_angular"]
 
 
 def report_counts(request, targets: list[str], extra: list[str] = ()) -> None:

@@ -1,0 +1,70 @@
+"""reactive_node against property-based hostile messages on every topic it subscribes (issue 18).
+
+test_reactive_node_hostile sends one targeted bad message at a time and checks each warning; this
+suite sends hypothesis-drawn goals, plans, scans and odometry (fixed seed, bounded examples) in
+batches: the node stays alive, prints no traceback, counts no callback error, and after each batch
+a good goal and scan still move the base. RSS grows by at most 50 MB over 10,000 junk scans.
+"""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from hostile_inputs import ReactiveNodeTarget, reactive_messages, report_counts, rss_mb, run_batch, tally
+
+pytestmark = pytest.mark.ros
+
+TARGET = "reactive_node"
+BATCHES, EXAMPLES = 3, 120
+JUNK_SCANS = 10_000
+RSS_GROWTH_MB = 50.0
+MEASURED: list[str] = []  # lines printed with the counts
+
+
+@pytest.fixture(scope="module")
+def node(node_process, rclpy_session, tmp_path_factory, request):
+    from conftest import SpinningNode
+
+    process = node_process("maru_planner.ros.reactive_node",
+                           ReactiveNodeTarget.node_arguments(tmp_path_factory.mktemp("hostile_reactive")))  # fmt: skip
+    spinning = SpinningNode("hostile_reactive_client")
+    target = ReactiveNodeTarget(spinning, process)
+    target.connect()
+    yield target
+    report_counts(request, [TARGET], MEASURED)
+    spinning.destroy()
+    assert process.alive(), process.log()[-3000:]
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")  # building hostile messages from inf values
+@pytest.mark.parametrize("batch", range(BATCHES))
+def test_hostile_messages_on_every_topic(node, batch):
+    run_batch(TARGET, reactive_messages(), node.send, EXAMPLES, seed_value=1800 + batch)
+    node.send_good_goal()
+    assert node.good_step(), node.process.log()[-2000:]
+    assert node.spinning.wait_for(lambda: node.callback_errors() == 0, timeout=30), node.process.log()[-2000:]
+
+
+def test_rss_over_10000_junk_scans(node):
+    from test_reactive_node import synthetic_scan
+
+    assert node.good_step()
+    before = rss_mb(node.process.proc.pid)
+    junk = synthetic_scan(1.0)
+    for i in range(JUNK_SCANS):
+        junk.header.stamp.sec = i % 900  # in the past: accepted or dropped as stale, never stored
+        junk.ranges[i % len(junk.ranges)] = math.nan if i % 3 else -1.0
+        node.client.scan_pub.publish(junk)
+    node.send_good_goal()
+    assert node.good_step(), "no good command after the junk scans"
+    after = rss_mb(node.process.proc.pid)
+    MEASURED.append(f"reactive_node RSS {before:.1f} MB -> {after:.1f} MB over {JUNK_SCANS} junk scans")
+    assert after - before <= RSS_GROWTH_MB
+
+
+def test_no_broken_invariant_and_enough_inputs(node):
+    record = tally(TARGET)
+    assert record.broken == 0, record.failures
+    assert record.inputs >= BATCHES * EXAMPLES * 0.9
+    assert "Traceback" not in node.process.log()
