@@ -124,6 +124,22 @@ def joint_levers(robot: RobotModel) -> np.ndarray:
     return levers
 
 
+def _joint_of_q(model: pin.Model, i: int) -> int:
+    return next(j for j in range(1, model.njoints) if model.joints[j].idx_q == i)
+
+
+def _downstream(robot: RobotModel, levers: np.ndarray) -> np.ndarray:
+    """(geometries, nq, nq): ``[g, j, k]`` = lever of joint k on g if k is below joint j on g's chain, else 0."""
+    model = robot.model
+    out = np.zeros((levers.shape[0], model.nq, model.nq))
+    for g, obj in enumerate(robot.collision_model.geometryObjects):
+        chain = [model.joints[j].idx_q for j in model.supports[obj.parentJoint] if j > 0]  # root first
+        for n, j in enumerate(chain):
+            for k in chain[n + 1 :]:
+                out[g, j, k] = levers[g, k]
+    return out
+
+
 def chord_deviation(times: np.ndarray, acceleration_bound: np.ndarray) -> np.ndarray:
     """Per joint, how far a curve sampled at ``times`` can leave the straight chords between its samples.
 
@@ -147,6 +163,9 @@ class _Pairs:
     first: np.ndarray  # (P,) robot geometry
     second: np.ndarray  # (P,) robot geometry, or obstacle index (into the box arrays) for obstacle pairs
     obstacle: np.ndarray  # (P,) bool
+    other: np.ndarray  # (P,) the second robot geometry of a self pair (the first for an obstacle pair)
+    moves_first: np.ndarray  # (P, nq) bool: joints that move the first body but not the second
+    moves_other: np.ndarray  # (P, nq) bool: joints that move the second (robot) body but not the first
     rate: np.ndarray  # (P, nq): distance change per unit |dq_j|
     gap: np.ndarray  # (P,): exact distance - bounding-volume bound is at most this
     box_center: np.ndarray  # (K, 3) obstacle bounding boxes in the world
@@ -155,22 +174,36 @@ class _Pairs:
 
 
 @njit(cache=True)
-def _geometry_centers_nb(configs, parent, kind, axis, prot, ppos, idx_q, joint, local, rot, pos, out):
-    """World centres of the geometries' bounding spheres, ``out[i]`` for ``configs[i]`` (one numba call)."""
+def _frames_nb(configs, parent, kind, axis, prot, ppos, idx_q, joint, local, q_joint, rot, pos, centers, to_axis):
+    """Per configuration: world centres of the geometries' bounding spheres, and each centre's distance from
+    the axis of each joint of q."""
     for i in range(configs.shape[0]):
         joint_poses_nb(configs[i], parent, kind, axis, prot, ppos, idx_q, rot, pos)
-        sphere_centers_nb(rot, pos, joint, local, out[i])
+        sphere_centers_nb(rot, pos, joint, local, centers[i])
+        for k in range(q_joint.shape[0]):
+            j = q_joint[k]
+            u0 = rot[j, 0, 0] * axis[j, 0] + rot[j, 0, 1] * axis[j, 1] + rot[j, 0, 2] * axis[j, 2]
+            u1 = rot[j, 1, 0] * axis[j, 0] + rot[j, 1, 1] * axis[j, 1] + rot[j, 1, 2] * axis[j, 2]
+            u2 = rot[j, 2, 0] * axis[j, 0] + rot[j, 2, 1] * axis[j, 1] + rot[j, 2, 2] * axis[j, 2]
+            for g in range(centers.shape[1]):
+                d0 = centers[i, g, 0] - pos[j, 0]
+                d1 = centers[i, g, 1] - pos[j, 1]
+                d2 = centers[i, g, 2] - pos[j, 2]
+                along = d0 * u0 + d1 * u1 + d2 * u2
+                to_axis[i, g, k] = np.sqrt(max(d0 * d0 + d1 * d1 + d2 * d2 - along * along, 0.0))
 
 
 class _Run:
     """The state of one :meth:`PathCertifier.certify_path` call."""
 
-    def __init__(self, path: np.ndarray, pairs: _Pairs, pair_margin: np.ndarray, deadline: float):
+    def __init__(self, path: np.ndarray, pairs: _Pairs, pair_margin: np.ndarray, deadline: float, downstream):
         self.path, self.pairs, self.pair_margin, self.deadline = path, pairs, pair_margin, deadline
         self.n_segments = len(path) - 1
         self.delta = np.diff(path, axis=0)
-        self.span = np.abs(self.delta).max(axis=1, initial=0.0)
-        self.rate = np.abs(self.delta) @ pairs.rate.T  # (segments, pairs): most distance change per segment
+        self.motion = np.abs(self.delta)  # (segments, nq)
+        self.span = self.motion.max(axis=1, initial=0.0)
+        # (segments, geometries, nq): how fast a geometry can move relative to each joint's axis (joints below it)
+        self.downstream = np.einsum("gjk,sk->sgj", downstream, self.motion)
         self.clearance = np.full(self.n_segments, math.inf)
         self.failed = self.n_segments  # first failing segment so far (n_segments: none)
         self.reason, self.witness = "", None
@@ -220,9 +253,12 @@ class PathCertifier:
         self._tree = tree_arrays(KinematicTree.from_pinocchio(robot.model))
         self._rot = np.empty((self._model.njoints, 3, 3))
         self._pos = np.empty((self._model.njoints, 3))
+        self._q_joint = np.array([_joint_of_q(robot.model, i) for i in range(robot.nq)], dtype=np.int64)
+        self._prismatic = np.array([robot.model.joints[int(j)].shortname() in PRISMATIC for j in self._q_joint])
+        self._downstream = _downstream(robot, self._levers)
         self._pairs: _Pairs | None = None
         # Compile (or load from numba's cache) the kernel now: inside the first request it took ~1.5 s of its budget.
-        self._bounds_centers(np.asarray(robot.neutral(), dtype=float)[None])
+        self._frames(np.asarray(robot.neutral(), dtype=float)[None])
 
     # ---------------------------------------------------------------- public --
     def certify_segment(
@@ -254,7 +290,7 @@ class PathCertifier:
         if deviation is not None:
             pair_margin += pairs.rate @ np.abs(np.asarray(deviation, dtype=float))
         cert = Certificate(valid=True, margin=margin)
-        run = _Run(path, pairs, pair_margin, math.inf if deadline is None else deadline)
+        run = _Run(path, pairs, pair_margin, math.inf if deadline is None else deadline, self._downstream)
         while len(run.seg):
             self._check_rows(run, cert)
         if run.failed < run.n_segments:
@@ -287,9 +323,10 @@ class PathCertifier:
         configs = run.path[seg[first_row]] + mid[first_row, None] * run.delta[seg[first_row]]
         cert.checks += len(keys)
         margin = run.pair_margin[pair]
-        rate = run.rate[seg, pair]
+        centers, to_axis = self._frames(configs)
+        rate = self._rates(to_axis, run, config_of, half)
         need = margin + half * rate
-        bound = self._bounds(configs, run.pairs, config_of, pair)
+        bound = self._bounds(centers, run.pairs, config_of, pair)
         refine = (bound < need) & (bound + run.pairs.gap[pair] >= need)
         exact = self._refine(configs, run.pairs, config_of, pair, refine, margin, bound, cert)
         np.minimum.at(run.clearance, seg, np.where(refine | (bound >= need), bound, math.inf))
@@ -309,15 +346,35 @@ class PathCertifier:
         run.a = np.concatenate([run.a[keep], mid[keep] + reach[keep]])
         run.b = np.concatenate([mid[keep] - reach[keep], run.b[keep]])
 
-    def _bounds_centers(self, configs: np.ndarray) -> np.ndarray:
-        """World centres of the robot geometries' bounding spheres at each configuration."""
+    def _frames(self, configs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """At each configuration (one numba call): the bounding-sphere centres (C, geometries, 3) and each
+        centre's distance from each joint's axis (C, geometries, nq)."""
         centers = np.empty((len(configs), self._n_robot, 3))
-        _geometry_centers_nb(configs, *self._tree, self._joint, self._local, self._rot, self._pos, centers)
-        return centers
+        to_axis = np.empty((len(configs), self._n_robot, self._model.nq))
+        _frames_nb(configs, *self._tree, self._joint, self._local, self._q_joint, self._rot, self._pos,
+                   centers, to_axis)  # fmt: skip
+        return centers, to_axis
 
-    def _bounds(self, configs: np.ndarray, pairs: _Pairs, config_of: np.ndarray, pair: np.ndarray) -> np.ndarray:
+    def _rates(self, to_axis: np.ndarray, run: _Run, config_of: np.ndarray, half: np.ndarray) -> np.ndarray:
+        """Per row: how fast its pair's distance can change per unit t on its piece (the segment's |dq| weighted).
+
+        A revolute joint's lever over the piece: the centre's distance from its axis at the middle, plus the
+        bounding radius, plus how far the joints below can move the centre in half the piece -- never more
+        than the configuration-free lever of :func:`joint_levers`.
+        """
+        pairs, seg = run.pairs, run.seg
+        first, other = pairs.first[run.pair], pairs.other[run.pair]
+        lever = self._lever_at(to_axis[config_of, first], first, seg, half, run) * pairs.moves_first[run.pair]
+        lever += self._lever_at(to_axis[config_of, other], other, seg, half, run) * pairs.moves_other[run.pair]
+        return np.einsum("rj,rj->r", lever, run.motion[seg])
+
+    def _lever_at(self, to_axis: np.ndarray, g: np.ndarray, seg, half, run: _Run) -> np.ndarray:
+        """(rows, nq): the most geometry ``g`` moves per unit motion of each joint, anywhere on the piece."""
+        local = to_axis + self._radius[g][:, None] + half[:, None] * run.downstream[seg, g]
+        return np.where(self._prismatic, 1.0, np.minimum(self._levers[g], local))
+
+    def _bounds(self, centers: np.ndarray, pairs: _Pairs, config_of: np.ndarray, pair: np.ndarray) -> np.ndarray:
         """Bounding-volume lower bound of each row's pair distance at its configuration."""
-        centers = self._bounds_centers(configs)
         first, second, obstacle = pairs.first[pair], pairs.second[pair], pairs.obstacle[pair]
         bound = np.empty(len(pair))
         env = np.flatnonzero(obstacle)
@@ -375,39 +432,39 @@ class PathCertifier:
         n = self._n_robot
         objects = geom_model.geometryObjects
         boxes = [_bounding_box(objects[k]) for k in range(n, geom_model.ngeoms)]
-        first, second, obstacle, rate, gap = [], [], [], [], []
-        for pair in geom_model.collisionPairs:
-            a, b = sorted((pair.first, pair.second))
-            if b >= n:
-                center, rot, half, exact_box = boxes[b - n]
-                first.append(a), second.append(b - n), obstacle.append(True)
-                rate.append(self._levers[a])
-                gap.append(2.0 * self._radius[a] + (0.0 if exact_box else 2.0 * float(np.linalg.norm(half))))
-            else:
-                only_a, only_b = self._chain[a] & ~self._chain[b], self._chain[b] & ~self._chain[a]
-                first.append(a), second.append(b), obstacle.append(False)
-                rate.append(np.where(only_a, self._levers[a], 0.0) + np.where(only_b, self._levers[b], 0.0))
-                gap.append(2.0 * (self._radius[a] + self._radius[b]))
-        hull_model = geom_model.copy()
+        box_center = np.array([c for c, _, _, _ in boxes], dtype=float).reshape(-1, 3)
+        box_half = np.array([h for _, _, h, _ in boxes], dtype=float).reshape(-1, 3)
+        box_slack = np.array([0.0 if exact else 2.0 * np.linalg.norm(h) for _, _, h, exact in boxes])
+        ends = np.array([(p.first, p.second) for p in geom_model.collisionPairs], dtype=int).reshape(-1, 2)
+        first, second = ends.min(axis=1), ends.max(axis=1)
+        obstacle = second >= n
+        other = np.where(obstacle, first, second)
+        chain_first, chain_other = self._chain[first], self._chain[other] & ~obstacle[:, None]
+        moves_first, moves_other = chain_first & ~chain_other, chain_other & ~chain_first
+        radius = self._radius
+        gap = np.where(obstacle, 2.0 * radius[first], 2.0 * (radius[first] + radius[other]))
+        gap[obstacle] += box_slack[second[obstacle] - n]
         meshes = [k for k, obj in enumerate(objects) if isinstance(obj.geometry, coal.BVHModelBase)]
+        hull_model = geom_model.copy()
         for k in meshes:
-            hull = self._hulls[k] if k < n else convex_hull(objects[k].geometry)
-            hull_model.geometryObjects[k].geometry = hull
-        has_hull = [pair.first in meshes or pair.second in meshes for pair in geom_model.collisionPairs]
+            hull_model.geometryObjects[k].geometry = self._hulls[k] if k < n else convex_hull(objects[k].geometry)
         return _Pairs(
             geom_model=geom_model,
             geom_data=pin.GeometryData(geom_model),
             hull_model=hull_model,
             hull_data=pin.GeometryData(hull_model),
-            has_hull=np.array(has_hull, dtype=bool),
-            first=np.array(first, dtype=int),
-            second=np.array(second, dtype=int),
-            obstacle=np.array(obstacle, dtype=bool),
-            rate=np.array(rate, dtype=float).reshape(-1, self._model.nq),
-            gap=np.array(gap, dtype=float),
-            box_center=np.array([c for c, _, _, _ in boxes], dtype=float).reshape(-1, 3),
+            has_hull=np.isin(first, meshes) | np.isin(second, meshes),
+            first=first,
+            second=np.where(obstacle, second - n, second),
+            obstacle=obstacle,
+            other=other,
+            moves_first=moves_first,
+            moves_other=moves_other,
+            rate=moves_first * self._levers[first] + moves_other * self._levers[other],
+            gap=gap,
+            box_center=box_center,
             box_rot=np.array([r for _, r, _, _ in boxes], dtype=float).reshape(-1, 3, 3),
-            box_half=np.array([h for _, _, h, _ in boxes], dtype=float).reshape(-1, 3),
+            box_half=box_half,
         )
 
 
