@@ -10,9 +10,12 @@ import toppra.algorithm
 from planning_toys import BoxWorldChecker, ToyRobot, maze_checker
 
 from maru_planner import errors
+from maru_planner.collision.certify import chord_deviation
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig, PlanStatus, timing
 from maru_planner.planning.problems import PROBLEMS
+from maru_planner.robot import RobotModel
 from maru_planner.ros.planning_conversions import code_name, duration_seconds
+from maru_planner.scene import Scene
 
 TOL = 1e-6
 NAMES3 = ["a", "b", "c"]
@@ -306,3 +309,26 @@ def test_plan_motion_times_by_the_requested_method_and_defaults_to_toppra(plan_m
 
     bad = plan_motion(time_parameterization="bang-bang")
     assert bad.error.code == PlanningError.INVALID_REQUEST and "time_parameterization" in bad.error.message
+
+
+@pytest.mark.parametrize("method", ["toppra", "ruckig"])
+def test_on_a_certifying_planner_the_returned_trajectory_itself_certifies(method):
+    """Maru-1 6-DOF paper problem: the sampled trajectory, chords plus their error bound, is proven clear."""
+    problem = PROBLEMS["maru6"]
+    robot = RobotModel.maru1()
+    planner = MotionPlanner.from_scene(robot, Scene.from_yaml(problem.scene_path), PlannerConfig())
+    assert planner.certifier is not None
+    names = robot.groups[problem.group]
+    start = dict(robot.named_states.get("home", {})) | problem.start_dict(names)
+    result = planner.plan(MotionRequest(problem.group, start=start, goal_joints=problem.goal_dict(names),
+                                        planner_id="RRTConnect", seed=2, time_budget=30.0,
+                                        time_parameterization=method))  # fmt: skip
+    assert result.success and result.stats.time_parameterization == method, result.message
+    traj = result.trajectory
+    indices = robot.joint_indices(traj.joint_names)
+    full = np.repeat(np.array([start.get(n, 0.0) for n in robot.joint_names])[None], len(traj.times), axis=0)
+    full[:, indices] = traj.positions
+    acceleration = np.zeros(robot.nq)
+    acceleration[indices] = robot.acceleration_limits[indices]
+    certificate = planner.certifier.certify_path(full, margin=0.0, deviation=chord_deviation(traj.times, acceleration))
+    assert certificate.valid, certificate.reason
