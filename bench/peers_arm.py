@@ -1,12 +1,14 @@
 """Arm planning against peers: ours vs. naive OMPL vs. pyroboplan, on Maru-1 13-DOF and MotionBenchMaker Panda.
 
     .venv/bin/python bench/peers_arm.py [--quick] [--budget 1.0] [--peer-budget 3.0] [--pyroboplan-per-set 10]
+        [--solvers ours-compiled,naive OMPL] [--per-set N]
 
 Solvers, all RRT-Connect, on the same problems in one run:
 - ours: ``MotionPlanner`` (planner "RRTConnect", no simplification) on the batched sphere checker
   (``SphereCollisionChecker``: exact answer at every checked state, ``collision_model="spheres"``); the facade
-  verifies the path on the exact pinocchio/coal model and re-plans at a finer resolution if that fails.
-  Time = the whole ``MotionPlanner.plan`` call (validation, search, time parameterisation, verification).
+  certifies the path on the exact pinocchio/coal model and repairs or re-plans what fails.
+  Time = the whole ``MotionPlanner.plan`` call (validation, search, time parameterisation, certification).
+- ours-compiled: the same, planner "CompiledRRTConnect" (the RRT-Connect loop in one numba kernel).
 - naive OMPL: ``ompl.geometric.RRTConnect`` through ``SimpleSetup`` with OMPL's defaults, the state validity
   checker a plain Python function calling ``pinocchio.computeCollisions`` on the mesh model per state.
 - pyroboplan: ``RRTPlanner`` with ``rrt_connect=True, bidirectional_rrt=True`` (its RRT-Connect), default step.
@@ -41,6 +43,8 @@ RESULTS = ROOT / "results"
 TARBALL = benchmarks_dir() / "motionbenchmaker" / "vamp_panda_problems.tar.bz2"
 PANDA_ARM = [f"panda_joint{i}" for i in range(1, 8)]
 NAIVE_RES = "naive OMPL, our resolution"
+COMPILED = "ours-compiled"
+SOLVERS = ("ours", COMPILED, "naive OMPL", NAIVE_RES, "pyroboplan")
 VAMP_PUBLISHED = {
     "source": "VAMP README / Thomason et al., ICRA 2024 (RRT-Connect, SIMD sphere checks, one desktop core)",
     "mbm_panda_median_s": 35e-6,
@@ -90,23 +94,22 @@ def full_q(robot, values: dict) -> np.ndarray:
 
 # ------------------------------------------------------------------------------------------ solvers --
 class Ours:
-    name = "ours"
-
-    def __init__(self, robot, resolution: float):
+    def __init__(self, robot, resolution: float, planner_id: str = "RRTConnect", name: str = "ours"):
         config = PlannerConfig(resolution=resolution, collision_model="spheres", verify_resolution=0.5 * resolution)
         self.planner = MotionPlanner.from_scene(robot, None, config)
         self.fast = self.planner.checker
+        self.planner_id, self.name = planner_id, name
 
     def solve(self, case: Case, budget: float, seed: int) -> dict:
         self.planner.set_scene(case.scene)
         self.fast.exact_pair_checks = 0
-        req = MotionRequest(case.group, start=case.start, goal_joints=case.goal, planner_id="RRTConnect",
+        req = MotionRequest(case.group, start=case.start, goal_joints=case.goal, planner_id=self.planner_id,
                             time_budget=budget, seed=seed, simplify=False)
         res = self.planner.plan(req)
         st = res.stats
         return {"success": res.success, "time": st.total_time, "status": res.status.value,
-                "fallback": st.replans > 0, "verify_time": st.verify_time,
-                "plan_time": st.total_time - st.verify_time, "checks": st.collision_checks,
+                "fallback": st.replans + st.repairs > 0, "verify_time": st.verify_time + st.certify_time,
+                "plan_time": st.total_time - st.verify_time - st.certify_time, "checks": st.collision_checks,
                 "exact_pair_checks": self.fast.exact_pair_checks}
 
 
@@ -240,7 +243,7 @@ def summarise(runs: list[dict], budget: float) -> dict:
         "p95_s": float(np.percentile(times, 95)),
         "mean_s": float(times.mean()),
         "median_solved_s": float(np.median(times[ok])) if ok.any() else None,
-        **({"median_verify_s": float(np.median([r["verify_time"] for r in runs])),
+        **({"median_verify_s": float(np.median([r.get("verify_time", 0.0) for r in runs])),
             "median_plan_s": float(np.median([r.get("plan_time", r["time"]) for r in runs])),
             "fallbacks": int(sum(r.get("fallback", False) for r in runs)),
             "median_exact_pair_checks": float(np.median([r.get("exact_pair_checks", 0) for r in runs]))}
@@ -287,7 +290,12 @@ def main(argv=None) -> int:
     ap.add_argument("--maru-seeds", type=int, default=10)
     ap.add_argument("--resolution", type=float, default=0.05, help="our motion-check step (rad, L-inf)")
     ap.add_argument("--out", type=Path, default=RESULTS / "peers_arm")
+    ap.add_argument("--solvers", type=lambda text: text.split(","), default=list(SOLVERS),
+                    help=f"comma-separated solvers to run (default: all of {', '.join(SOLVERS)})")
     args = ap.parse_args(argv)
+    unknown = sorted(set(args.solvers) - set(SOLVERS))
+    if unknown:
+        ap.error(f"unknown solver(s) {', '.join(unknown)}; known: {', '.join(SOLVERS)}")
     per_set = 3 if args.quick else args.per_set
     pyro_per_set = 2 if args.quick else args.pyroboplan_per_set
     maru_seeds = list(range(3 if args.quick else args.maru_seeds))
@@ -301,23 +309,24 @@ def main(argv=None) -> int:
 
     results: dict = {"config": vars(args) | {"out": str(args.out)}, "vamp_published": VAMP_PUBLISHED, "runs": {}}
     solvers = {
-        "maru13": (Ours(maru, args.resolution), NaiveOmpl(None), NaiveOmpl(None, args.resolution), Pyroboplan(None)),
-        "mbm": (Ours(panda, args.resolution), NaiveOmpl(PANDA_FINGERS_OPEN),
-                NaiveOmpl(PANDA_FINGERS_OPEN, args.resolution), Pyroboplan(PANDA_FINGERS_OPEN)),
+        "maru13": (Ours(maru, args.resolution), Ours(maru, args.resolution, "CompiledRRTConnect", COMPILED),
+                   NaiveOmpl(None), NaiveOmpl(None, args.resolution), Pyroboplan(None)),
+        "mbm": (Ours(panda, args.resolution), Ours(panda, args.resolution, "CompiledRRTConnect", COMPILED),
+                NaiveOmpl(PANDA_FINGERS_OPEN), NaiveOmpl(PANDA_FINGERS_OPEN, args.resolution),
+                Pyroboplan(PANDA_FINGERS_OPEN)),
     }
     for family, cases, seeds in (("maru13", maru_cases, maru_seeds), ("mbm", panda_cases, [0])):
-        ours, naive, naive_res, pyro = solvers[family]
+        ours, compiled, naive, naive_res, pyro = solvers[family]
         subset = cases if family == "maru13" else [c for c in cases if c.name in pyro_names]
-        log(f"[{family}] ours")
-        r_ours = run(ours, cases, args.budget, seeds, "ours")
-        log(f"[{family}] naive OMPL")
-        r_naive = run(naive, cases, args.peer_budget, seeds, "naive OMPL")
-        log(f"[{family}] naive OMPL at our resolution")
-        r_naive_res = run(naive_res, subset, args.peer_budget, seeds, "naive OMPL, our resolution")
-        log(f"[{family}] pyroboplan")
-        r_pyro = run(pyro, subset, args.peer_budget, seeds[:3] if family == "maru13" else seeds, "pyroboplan")
-        results["runs"][family] = {"ours": r_ours, "naive OMPL": r_naive, NAIVE_RES: r_naive_res,
-                                   "pyroboplan": r_pyro}
+        plan = {"ours": (ours, cases, args.budget, seeds), COMPILED: (compiled, cases, args.budget, seeds),
+                "naive OMPL": (naive, cases, args.peer_budget, seeds),
+                NAIVE_RES: (naive_res, subset, args.peer_budget, seeds),
+                "pyroboplan": (pyro, subset, args.peer_budget, seeds[:3] if family == "maru13" else seeds)}
+        results["runs"][family] = {}
+        for name, (solver, chosen, budget, solver_seeds) in plan.items():
+            log(f"[{family}] {name}")
+            runs = run(solver, chosen, budget, solver_seeds, name) if name in args.solvers else []
+            results["runs"][family][name] = runs
 
     summary = build_summary(results, args)
     results["summary"] = summary
@@ -341,12 +350,12 @@ def _json_default(o):
 def build_summary(results, args) -> dict:
     out = {}
     for family, by_solver in results["runs"].items():
-        fam = {name: summarise(runs, args.budget if name == "ours" else args.peer_budget)
+        fam = {name: summarise(runs, args.budget if name.startswith("ours") else args.peer_budget)
                for name, runs in by_solver.items()}
         # ratios on the problems every solver attempted (pyroboplan ran on a subset)
         common = {r["problem"] for r in by_solver["pyroboplan"]}
         sub = {name: summarise([r for r in runs if r["problem"] in common],
-                               args.budget if name == "ours" else args.peer_budget)
+                               args.budget if name.startswith("ours") else args.peer_budget)
                for name, runs in by_solver.items()}
         fam["ratios"] = {
             "naive_over_ours_median": ratio(fam["ours"].get("median_s"), fam["naive OMPL"].get("median_s")),
@@ -354,12 +363,20 @@ def build_summary(results, args) -> dict:
             "pyroboplan_over_ours_median_common": ratio(sub["ours"].get("median_s"), sub["pyroboplan"].get("median_s")),
             "naive_same_resolution_over_ours_median_common": ratio(sub["ours"].get("median_s"),
                                                                    sub[NAIVE_RES].get("median_s")),
+            "naive_over_compiled_median": ratio(fam[COMPILED].get("median_s"), fam["naive OMPL"].get("median_s")),
             "common_subset": sub,
         }
         fam["fallbacks"] = int(sum(r.get("fallback", False) for r in by_solver["ours"]))
         out[family] = fam
     mbm = out.get("mbm", {}).get("ours", {})
+    compiled = out.get("mbm", {}).get(COMPILED, {})
     out["targets"] = {
+        # issue 16, for the compiled kernel (per call, certification included)
+        "compiled_mbm_success_ge_99.4pct": compiled.get("success_rate", 0) >= 0.994,
+        "compiled_mbm_median_le_2ms": (compiled.get("median_s") or 1e9) <= 0.002,
+        "compiled_mbm_p95_le_50ms": (compiled.get("p95_s") or 1e9) <= 0.050,
+        "compiled_30x_naive_mbm": (out.get("mbm", {}).get("ratios", {}).get("naive_over_compiled_median") or 0) >= 30,
+        "compiled_maru13_median_le_1ms": (out.get("maru13", {}).get(COMPILED, {}).get("median_s") or 1e9) <= 0.001,
         "mbm_success_ge_99.5pct": mbm.get("success_rate", 0) >= 0.995,
         "mbm_median_le_10ms": (mbm.get("median_s") or 1e9) <= 0.010,
         "ours_3x_naive_mbm": (out.get("mbm", {}).get("ratios", {}).get("naive_over_ours_median") or 0) >= 3,
@@ -388,7 +405,7 @@ def markdown(summary, args) -> str:
         "|---|---|---|---|---|---|---|",
     ]
     for family in ("maru13", "mbm"):
-        for name in ("ours", "naive OMPL", NAIVE_RES, "pyroboplan"):
+        for name in SOLVERS:
             s = summary[family][name]
             if not s.get("n"):
                 continue
@@ -406,10 +423,13 @@ def markdown(summary, args) -> str:
               f"Re-plans at a finer resolution after a failed verification: maru13 {summary['maru13']['fallbacks']}, "
               f"mbm {summary['mbm']['fallbacks']}.", ""]
     for family in ("maru13", "mbm"):
-        o = summary[family]["ours"]
-        lines.append(f"ours, {family}: median search+post-processing {_ms(o.get('median_plan_s'))} ms, median exact "
-                     f"verification {_ms(o.get('median_verify_s'))} ms, median coal pair checks "
-                     f"{o.get('median_exact_pair_checks', 0):.0f}; failures: {', '.join(o['failures']) or 'none'}")
+        for name in ("ours", COMPILED):
+            o = summary[family][name]
+            if not o.get("n"):
+                continue
+            lines.append(f"{name}, {family}: median search+post-processing {_ms(o.get('median_plan_s'))} ms, median "
+                         f"exact certification {_ms(o.get('median_verify_s'))} ms, median coal pair checks "
+                         f"{o.get('median_exact_pair_checks', 0):.0f}; failures: {', '.join(o['failures']) or 'none'}")
     lines.append("")
     return "\n".join(lines)
 
@@ -426,8 +446,8 @@ def plot(results, path: Path, args) -> None:
 
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
     for ax, family in zip(axes, ("maru13", "mbm")):
-        for name, color in (("ours", "tab:green"), ("naive OMPL", "tab:blue"), (NAIVE_RES, "tab:cyan"),
-                            ("pyroboplan", "tab:red")):
+        for name, color in (("ours", "tab:green"), (COMPILED, "tab:olive"), ("naive OMPL", "tab:blue"),
+                            (NAIVE_RES, "tab:cyan"), ("pyroboplan", "tab:red")):
             runs = results["runs"][family][name]
             if not runs:
                 continue
