@@ -7,6 +7,7 @@ file order; each one that changes a parameter restores it.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import shutil
 import subprocess
@@ -228,57 +229,68 @@ def test_every_parameter_change_is_applied_or_rejected_with_a_reason(params):
             assert restored.successful, (name, restored.reason)
 
 
-def test_run_time_changes_show_in_the_next_plan(params, client, arm_node):
-    assert params.set("default_planner", "PRM").successful
-    response = client.plan(_goal(), start=START, planner_id="", time_budget=5.0, seed=3)
-    _assert_success(response)
-    assert response.stats.planner_id == "PRM"
-    assert params.set("default_planner", "RRTConnect").successful
+@contextlib.contextmanager
+def changed(params, **values):
+    """Parameters set to ``values`` (each accepted) for the ``with`` block, then set back."""
+    before = {name: params.get(name) for name in values}
+    try:
+        for name, value in values.items():
+            result = params.set(name, value)
+            assert result.successful, (name, value, result.reason)
+        yield
+    finally:
+        for name, value in before.items():
+            assert params.set(name, value).successful, name
 
-    assert params.set("default_group", "right_arm").successful
+
+def test_default_planner_and_group_changes_show_in_the_next_plan(params, client):
+    with changed(params, default_planner="GoalBiasedRRT"):
+        response = client.plan(_goal(), start=START, planner_id="", time_budget=5.0, seed=3)
+        _assert_success(response)
+        assert response.stats.planner_id == "GoalBiasedRRT"
     right_goal = {f"r_arm_j{i}": START[f"r_arm_j{i}"] for i in range(1, 7)}
     right_goal["r_arm_j4"] += 0.3
-    response = client.plan(right_goal, start=START, group="", time_budget=5.0, seed=3)
-    _assert_success(response)
-    assert list(response.trajectory.joint_names) == [f"r_arm_j{i}" for i in range(1, 7)]
-    assert params.set("default_group", "upper_body").successful
+    with changed(params, default_group="right_arm"):
+        response = client.plan(right_goal, start=START, group="", time_budget=5.0, seed=3)
+        _assert_success(response)
+        assert list(response.trajectory.joint_names) == [f"r_arm_j{i}" for i in range(1, 7)]
 
+
+def test_resolution_and_budget_changes_show_in_the_next_plan(params, client):
     coarse = client.plan(_goal(), start=START, time_budget=5.0, seed=3)
-    assert params.set("resolution", 0.003).successful
-    fine = client.plan(_goal(), start=START, time_budget=10.0, seed=3)
+    with changed(params, resolution=0.003):
+        fine = client.plan(_goal(), start=START, time_budget=10.0, seed=3)
     _assert_success(coarse)
     _assert_success(fine)
     assert fine.stats.collision_checks > 3 * coarse.stats.collision_checks
-    assert params.set("resolution", 0.03).successful
-
-    assert params.set("max_planning_time", 2.0).successful
-    response = client.plan(_goal(), start=START, time_budget=3.0)
+    with changed(params, max_planning_time=2.0):
+        response = client.plan(_goal(), start=START, time_budget=3.0)
     assert response.error.code == _codes().INVALID_REQUEST and "max_planning_time 2.0" in response.error.message
-    assert params.set("max_planning_time", 60.0).successful
 
-    assert params.set("collision_model", "spheres").successful
-    _assert_success(client.plan(_goal(0.2), start=START, time_budget=10.0, seed=3))
-    assert "on spheres" in arm_node.log()
-    assert params.set("collision_model", "exact").successful
+
+def test_collision_model_change_rebuilds_the_planning_contexts(params, client, arm_node):
+    with changed(params, collision_model="spheres"):
+        _assert_success(client.plan(_goal(0.2), start=START, time_budget=10.0, seed=3))
+    assert "planning contexts rebuilt" in arm_node.log() and "on spheres" in arm_node.log()
 
 
 def test_a_full_queue_answers_busy_after_workers_and_queue_size_change(params, client, tester):
     from maru_planner.ros.planning_client import plan_request
 
-    assert params.set("workers", 1).successful
-    assert params.set("queue_size", 0).successful
-    # plain RRT cannot solve the paper problem: it holds the only worker for its whole budget
-    long_plan = client.plan_client.call_async(plan_request(PAPER_GOAL, start=START, planner_id="RRT", time_budget=4.0))
-    busy = None
-    while not long_plan.done() and busy is None:
-        response = client.plan(_goal(), start=START, time_budget=2.0)
-        if response.error.code == _codes().BUSY:
-            busy = response
-    assert busy is not None, "never answered BUSY while the only worker was planning"
-    assert "queue_size 0" in busy.error.message
-    assert tester.wait_for(long_plan.done, timeout=60.0)
-    assert long_plan.result().error.code == _codes().TIMED_OUT
-    assert params.set("workers", 2).successful and params.set("queue_size", 4).successful
+    with changed(params, workers=1, queue_size=0):
+        # plain RRT cannot solve the paper problem: it holds the only worker for its whole budget
+        long_plan = client.plan_client.call_async(
+            plan_request(PAPER_GOAL, start=START, planner_id="RRT", time_budget=4.0)
+        )
+        busy = None
+        while not long_plan.done() and busy is None:
+            response = client.plan(_goal(), start=START, time_budget=2.0)
+            if response.error.code == _codes().BUSY:
+                busy = response
+        assert busy is not None, "never answered BUSY while the only worker was planning"
+        assert "queue_size 0" in busy.error.message
+        assert tester.wait_for(long_plan.done, timeout=60.0)
+        assert long_plan.result().error.code == _codes().TIMED_OUT
     _assert_success(client.plan(_goal(), start=START, time_budget=5.0))
 
 

@@ -94,7 +94,7 @@ def ros_type(spec: ParamSpec) -> Parameter.Type:
         if items and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in items):
             return Parameter.Type.DOUBLE_ARRAY
         return Parameter.Type.STRING_ARRAY
-    raise TypeError(f"parameter {spec.name!r}: a {kind.__name__} cannot be a ROS parameter")
+    raise TypeError(f"parameter {spec.name!r}: a {kind} value cannot be a ROS parameter")
 
 
 def descriptor(spec: ParamSpec) -> ParameterDescriptor:
@@ -204,9 +204,11 @@ def _ros_value(value: Any) -> Any:
 
 def _python_value(value: Any, spec: ParamSpec) -> Any:
     """A parameter value as ``spec`` checks it: arrays (rclpy gives ``array.array``) as the spec's list/tuple."""
-    if isinstance(value, (array.array, list, tuple)) and spec.value_type in (list, tuple):
-        return spec.value_type(value)
-    return value
+    if not isinstance(value, (array.array, list, tuple)):
+        return value
+    if spec.value_type is tuple:
+        return tuple(value)
+    return list(value) if spec.value_type is list else value
 
 
 def _first_part(exc: Exception) -> str:

@@ -485,6 +485,7 @@ class PlanningNode(Node):
         stamp = self.get_clock().now().to_msg()
         response.trajectory = conv.trajectory_msg(result.trajectory, self.settings.planning_frame, stamp)
         # publishing (and marker FK) happens after the answer has gone out
+        assert self.executor is not None  # a service callback runs in the node's executor
         self.executor.create_task(self._publish_plan, response.trajectory, result.trajectory, motion_request.start)
         self.get_logger().info(
             f"plan_motion {motion_request.group} {response.stats.planner_id} on {result.stats.collision_model}: "
