@@ -23,7 +23,6 @@ from collections.abc import Iterator
 
 import numpy as np
 from ompl import base as ob
-from ompl import geometric as og
 from ompl import util as ou
 
 from maru_planner import errors
@@ -45,7 +44,7 @@ from maru_planner.planning.registry import (
     merged_params,
 )
 from maru_planner.planning.roadmap import Roadmap
-from maru_planner.planning.space import BatchedMotionValidator, EdgeChecker, GroupSpace, make_validity_fn
+from maru_planner.planning.space import EdgeChecker, GroupSetup, GroupSpace
 from maru_planner.planning.types import (
     MotionRequest,
     MotionResult,
@@ -114,6 +113,7 @@ class MotionPlanner:
         self._lock = threading.RLock()
         self._scene_epoch = 0
         self._roadmaps: dict[tuple, Roadmap] = {}
+        self._setups: dict[tuple[int, ...], GroupSetup] = {}  # per group's joint indices, reused across requests
         self.last_revalidation = None
         self.scene = None
         if scene is not None:
@@ -332,7 +332,7 @@ class MotionPlanner:
         self._check_free(goal_full, errors.GoalInCollision, "goal")
         stats.validation_time = time.monotonic() - t_val
 
-        gs = GroupSpace(names, indices, self.robot.lower_limits[indices], self.robot.upper_limits[indices], start_full)
+        gs = self._group_setup(names, indices, start_full, resolution).gs
         start, goal = start_full[indices], goal_full[indices]
         checks0 = self.checker.check_count
         try:
@@ -517,15 +517,22 @@ class MotionPlanner:
             )
         raise errors.PlanningFailed(failure, source="planner")
 
+    def _group_setup(self, names, indices, base: np.ndarray, resolution: float) -> GroupSetup:
+        """The group's space and OMPL setup (built once per group), prepared for ``base`` and ``resolution``."""
+        setup = self._setups.get(tuple(indices))
+        if setup is None:
+            lower, upper = self.robot.lower_limits[indices], self.robot.upper_limits[indices]
+            setup = GroupSetup(GroupSpace(names, indices, lower, upper, base), self.checker, resolution)
+            self._setups[tuple(indices)] = setup
+        setup.prepare(base, resolution)
+        return setup
+
     def _search_once(self, spec, gs, start, goal, params, seed, search_deadline, stats, resolution):
-        """One solve of a fresh planner; (path | None, proven-failure message | None)."""
-        edges = EdgeChecker(gs, self.checker, resolution)
+        """One solve of a fresh planner on the group's reused setup; (path | None, proven-failure message | None)."""
+        setup = self._group_setup(gs.joint_names, gs.indices, gs.base, resolution)
+        edges, ss = setup.edges, setup.ss
+        si = ss.getSpaceInformation()
         with seeded_ompl(seed):
-            ss = og.SimpleSetup(gs.space)
-            si = ss.getSpaceInformation()
-            ss.setStateValidityChecker(make_validity_fn(edges))
-            validator = BatchedMotionValidator(si, edges)
-            si.setMotionValidator(validator)
             ss.setStartAndGoalStates(gs.to_state(start), gs.to_state(goal))
             planner = make_planner(spec.id, si, params, edge_checker=edges)
             ss.setPlanner(planner)

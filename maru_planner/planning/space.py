@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 from ompl import base as ob
+from ompl import geometric as og
 
 from maru_planner.collision.checker import bisection_order
 
@@ -125,3 +126,32 @@ def make_validity_fn(edge_checker: EdgeChecker) -> Callable[[Any], bool]:
         return bool(checker.is_valid(gs.full(np.array([state[i] for i in range(dim)]))))
 
     return is_valid
+
+
+class GroupSetup:
+    """A group's space and an OMPL ``SimpleSetup`` on it whose space information is set up once, then reused.
+
+    Setting up OMPL's SpaceInformation (the state space, its projections) costs more than a trivial
+    search, so a planner keeps one GroupSetup per group and, per search, calls :meth:`prepare` with the
+    request's ``base`` (the joints outside the group) and motion resolution, then plugs in a fresh
+    planner. Built before the search's seeded section, so OMPL's seed generator gives a search the same
+    numbers whether its setup is new or reused.
+    """
+
+    def __init__(self, group_space: GroupSpace, checker, resolution: float):
+        self.gs = group_space
+        self.edges = EdgeChecker(group_space, checker, resolution)
+        self.ss = og.SimpleSetup(group_space.space)
+        self.ss.setStateValidityChecker(make_validity_fn(self.edges))
+        si = self.ss.getSpaceInformation()
+        self._validator = BatchedMotionValidator(si, self.edges)  # lives as long as the setup
+        si.setMotionValidator(self._validator)
+        si.setup()
+
+    def prepare(self, base: np.ndarray, resolution: float) -> None:
+        """Use ``base`` for the joints outside the group and check motions every ``resolution`` rad."""
+        if not resolution > 0:
+            raise ValueError(f"motion resolution must be > 0, got {resolution}")
+        self.gs.base = np.asarray(base, dtype=float).copy()
+        self.edges.resolution = float(resolution)
+        self.ss.clear()  # the previous search's planner data and solutions
