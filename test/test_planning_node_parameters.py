@@ -268,6 +268,15 @@ def test_resolution_and_budget_changes_show_in_the_next_plan(params, client):
     assert response.error.code == _codes().INVALID_REQUEST and "max_planning_time 2.0" in response.error.message
 
 
+def test_a_planner_parameter_change_shows_in_the_next_plan(params, client):
+    default = client.plan(_goal(), start=START, planner_id="RRTConnect", time_budget=5.0, seed=3)
+    with changed(params, **{"planners.RRTConnect.range": 0.01}):  # 0.3 rad in steps of at most 0.01 rad
+        short_edges = client.plan(_goal(), start=START, planner_id="RRTConnect", time_budget=10.0, seed=3)
+    _assert_success(default)
+    _assert_success(short_edges)
+    assert short_edges.stats.nodes >= 30 > default.stats.nodes
+
+
 def test_collision_model_change_rebuilds_the_planning_contexts(params, client, arm_node):
     with changed(params, collision_model="spheres"):
         _assert_success(client.plan(_goal(0.2), start=START, time_budget=10.0, seed=3))
