@@ -163,9 +163,7 @@ class MotionPlanner:
         except errors.MaruError as exc:
             _set_error(result, exc)
         except Exception as exc:  # a bug or a checker failure: report it, keep serving
-            result.status = PlanStatus.PLANNING_FAILED
-            result.message = f"internal error: {type(exc).__name__}: {exc}"
-            result.error = exc
+            _set_internal_error(result, exc)
         return result
 
     # --- certification (docs/certification.md) -----------------------------------------------
@@ -181,11 +179,23 @@ class MotionPlanner:
 
     def _certify(self, request: MotionRequest, result: MotionResult, t0: float) -> MotionResult:
         """Certify ``result``'s path; repair failing segments locally in the time left, else fail the request."""
-        from maru_planner.collision.certify import certify_and_repair  # loaded by _make_certifier already
-
         if not result.success:
             return result
+        try:
+            self._certify_path(request, result, t0)
+        except errors.MaruError as exc:
+            _set_error(result, exc)
+            result.path, result.trajectory = None, None
+        except Exception as exc:  # a bug in certification: report it, keep serving
+            _set_internal_error(result, exc)
+            result.path, result.trajectory = None, None
+        return result
+
+    def _certify_path(self, request: MotionRequest, result: MotionResult, t0: float) -> None:
+        from maru_planner.collision.certify import certify_and_repair  # loaded by _make_certifier already
+
         stats = result.stats
+        certify_deadline = time.monotonic() + self.config.certify_timeout
         repaired = certify_and_repair(
             self.certifier,
             self._full_path(request, result),
@@ -193,7 +203,7 @@ class MotionPlanner:
             t0 + float(request.time_budget),
             margin=_safety_margin(request, self.config),
             max_repairs=self.config.max_refinements,
-            certify_deadline=time.monotonic() + self.config.certify_timeout,
+            certify_deadline=certify_deadline,
         )
         certificate = repaired.certificate
         stats.certified, stats.repairs = repaired.path is not None, repaired.repairs
@@ -201,15 +211,13 @@ class MotionPlanner:
         if is_sphere_checker(self.checker):
             _record_verification(result, certificate, repaired.repairs)
         if repaired.path is None:
-            _set_error(result, errors.PlanningFailed(
+            raise errors.PlanningFailed(
                 f"path failed verification on the exact model: segment {certificate.first_failing_segment} "
                 f"not certified ({certificate.reason}) after {repaired.repairs} repair(s)",
                 source="planner",
-            ))  # fmt: skip
-            result.path, result.trajectory = None, None
-        elif repaired.repairs:
-            self._replace_path(request, result, repaired.path, t0 + float(request.time_budget))
-        return result
+            )
+        if repaired.repairs:  # timing the repaired path may take as long as the certification was allowed to
+            self._replace_path(request, result, repaired.path, certify_deadline)
 
     def _repair_planner(self, request: MotionRequest, seed: int):
         """The local planner of a repair: RRTConnect between two waypoints of the request's group.
@@ -609,6 +617,12 @@ class MotionPlanner:
         path, _checks = postprocess.shortcut(raw, edges.edge_valid, rng, deadline, self.config.simplify_max_tries)
         stats.simplify_time = time.monotonic() - t_simp
         return path
+
+
+def _set_internal_error(result: MotionResult, exc: Exception) -> None:
+    result.status = PlanStatus.PLANNING_FAILED
+    result.message = f"internal error: {type(exc).__name__}: {exc}"
+    result.error = exc
 
 
 def _record_verification(result: MotionResult, certificate, repairs: int) -> None:
