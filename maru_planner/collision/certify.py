@@ -202,6 +202,7 @@ class _Run:
         self.delta = np.diff(path, axis=0)
         self.motion = np.abs(self.delta)  # (segments, nq)
         self.span = self.motion.max(axis=1, initial=0.0)
+        self.rate = self.motion @ pairs.rate.T  # (segments, pairs): configuration-free bound on distance change
         # (segments, geometries, nq): how fast a geometry can move relative to each joint's axis (joints below it)
         self.downstream = np.einsum("gjk,sk->sgj", downstream, self.motion)
         self.clearance = np.full(self.n_segments, math.inf)
@@ -324,9 +325,11 @@ class PathCertifier:
         cert.checks += len(keys)
         margin = run.pair_margin[pair]
         centers, to_axis = self._frames(configs)
-        rate = self._rates(to_axis, run, config_of, half)
-        need = margin + half * rate
         bound = self._bounds(centers, run.pairs, config_of, pair)
+        rate = run.rate[seg, pair]  # configuration-free; tightened only where the bound falls short of it
+        short = np.flatnonzero(bound < margin + half * rate)
+        rate[short] = self._rates(to_axis[config_of[short]], run, short, half[short])
+        need = margin + half * rate
         refine = (bound < need) & (bound + run.pairs.gap[pair] >= need)
         exact = self._refine(configs, run.pairs, config_of, pair, refine, margin, bound, cert)
         np.minimum.at(run.clearance, seg, np.where(refine | (bound >= need), bound, math.inf))
@@ -355,17 +358,17 @@ class PathCertifier:
                    centers, to_axis)  # fmt: skip
         return centers, to_axis
 
-    def _rates(self, to_axis: np.ndarray, run: _Run, config_of: np.ndarray, half: np.ndarray) -> np.ndarray:
-        """Per row: how fast its pair's distance can change per unit t on its piece (the segment's |dq| weighted).
+    def _rates(self, to_axis: np.ndarray, run: _Run, rows: np.ndarray, half: np.ndarray) -> np.ndarray:
+        """Per row of ``rows``: how fast its pair's distance can change per unit t on its piece.
 
-        A revolute joint's lever over the piece: the centre's distance from its axis at the middle, plus the
-        bounding radius, plus how far the joints below can move the centre in half the piece -- never more
-        than the configuration-free lever of :func:`joint_levers`.
+        A revolute joint's lever over the piece: the centre's distance from its axis at the middle (``to_axis``,
+        the rows' configurations), plus the bounding radius, plus how far the joints below can move the centre
+        in half the piece -- never more than the configuration-free lever of :func:`joint_levers`.
         """
-        pairs, seg = run.pairs, run.seg
-        first, other = pairs.first[run.pair], pairs.other[run.pair]
-        lever = self._lever_at(to_axis[config_of, first], first, seg, half, run) * pairs.moves_first[run.pair]
-        lever += self._lever_at(to_axis[config_of, other], other, seg, half, run) * pairs.moves_other[run.pair]
+        pairs, seg, pair = run.pairs, run.seg[rows], run.pair[rows]
+        first, other, index = pairs.first[pair], pairs.other[pair], np.arange(len(rows))
+        lever = self._lever_at(to_axis[index, first], first, seg, half, run) * pairs.moves_first[pair]
+        lever += self._lever_at(to_axis[index, other], other, seg, half, run) * pairs.moves_other[pair]
         return np.einsum("rj,rj->r", lever, run.motion[seg])
 
     def _lever_at(self, to_axis: np.ndarray, g: np.ndarray, seg, half, run: _Run) -> np.ndarray:
