@@ -117,7 +117,7 @@ def test_huge_world_bounds(tmp_path):
     world = tmp_path / "w.yaml"
     world.write_text("bounds: [0, 0, 1000000, 1000000]\nstart: [1, 1, 0]\ngoal: [2, 2, 0]\nobstacles: []\n")
     out = run_cli("--world", str(world), "--planner", "biped_wall")
-    assert_one_line_error(out, EXIT_BAD_INPUT, "cells is over the limit")
+    assert_one_line_error(out, EXIT_BAD_INPUT, "cells, over the limit")
 
 
 def test_help_documents_the_exit_codes_and_every_planner():

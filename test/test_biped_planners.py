@@ -229,7 +229,7 @@ def test_both_planners_on_a_plain_grid_map_the_house():
 
 @pytest.mark.parametrize("bounds", [[0, 0, 1e6, 1e6], [-1e6, 0, 0, 10]])
 def test_huge_world_bounds_are_refused_before_allocating(bounds):
-    with pytest.raises(TooLarge, match="cells is over the limit"):
+    with pytest.raises(TooLarge, match="cells, over the limit"):
         world_from_dict({"bounds": bounds, "resolution": 0.02, "obstacles": []})
 
 

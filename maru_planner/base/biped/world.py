@@ -29,8 +29,8 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from maru_planner.base.budget import check_map_cells
-from maru_planner.errors import InvalidScene
+from maru_planner.base.budget import MAX_MAP_CELLS
+from maru_planner.errors import InvalidScene, TooLarge
 
 MAX_OBSTACLES = 10000
 
@@ -112,18 +112,22 @@ class BipedWorld:
 
 
 def grid_shape(bounds: tuple, resolution: float) -> tuple[int, int]:
-    """(rows, cols) of the 2-D map covering ``bounds`` at ``resolution``."""
+    """(rows, cols) of the 2-D map covering ``bounds`` at ``resolution``; TooLarge over MAX_MAP_CELLS."""
     xmin, ymin, xmax, ymax = bounds
-    return int(math.ceil((ymax - ymin) / resolution - 1e-9)), int(math.ceil((xmax - xmin) / resolution - 1e-9))
+    rows, cols = (ymax - ymin) / resolution, (xmax - xmin) / resolution
+    if not rows * cols <= MAX_MAP_CELLS:  # also catches inf and nan before they become integers
+        raise TooLarge(f"world bounds {[round(b, 3) for b in bounds]} at {resolution:.3g} m: about "
+                       f"{rows * cols:.3g} cells, over the limit of {MAX_MAP_CELLS} cells")
+    return int(math.ceil(rows - 1e-9)), int(math.ceil(cols - 1e-9))
 
 
 def _floats(value, n: int, what: str) -> tuple:
     try:
         out = tuple(float(v) for v in value)
     except (TypeError, ValueError):
-        raise InvalidScene(f"{what} must be a list of {n} numbers, got {value!r}") from None
+        raise InvalidScene(f"{what} must be a list of {n} numbers, got {str(value)[:60]}") from None
     if len(out) != n or not all(math.isfinite(v) for v in out):
-        raise InvalidScene(f"{what} must be {n} finite numbers, got {value!r}")
+        raise InvalidScene(f"{what} must be {n} finite numbers, got {str(value)[:60]}")
     return out
 
 
@@ -133,7 +137,7 @@ def _robot_from(data: dict) -> BipedRobot:
              "height"}
     unknown = set(data) - known
     if unknown:
-        raise InvalidScene(f"unknown robot field(s) {sorted(unknown)}; expected {sorted(known)}")
+        raise InvalidScene(f"unknown robot field(s) {str(sorted(map(str, unknown)))[:80]}; expected {sorted(known)}")
     if "body_width" in data:
         if "body_left" in data or "body_right" in data:
             raise InvalidScene("give either robot.body_width (symmetric) or body_left/body_right, not both")
@@ -142,39 +146,39 @@ def _robot_from(data: dict) -> BipedRobot:
     try:
         return BipedRobot(**{k: float(v) for k, v in data.items()})
     except (TypeError, ValueError) as exc:
-        raise InvalidScene(f"robot: {exc}") from None
+        raise InvalidScene(f"robot: {str(exc)[:120]}") from None
 
 
 def _box_from(i: int, data: dict) -> Box3D:
     if not isinstance(data, dict):
-        raise InvalidScene(f"obstacle #{i} must be a mapping, got {data!r}")
+        raise InvalidScene(f"obstacle #{i} must be a mapping, got {str(data)[:60]}")
     name = str(data.get("name", f"obstacle_{i}"))
+    label = f"obstacle {name[:40]!r}"
     for key in ("center", "size"):
         if key not in data:
-            raise InvalidScene(f"obstacle {name!r} has no {key!r}")
-    size = _floats(data["size"], 2, f"obstacle {name!r} size")
+            raise InvalidScene(f"{label} has no {key!r}")
+    size = _floats(data["size"], 2, f"{label} size")
     if min(size) <= 0:
-        raise InvalidScene(f"obstacle {name!r} size must be positive, got {size}")
-    z = _floats(data.get("z", (0.0, 2.0)), 2, f"obstacle {name!r} z")
+        raise InvalidScene(f"{label} size must be positive, got {size}")
+    z = _floats(data.get("z", (0.0, 2.0)), 2, f"{label} z")
     if z[1] <= z[0]:
-        raise InvalidScene(f"obstacle {name!r} z must be [zmin, zmax] with zmax > zmin, got {z}")
-    center = _floats(data["center"], 2, f"obstacle {name!r} center")
-    return Box3D(name, center, size, z, float(data.get("yaw", 0.0)))
+        raise InvalidScene(f"{label} z must be [zmin, zmax] with zmax > zmin, got {z}")
+    center = _floats(data["center"], 2, f"{label} center")
+    return Box3D(name, center, size, z, _floats([data.get("yaw", 0.0)], 1, f"{label} yaw")[0])
 
 
 def world_from_dict(data: dict, name: str = "world") -> BipedWorld:
     if not isinstance(data, dict):
         raise InvalidScene("a biped world must be a YAML mapping")
-    resolution = float(data.get("resolution", 0.02))
-    if not (math.isfinite(resolution) and resolution > 0):
+    resolution = _floats([data.get("resolution", 0.02)], 1, "resolution")[0]
+    if not resolution > 0:
         raise InvalidScene(f"resolution must be positive, got {resolution}")
     if "bounds" not in data:
         raise InvalidScene("world has no 'bounds' [xmin, ymin, xmax, ymax]")
     bounds = _floats(data["bounds"], 4, "bounds")
     if bounds[2] <= bounds[0] or bounds[3] <= bounds[1]:
         raise InvalidScene(f"bounds must be [xmin, ymin, xmax, ymax] with max > min, got {bounds}")
-    rows, cols = grid_shape(bounds, resolution)
-    check_map_cells(rows, cols, f"world bounds {list(bounds)} at {resolution} m")
+    grid_shape(bounds, resolution)
     raw_obstacles = data.get("obstacles") or []
     if not isinstance(raw_obstacles, list):
         raise InvalidScene(f"obstacles must be a list, got {str(raw_obstacles)[:40]}")
@@ -185,8 +189,11 @@ def world_from_dict(data: dict, name: str = "world") -> BipedWorld:
     goal = _floats(data["goal"], 3, "goal") if "goal" in data else None
     line = None
     if data.get("reference_line") is not None:
-        line = np.asarray(data["reference_line"], dtype=float)
-        if line.ndim != 2 or line.shape[1] != 2 or len(line) < 2:
+        try:
+            line = np.asarray(data["reference_line"], dtype=float)
+        except (TypeError, ValueError):
+            line = np.zeros((0,))
+        if line.ndim != 2 or line.shape[1] != 2 or len(line) < 2 or not np.isfinite(line).all():
             raise InvalidScene("reference_line must be a list of at least two [x, y] points")
     return BipedWorld(str(data.get("name", name)), resolution, bounds, _robot_from(data.get("robot")), obstacles,
                       start, goal, line, {k: v for k, v in data.items() if k == "description"})
@@ -200,5 +207,7 @@ def load_world(path) -> BipedWorld:
     try:
         data = yaml.safe_load(path.read_text())
     except yaml.YAMLError as exc:
-        raise InvalidScene(f"{path}: not valid YAML ({exc})") from None
+        where = getattr(exc, "problem_mark", None)
+        line = f" (line {where.line + 1})" if where is not None else ""
+        raise InvalidScene(f"{path}: not valid YAML{line}") from None
     return world_from_dict(data, path.stem)
