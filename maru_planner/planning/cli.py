@@ -66,6 +66,13 @@ def _positive(text: str) -> float:
     return value
 
 
+def _margin(text: str) -> float:
+    value = float(text)
+    if not (math.isfinite(value) and value >= 0):
+        raise argparse.ArgumentTypeError(f"must be a finite number >= 0 (m), got {text!r}")
+    return value
+
+
 def _scaling(text: str) -> float:
     value = float(text)
     if not (math.isfinite(value) and 0.0 < value <= 1.0):
@@ -128,6 +135,9 @@ def build_parser() -> argparse.ArgumentParser:
         default="exact",
         help="exact: pinocchio + coal; spheres: batched sphere checker, the path then verified on the exact model",
     )
+    p.add_argument("--safety-margin", type=_margin, default=PlannerConfig.safety_margin,
+                   help="clearance (m) the certified path keeps from obstacles and link pairs (see "
+                   "docs/certification.md)")  # fmt: skip
     p.add_argument("--velocity-scaling", type=_scaling, default=1.0)
     p.add_argument("--acceleration-scaling", type=_scaling, default=1.0)
     p.add_argument(
@@ -260,6 +270,7 @@ def run(args: argparse.Namespace, params: dict[str, Any], progress: _Progress) -
         resolution=args.resolution,
         collision_model=args.collision_model,
         planner_params={args.planner: params},
+        safety_margin=args.safety_margin,
     )
     progress(f"building the {args.collision_model} collision model")
     planner = MotionPlanner.from_scene(robot, scene, config)
