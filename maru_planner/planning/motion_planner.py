@@ -3,6 +3,13 @@
 One hard time budget per request covers validation, IK, search and post-processing. Bad input
 never raises: the typed error (``maru_planner.errors``) becomes ``result.status`` + message.
 
+Watching and cancelling: ``plan(request, monitor)`` reports its stages ("validation", "ik", "search",
+"simplify", "certify", "parameterize") with the tree size and best path length where they are known,
+attaches every OMPL search to the :class:`~maru_planner.monitor.PlanMonitor` (``cancel()`` ends it at
+OMPL's next check) and checks it between stages and in the Python loops (shortcutting, blend checks);
+a cancelled plan ends with PLANNING_FAILED and a :class:`~maru_planner.errors.PlanningCancelled` error,
+its statistics as far as it got.
+
 Threads: ``plan`` and ``set_scene`` of one MotionPlanner are serialised by its own lock (the
 robot model, checker and roadmap cache are not thread-safe), and every OMPL search in the process
 runs under one module lock, because OMPL's seed generator is process-global: reseeding it right
@@ -26,7 +33,9 @@ from ompl import base as ob
 from ompl import util as ou
 
 from maru_planner import errors
+from maru_planner.monitor import PlanMonitor
 from maru_planner.planning import postprocess, timing
+from maru_planner.planning.cartesian import CartesianRequest, CartesianResult, compute_cartesian_path
 from maru_planner.planning.checkers import (
     collision_model_of,
     default_exact_checker,
@@ -114,6 +123,7 @@ class MotionPlanner:
         self._scene_epoch = 0
         self._roadmaps: dict[tuple, Roadmap] = {}
         self._setups: dict[tuple[int, ...], GroupSetup] = {}  # per group's joint indices, reused across requests
+        self._monitor = PlanMonitor()  # the running plan's (plan() sets it under the lock); never cancelled idle
         self.last_revalidation = None
         self.scene = None
         if scene is not None:
@@ -139,15 +149,28 @@ class MotionPlanner:
             self._scene_epoch += 1
 
     # --- planning ---------------------------------------------------------------------------
-    def plan(self, request: MotionRequest) -> MotionResult:
-        """Plan ``request``; never raises (errors become the result's status and message)."""
+    def cartesian_path(self, request: CartesianRequest) -> CartesianResult:
+        """A straight task-space path (:mod:`~maru_planner.planning.cartesian`) on this planner's robot,
+        checker and certifier; never raises."""
+        with self._lock:
+            return compute_cartesian_path(self, request)
+
+    def plan(self, request: MotionRequest, monitor: PlanMonitor | None = None) -> MotionResult:
+        """Plan ``request``; never raises (errors become the result's status and message).
+
+        ``monitor`` receives the stages and progress and can cancel the plan from another thread (module doc).
+        """
         t0 = time.monotonic()
         with self._lock:
-            result = self._plan_once(request, t0, self.config.resolution)
-            if self.certifier is not None:
-                result = self._certify(request, result, t0)
-            elif self.exact_checker is not None:
-                result = self._verify(request, result, t0)
+            self._monitor = monitor or PlanMonitor()
+            try:
+                result = self._plan_once(request, t0, self.config.resolution)
+                if self.certifier is not None:
+                    result = self._certify(request, result, t0)
+                elif self.exact_checker is not None:
+                    result = self._verify(request, result, t0)
+            finally:
+                self._monitor = PlanMonitor()
         result.stats.total_time = time.monotonic() - t0
         return result
 
@@ -195,6 +218,7 @@ class MotionPlanner:
         from maru_planner.collision.certify import certify_and_repair  # loaded by _make_certifier already
 
         stats = result.stats
+        self._monitor.report("certify")
         certify_deadline = time.monotonic() + self.config.certify_timeout
         repaired = certify_and_repair(
             self.certifier,
@@ -205,6 +229,7 @@ class MotionPlanner:
             max_repairs=self.config.max_refinements,
             certify_deadline=certify_deadline,
         )
+        self._monitor.check()  # a repair search ended by a cancel looks like a failed repair
         certificate = repaired.certificate
         stats.certified, stats.repairs = repaired.path is not None, repaired.repairs
         stats.certify_time, stats.min_clearance = certificate.seconds, certificate.min_clearance
@@ -234,6 +259,7 @@ class MotionPlanner:
         names = self.robot.joint_names
         group = [names[i] for i in self.robot.group_joint_indices(request.group)]
         attempt = itertools.count(1)
+        monitor = self._monitor
 
         def plan_between(qa: np.ndarray, qb: np.ndarray, margin: float, deadline: float) -> np.ndarray | None:
             checker = CollisionChecker(self.robot, self.certifier.checker.scene, padding=margin)
@@ -243,7 +269,9 @@ class MotionPlanner:
                 goal_joints={n: float(qb[names.index(n)]) for n in group}, planner_id="RRTConnect",
                 time_budget=max(deadline - time.monotonic(), 1e-3), seed=seed + next(attempt),
             )  # fmt: skip
-            found = local.plan(sub)
+            nested = PlanMonitor()
+            with monitor.attach(_CancelsNested(nested)):
+                found = local.plan(sub, nested)
             return local._full_path(sub, found) if found.success else None
 
         return plan_between
@@ -269,6 +297,7 @@ class MotionPlanner:
 
         resolution, verify_time, replans = self.config.resolution, 0.0, 0
         while result.success:
+            self._monitor.report("certify")
             t_ver = time.monotonic()
             path = self._full_path(request, result)
             result.verification = verify_path(self.exact_checker, path, self.config.verify_step)
@@ -325,14 +354,18 @@ class MotionPlanner:
             raise errors.InvalidRequest(f"seed must be in [0, 2^63), got {seed}")
         stats.seed = seed
 
+        monitor = self._monitor
+        monitor.report("validation")
         indices = sorted(self.robot.group_joint_indices(req.group))
         names = [self.robot.joint_names[i] for i in indices]
         result.joint_names = names
         start_full = self._start_state(req, indices)
         if req.goal_poses:
+            monitor.report("ik")
             t_ik = time.monotonic()
             goal_full = self._solve_pose_goal(req, start_full, indices, deadline)
             stats.ik_time = time.monotonic() - t_ik
+            monitor.report("validation")
         else:
             goal_full = self._goal_state(req, start_full, indices)
         t_val = time.monotonic()
@@ -344,13 +377,16 @@ class MotionPlanner:
         start, goal = start_full[indices], goal_full[indices]
         checks0 = self.checker.check_count
         try:
+            monitor.report("search")
             raw = self._search(spec, gs, start, goal, seed, attempts, deadline, stats, resolution)
             stats.raw_waypoints = len(raw)
             stats.raw_path_length = postprocess.path_length(raw)
+            monitor.report("simplify", best_cost=stats.raw_path_length)
             path = self._simplify(req, gs, raw, seed, deadline, stats, resolution)
         finally:
             stats.collision_checks = int(self.checker.check_count - checks0)
 
+        monitor.report("parameterize", best_cost=postprocess.path_length(path))
         t_par = time.monotonic()
         result.trajectory = self._time_parameterize(req, method, path, start_full, indices, stats, deadline)
         stats.parameterize_time = time.monotonic() - t_par
@@ -411,10 +447,12 @@ class MotionPlanner:
             out[:, indices] = states
             return out
 
+        monitor = self._monitor
         if self.certifier is not None:
             margin = _safety_margin(req, self.config)
 
             def certified(states: np.ndarray, chord_deviation: np.ndarray) -> bool:
+                monitor.check()
                 deviation = np.zeros(len(start_full))
                 deviation[indices] = chord_deviation
                 return self.certifier.certify_path(full(states), deadline, margin=margin, deviation=deviation).valid
@@ -423,6 +461,7 @@ class MotionPlanner:
         checker = self.exact_checker or self.checker
 
         def free(states: np.ndarray, _chord_deviation: np.ndarray) -> bool:
+            monitor.check()
             return checker.first_invalid(full(states)) < 0
 
         return free, timing.CERTIFY_STEP
@@ -454,12 +493,17 @@ class MotionPlanner:
         return out
 
     def _start_state(self, req: MotionRequest, indices) -> np.ndarray:
-        if not req.start:
+        return self.start_configuration(req.start, indices, req.group)
+
+    def start_configuration(self, start: dict | None, indices, group: str = "") -> np.ndarray:
+        """Full configuration of ``start`` ({joint: value}, checked: names, NaN, limits, every joint of
+        ``indices`` given); joints it does not name are at neutral."""
+        if not start:
             raise errors.NoStartState("no start state given (start is empty)")
-        values = self._check_values(req.start, "start")
+        values = self._check_values(start, "start")
         missing = [self.robot.joint_names[i] for i in indices if i not in values]
         if missing:
-            raise errors.InvalidJointNames(f"start is missing joint(s) of group {req.group}: {', '.join(missing)}")
+            raise errors.InvalidJointNames(f"start is missing joint(s) of group {group}: {', '.join(missing)}")
         q = np.asarray(self.robot.neutral(), dtype=float).copy()
         for i, v in values.items():
             q[i] = v
@@ -515,6 +559,7 @@ class MotionPlanner:
             path, failure = search(spec, gs, start, goal, params, seed + attempt, search_deadline, stats, resolution)
             # roadmap planners: query time only; the roadmap build is reported apart (roadmap_build_time)
             stats.solve_time += time.monotonic() - t_solve - (stats.roadmap_build_time - build_before)
+            self._monitor.report("search", nodes=stats.nodes)  # raises if the search ended by a cancel
             if path is not None:
                 return path
         if failure is None or time.monotonic() >= search_deadline:
@@ -544,7 +589,9 @@ class MotionPlanner:
             ss.setStartAndGoalStates(gs.to_state(start), gs.to_state(goal))
             planner = make_planner(spec.id, si, params, edge_checker=edges)
             ss.setPlanner(planner)
-            ss.solve(ob.timedPlannerTerminationCondition(max(0.0, search_deadline - time.monotonic())))
+            ptc = ob.timedPlannerTerminationCondition(max(0.0, search_deadline - time.monotonic()))
+            with self._monitor.attach(ptc):
+                ss.solve(ptc)
         stats.nodes, stats.edges = _graph_size(planner, si)
         if ss.haveExactSolutionPath():
             return np.array([gs.to_array(s) for s in ss.getSolutionPath().getStates()]), None
@@ -600,6 +647,7 @@ class MotionPlanner:
             before = roadmap.build_time
             roadmap.build(self.config.prm_roadmap_nodes, search_deadline)
             stats.roadmap_build_time += roadmap.build_time - before
+        self._monitor.report("search", nodes=roadmap.milestones)
         seconds = search_deadline - time.monotonic()
         if seconds <= 0:
             return None
@@ -614,9 +662,25 @@ class MotionPlanner:
         t_simp = time.monotonic()
         edges = EdgeChecker(gs, self.checker, resolution)
         rng = np.random.default_rng(seed)
-        path, _checks = postprocess.shortcut(raw, edges.edge_valid, rng, deadline, self.config.simplify_max_tries)
+        monitor = self._monitor
+
+        def edge_valid(qa: np.ndarray, qb: np.ndarray) -> bool:
+            monitor.check()
+            return edges.edge_valid(qa, qb)
+
+        path, _checks = postprocess.shortcut(raw, edge_valid, rng, deadline, self.config.simplify_max_tries)
         stats.simplify_time = time.monotonic() - t_simp
         return path
+
+
+class _CancelsNested:
+    """Attached to a request's monitor, its cancel reaches a nested plan (a repair) that reports its own stages."""
+
+    def __init__(self, nested: PlanMonitor):
+        self.nested = nested
+
+    def terminate(self) -> None:
+        self.nested.cancel()
 
 
 def _set_internal_error(result: MotionResult, exc: Exception) -> None:
