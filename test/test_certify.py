@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -17,6 +19,7 @@ from maru_planner.collision.certify import (
 )
 from maru_planner.collision.spheres import densify, verify_path
 from maru_planner.paths import config_path
+from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig, PlanStatus
 from maru_planner.robot import RobotModel, load_example_robot
 from maru_planner.scene import Obstacle, Scene
 
@@ -228,3 +231,27 @@ def test_an_end_closer_than_the_margin_lowers_it_to_half_its_clearance(arm):
     repaired = certify_and_repair(certifier, np.array([[0.0, 0.0], [0.3, 0.0]]), lambda *_: None, deadline=np.inf)
     assert repaired.certificate.valid and repaired.repairs == 0
     assert repaired.certificate.margin == pytest.approx(0.002, abs=1e-5)
+
+
+def test_motion_planner_returns_only_certified_paths(arm):
+    # At a 0.7 rad motion step the search checks the goal alone and steps over the plate.
+    scene = Scene([Obstacle("plate", "box", size=(0.04, 0.002, 0.05), pose=[REACH + 0.01, 0.0, 0.0])])
+    config = PlannerConfig(resolution=0.7, safety_margin=0.005)
+    request = MotionRequest("all", start={"j1": -0.3, "j2": 0.0}, goal_joints={"j1": 0.4, "j2": 0.0},
+                            planner_id="RRTConnect", time_budget=10.0, seed=1)  # fmt: skip
+    uncertified = MotionPlanner.from_scene(arm, scene, dataclasses.replace(config, certify=False)).plan(request)
+    assert uncertified.success and not uncertified.stats.certified
+    assert not verify_path(CollisionChecker(arm, scene), np.asarray(uncertified.path), 1e-3).valid
+    result = MotionPlanner.from_scene(arm, scene, config).plan(request)
+    assert result.success and result.stats.certified and result.stats.repairs >= 1, result.message
+    assert result.stats.min_clearance >= 0.005 and result.stats.certify_time > 0
+    padded = CollisionChecker(arm, scene, padding=0.005)
+    assert verify_path(padded, np.asarray(result.path), 1e-3).valid
+    assert result.to_json_dict()["stats"]["certified"]
+
+
+def test_motion_planner_rejects_a_negative_safety_margin(arm):
+    request = MotionRequest("all", start={"j1": 0.0, "j2": 0.0}, goal_joints={"j1": 0.1, "j2": 0.0},
+                            safety_margin=-0.01)  # fmt: skip
+    result = MotionPlanner.from_scene(arm, Scene()).plan(request)
+    assert result.status is PlanStatus.INVALID_REQUEST and "safety_margin" in result.message
