@@ -6,11 +6,13 @@ obstacle, and its SRDF-filtered self-collision pairs) two numbers decide:
 
 - a lower bound ``d`` on the pair's distance at a configuration: a bounding-volume bound first
   (the geometry's bounding sphere against the obstacle's oriented bounding box, or two bounding
-  spheres), the exact coal distance only for the pairs where that bound is not enough;
+  spheres), then coal's distance to a mesh's convex hull, the exact coal distance only where the
+  hull is within the margin;
 - an upper bound ``M`` on how fast that distance can change along a segment:
   ``M = sum_j c_j |q1_j - q0_j|`` over the joints that move one body of the pair but not the other,
   ``c_j`` the largest distance from joint ``j``'s axis to any point of the body (revolute; a bound
-  from the joint offsets down the chain plus the geometry's bounding radius) or 1 (prismatic).
+  from the joint offsets down the chain plus the geometry's bounding radius, tightened on each piece
+  with the configuration at its middle) or 1 (prismatic).
 
 On ``q(t) = q0 + t (q1 - q0)``, a pair whose distance at ``t_m`` is ``d`` keeps more than
 ``margin`` of clearance for ``|t - t_m| < (d - margin) / M``. Each segment is bisected until those
@@ -37,7 +39,7 @@ from maru_planner.collision.checker import CollisionChecker
 from maru_planner.robot.model import RobotModel
 from maru_planner.scene import Scene
 
-DEFAULT_SAFETY_MARGIN = 0.01  # m
+DEFAULT_SAFETY_MARGIN = 0.01  # m (PlannerConfig.safety_margin's default too)
 DISTANCE_TOLERANCE = 1e-6  # m: coal's GJK tolerance, taken off every exact distance
 MIN_INTERVAL = 1e-9  # rad: a piece of segment this short that is still unproven fails as "unproven"
 REVOLUTE = ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned")
