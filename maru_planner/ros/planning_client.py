@@ -8,26 +8,38 @@
 Call ``rclpy.init()`` first (or pass ``init=True``, which keeps the user's DDS networking, as the
 nodes do: ``maru_planner.ros.env.network_from_environment``). Every method returns the service response as is; a
 call that gets no answer within ``timeout`` raises ``TimeoutError``.
+
+The ``plan_motion`` action, watched and cancellable::
+
+    goal = client.plan_action(goal_joints, start=start, planner_id="RRT", feedback_callback=print)
+    goal.cancel()                      # the node stops the search within milliseconds
+    status, result = goal.result()     # GoalStatus.STATUS_CANCELED, the statistics so far
 """
 
 from __future__ import annotations
 
 import threading
 import time
+from collections.abc import Callable
 
 import rclpy
+from action_msgs.msg import GoalStatus
 from geometry_msgs.msg import Pose, PoseStamped
+from rclpy.action import ActionClient
+from rclpy.action.client import ClientGoalHandle
 from rclpy.executors import SingleThreadedExecutor
+from rclpy.task import Future
 from sensor_msgs.msg import JointState
 
 from maru_planner.ros import planning_conversions as conv
 from maru_planner.ros.env import network_from_environment
+from maru_planner_interfaces.action import PlanMotion as PlanMotionAction
 from maru_planner_interfaces.msg import SceneObstacle
 from maru_planner_interfaces.srv import ApplyScene, ComputeIK, GetScene, PlanMotion
 
 
 class PlanningClient:
-    """Clients of ``plan_motion``, ``compute_ik``, ``apply_scene`` and ``get_scene``.
+    """Clients of ``plan_motion`` (service and action), ``compute_ik``, ``apply_scene`` and ``get_scene``.
 
     ``node``: an existing node that someone else spins (an executor thread); if None the
     client makes its own node and spins it in a daemon thread. ``namespace``: where the
@@ -45,6 +57,7 @@ class PlanningClient:
         self.ik_client = self.node.create_client(ComputeIK, prefix + "compute_ik")
         self.apply_client = self.node.create_client(ApplyScene, prefix + "apply_scene")
         self.scene_client = self.node.create_client(GetScene, prefix + "get_scene")
+        self.plan_action_client = ActionClient(self.node, PlanMotionAction, prefix + "plan_motion")
         self._executor = None
         if self._owns_node:
             self._executor = SingleThreadedExecutor()
@@ -86,6 +99,23 @@ class PlanningClient:
         """
         request = plan_request(goal_joints, **request_fields)
         return self.call(self.plan_client, request, timeout or request.allowed_planning_time + 30.0)
+
+    def plan_action(
+        self,
+        goal_joints: dict[str, float] | None = None,
+        *,
+        feedback_callback: Callable[[PlanMotionAction.Feedback], None] | None = None,
+        timeout: float = 60.0,
+        **request_fields,
+    ) -> PlanGoal:
+        """Send a ``plan_motion`` action goal (``request_fields`` as for :meth:`plan`) and wait until it is accepted.
+
+        ``feedback_callback`` gets every feedback message (stage, elapsed, nodes, best_cost) in the
+        client's executor thread. Returns the running :class:`PlanGoal` (``cancel()``, ``result()``).
+        """
+        return send_plan_goal(
+            self.plan_action_client, plan_goal(goal_joints, **request_fields), feedback_callback, timeout
+        )
 
     def compute_ik(
         self,
@@ -135,6 +165,67 @@ class PlanningClient:
 
     def __exit__(self, *exc):
         self.close()
+
+
+class PlanGoal:
+    """An accepted ``plan_motion`` action goal: its result request is already on its way."""
+
+    def __init__(self, handle: ClientGoalHandle):
+        self.handle = handle
+        self._result = handle.get_result_async()
+
+    @property
+    def done(self) -> bool:
+        return self._result.done()
+
+    def cancel(self, timeout: float = 30.0) -> bool:
+        """Ask the node to cancel the goal; whether it accepted (False once the goal has ended)."""
+        response = _wait(self.handle.cancel_goal_async(), timeout, "plan_motion cancel")
+        return len(response.goals_canceling) > 0
+
+    def result(self, timeout: float = 120.0) -> tuple[int, PlanMotionAction.Result]:
+        """(``action_msgs/GoalStatus`` status, result) once the goal has ended: SUCCEEDED, ABORTED or CANCELED."""
+        response = _wait(self._result, timeout, "plan_motion result")
+        return response.status, response.result
+
+
+def plan_goal(goal_joints: dict[str, float] | None = None, **request_fields) -> PlanMotionAction.Goal:
+    """A ``PlanMotion`` action goal from plain Python values (:func:`plan_request`'s keywords)."""
+    request = plan_request(goal_joints, **request_fields)
+    return PlanMotionAction.Goal(
+        **{name: getattr(request, name) for name in PlanMotionAction.Goal.get_fields_and_field_types()}
+    )
+
+
+def send_plan_goal(
+    client: ActionClient,
+    goal: PlanMotionAction.Goal,
+    feedback_callback: Callable[[PlanMotionAction.Feedback], None] | None = None,
+    timeout: float = 60.0,
+) -> PlanGoal:
+    """Send ``goal`` on a ``plan_motion`` action client and wait for its acceptance (the node never rejects)."""
+    if not client.wait_for_server(timeout_sec=timeout):
+        raise TimeoutError(f"no plan_motion action server after {timeout} s")
+    on_feedback = None if feedback_callback is None else (lambda message: feedback_callback(message.feedback))
+    handle = _wait(client.send_goal_async(goal, feedback_callback=on_feedback), timeout, "plan_motion goal")
+    if not handle.accepted:
+        raise RuntimeError("plan_motion rejected the goal")
+    return PlanGoal(handle)
+
+
+def _wait(future: Future, timeout: float, what: str):
+    """The result of an rclpy future that an executor thread completes (blocks without polling)."""
+    answered = threading.Event()
+    future.add_done_callback(lambda _future: answered.set())
+    if not answered.wait(timeout):
+        raise TimeoutError(f"no {what} within {timeout} s")
+    return future.result()
+
+
+def status_name(status: int) -> str:
+    """``action_msgs/GoalStatus`` constant name of ``status`` (e.g. "STATUS_CANCELED")."""
+    names = {getattr(GoalStatus, n): n for n in dir(GoalStatus) if n.startswith("STATUS_")}
+    return names.get(status, f"UNKNOWN({status})")
 
 
 def call_service(client, request, timeout: float = 60.0):

@@ -18,6 +18,13 @@ requests are admitted (planning or waiting); one more is answered BUSY at once. 
 waiting counts against the request's own budget. The services' QoS queue
 (``request_queue_depth``) is deeper than that, so the middleware drops no request before the
 node has seen it.
+
+The ``plan_motion`` action (``maru_planner_interfaces/action/PlanMotion``) plans the same way,
+through the same conversion and worker pool, and answers with the service's response as its
+result. While a goal runs, its :class:`~maru_planner.monitor.PlanMonitor` is published as feedback
+every ``feedback_period``; a cancel request cancels the monitor, which stops the search at once.
+Every goal is accepted; one that cannot plan (bad fields, BUSY, no path) ends ABORTED with the
+service's error code in its result, a cancelled one CANCELED with the statistics so far.
 """
 
 from __future__ import annotations
@@ -37,6 +44,8 @@ from typing import Any
 
 import numpy as np
 import rclpy
+from rclpy.action import ActionServer, CancelResponse
+from rclpy.action.server import ServerGoalHandle
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
 from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
 from rclpy.node import Node
@@ -49,6 +58,7 @@ from trajectory_msgs.msg import JointTrajectory
 from visualization_msgs.msg import MarkerArray
 
 from maru_planner import errors
+from maru_planner.monitor import PlanMonitor, Progress
 from maru_planner.params import ParamSpec, dataclass_params, param
 from maru_planner.paths import config_path, urdf_path
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig
@@ -61,6 +71,7 @@ from maru_planner.ros import planning_conversions as conv
 from maru_planner.ros.env import network_from_environment
 from maru_planner.ros.markers import plan_markers, scene_markers
 from maru_planner.scene import Obstacle, Scene
+from maru_planner_interfaces.action import PlanMotion as PlanMotionAction
 from maru_planner_interfaces.msg import PlanningError, SceneObstacle
 from maru_planner_interfaces.srv import ApplyScene, ComputeIK, GetScene, PlanMotion
 
@@ -72,6 +83,7 @@ PLANNER_PREFIX = "planners"
 
 LATCHED = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL, reliability=ReliabilityPolicy.RELIABLE)
 JOINT_STATES_DEPTH = 10  # only the newest state matters; a deep queue of junk messages would only cost memory
+CANCEL_SETTLE_TIMEOUT = 1.0  # s a finished goal waits for rclpy to mark its accepted cancel (microseconds in practice)
 
 
 @dataclass
@@ -117,6 +129,9 @@ class NodeSettings:
     )
     marker_period: float = param(
         1.0, "how often a new ~/markers subscriber is looked for, to send it the scene (s)", lower=0.01, upper=60.0
+    )
+    feedback_period: float = param(
+        0.1, "seconds between plan_motion action feedback messages (at most 0.2: at least 5 Hz)", lower=0.01, upper=0.2
     )
 
 
@@ -354,6 +369,21 @@ class PlanningNode(Node):
         self._marker_timer = self.create_timer(
             self.settings.marker_period, self._on_marker_timer, callback_group=MutuallyExclusiveCallbackGroup()
         )
+        self._make_plan_action(services, requests)
+
+    def _make_plan_action(self, callback_group: ReentrantCallbackGroup, requests: QoSProfile) -> None:
+        self._goal_monitors: dict[bytes, PlanMonitor] = {}
+        self._plan_action = ActionServer(
+            self,
+            PlanMotionAction,
+            "plan_motion",
+            self._execute_plan_goal,
+            callback_group=callback_group,
+            handle_accepted_callback=self._on_plan_goal_accepted,
+            cancel_callback=self._on_plan_goal_cancel,
+            goal_service_qos_profile=requests,
+            result_service_qos_profile=requests,
+        )
 
     # ------------------------------------------------------------ run-time parameter changes
 
@@ -467,32 +497,74 @@ class PlanningNode(Node):
     # ------------------------------------------------------------ services
 
     async def _on_plan_motion(self, request: PlanMotion.Request, response: PlanMotion.Response):
+        return await self._answer_plan(request, response, "plan_motion")
+
+    async def _answer_plan(self, request, answer, name: str, monitor: PlanMonitor | None = None):
+        """Plan ``request`` (a service request or action goal) and fill ``answer`` (its response or result)."""
         started = time.perf_counter()
         try:
             motion_request = self._motion_request(request)
             deadline = time.monotonic() + motion_request.time_budget
-            result = await self._in_worker(_plan_in_context, motion_request, deadline)
+            result = await self._in_worker(_plan_in_context, motion_request, deadline, monitor)
         except Exception as exc:  # noqa: BLE001 - every failure becomes an error code
-            response.error = conv.error_msg(exc, source="node")
-            self._log_failure("plan_motion", response.error)
-            return response
-        response.error = conv.result_error_msg(result)
-        response.planning_time = float(getattr(result.stats, "total_time", 0.0) or 0.0)
-        response.stats = conv.stats_msg(result.stats)
+            answer.error = conv.error_msg(exc, source="node")
+            self._log_failure(name, answer.error)
+            return answer
+        answer.error = conv.result_error_msg(result)
+        answer.planning_time = float(getattr(result.stats, "total_time", 0.0) or 0.0)
+        answer.stats = conv.stats_msg(result.stats)
         if not result.success:
-            self._log_failure("plan_motion", response.error)
-            return response
+            self._log_failure(name, answer.error)
+            return answer
         stamp = self.get_clock().now().to_msg()
-        response.trajectory = conv.trajectory_msg(result.trajectory, self.settings.planning_frame, stamp)
+        answer.trajectory = conv.trajectory_msg(result.trajectory, self.settings.planning_frame, stamp)
         # publishing (and marker FK) happens after the answer has gone out
         assert self.executor is not None  # a service callback runs in the node's executor
-        self.executor.create_task(self._publish_plan, response.trajectory, result.trajectory, motion_request.start)
+        self.executor.create_task(self._publish_plan, answer.trajectory, result.trajectory, motion_request.start)
         self.get_logger().info(
-            f"plan_motion {motion_request.group} {response.stats.planner_id} on {result.stats.collision_model}: "
-            f"{len(response.trajectory.points)} points, "
-            f"core {response.planning_time:.3f} s, in node {time.perf_counter() - started:.3f} s"
+            f"{name} {motion_request.group} {answer.stats.planner_id} on {result.stats.collision_model}: "
+            f"{len(answer.trajectory.points)} points, "
+            f"core {answer.planning_time:.3f} s, in node {time.perf_counter() - started:.3f} s"
         )
-        return response
+        return answer
+
+    # ------------------------------------------------------------ plan_motion action
+
+    def _on_plan_goal_accepted(self, goal_handle: ServerGoalHandle) -> None:
+        """Every goal is accepted (its result says what was wrong); its monitor exists before a cancel can come."""
+        self._goal_monitors[bytes(goal_handle.goal_id.uuid)] = PlanMonitor()
+        goal_handle.execute()
+
+    def _on_plan_goal_cancel(self, goal_handle: ServerGoalHandle) -> CancelResponse:
+        monitor = self._goal_monitors.get(bytes(goal_handle.goal_id.uuid))
+        if monitor is not None:
+            monitor.cancel()
+        return CancelResponse.ACCEPT
+
+    async def _execute_plan_goal(self, goal_handle: ServerGoalHandle) -> PlanMotionAction.Result:
+        """Plan the goal with feedback every ``feedback_period``; SUCCEEDED, CANCELED or ABORTED with the result."""
+        key = bytes(goal_handle.goal_id.uuid)
+        monitor = self._goal_monitors[key]
+        goal_handle.publish_feedback(_feedback_msg(monitor.snapshot()))
+        feedback_timer = self.create_timer(
+            self.settings.feedback_period,
+            lambda: goal_handle.publish_feedback(_feedback_msg(monitor.snapshot())),
+            callback_group=MutuallyExclusiveCallbackGroup(),
+        )
+        try:
+            result = await self._answer_plan(
+                goal_handle.request, PlanMotionAction.Result(), "plan_motion action", monitor
+            )
+        finally:
+            self.destroy_timer(feedback_timer)
+            del self._goal_monitors[key]
+        if result.error.code == PlanningError.SUCCESS:
+            goal_handle.succeed()
+        elif monitor.cancelled and _cancel_settled(goal_handle):
+            goal_handle.canceled()
+        else:
+            goal_handle.abort()
+        return result
 
     def _publish_plan(self, trajectory_msg: JointTrajectory, trajectory, start: dict[str, float]) -> None:
         """Publish the last plan on ~/planned_trajectory and, when someone listens, its hand paths."""
@@ -505,8 +577,8 @@ class PlanningNode(Node):
                 )
             self._publish_markers()
 
-    def _motion_request(self, request: PlanMotion.Request) -> MotionRequest:
-        """Core ``MotionRequest`` of a ``PlanMotion`` request (raises typed errors for bad fields)."""
+    def _motion_request(self, request: PlanMotion.Request | PlanMotionAction.Goal) -> MotionRequest:
+        """Core ``MotionRequest`` of a ``PlanMotion`` request or goal (raises typed errors for bad fields)."""
         settings = self.settings
         budget = float(request.allowed_planning_time)
         if not math.isfinite(budget) or budget <= 0.0:
@@ -634,9 +706,32 @@ def _time_left(deadline: float, budget_name: str) -> float:
     return left
 
 
-def _plan_in_context(context: PlanningContext, motion_request: MotionRequest, deadline: float):
+def _plan_in_context(
+    context: PlanningContext, motion_request: MotionRequest, deadline: float, monitor: PlanMonitor | None
+):
     budget = _time_left(deadline, "allowed_planning_time")
-    return context.planner.plan(dataclasses.replace(motion_request, time_budget=budget))
+    return context.planner.plan(dataclasses.replace(motion_request, time_budget=budget), monitor)
+
+
+def _feedback_msg(progress: Progress) -> PlanMotionAction.Feedback:
+    return PlanMotionAction.Feedback(
+        stage=progress.stage,
+        elapsed=float(progress.elapsed),
+        nodes=int(progress.info.get("nodes", 0)),
+        best_cost=float(progress.info.get("best_cost", math.nan)),
+    )
+
+
+def _cancel_settled(goal_handle: ServerGoalHandle) -> bool:
+    """Whether the goal is CANCELING (only then may it end CANCELED).
+
+    The cancel callback stops the plan before rclpy marks the goal CANCELING, so a plan that stops at
+    once may finish first; the mark follows within microseconds on the cancelling executor thread.
+    """
+    deadline = time.monotonic() + CANCEL_SETTLE_TIMEOUT
+    while not goal_handle.is_cancel_requested and time.monotonic() < deadline:
+        time.sleep(0.0005)
+    return goal_handle.is_cancel_requested
 
 
 def _ik_in_context(context: PlanningContext, group, targets, seed, strict, deadline, avoid_collisions) -> np.ndarray:

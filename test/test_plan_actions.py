@@ -1,0 +1,215 @@
+"""The plan_motion action of planning_node through real rclpy action clients (node in its own process).
+
+Acceptance (issue 14): feedback arrives at >= 5 Hz while a goal runs, and a cancel stops the search
+within 100 ms (median over 20 cancels, from the cancel request to the result's arrival at the client).
+Those two are the only timed assertions. The action answers like the service: the same result for the
+same seeded request, the same error codes for bad goals; a goal the node cannot admit ends ABORTED
+with BUSY.
+"""
+
+from __future__ import annotations
+
+import statistics
+import threading
+import time
+
+import numpy as np
+import pytest
+
+pytestmark = pytest.mark.ros
+
+GROUP_JOINTS = ["waist_yaw"] + [f"r_arm_j{i}" for i in range(1, 7)] + [f"l_arm_j{i}" for i in range(1, 7)]
+PAPER_START = dict(zip(GROUP_JOINTS, (-0.9, -0.7, 1.57, 0.7, 0.7, -0.9, -0.9, -0.8, 1.57, 2.0, 0.7, -1.9, -1.25)))
+PAPER_GOAL = dict(zip(GROUP_JOINTS, (0.9, -0.8, 1.57, 1.14, 0.7, -1.24, -1.9, -0.7, 1.57, 2.44, 0.7, -2.24, -1.25)))
+# Plain RRT (no goal bias) does not solve the 13-DOF paper problem: it searches for its whole budget.
+HARD = dict(start=PAPER_START, planner_id="RRT", time_budget=10.0)
+FEEDBACK_WINDOW = 3.0  # s of a running goal over which feedback is counted
+CANCELS = 20
+
+
+@pytest.fixture(scope="module")
+def planner_node(node_process, rclpy_session):
+    from maru_planner.paths import config_path
+
+    proc = node_process(
+        "maru_planner.ros.planning_node", ["--ros-args", "--params-file", str(config_path("planner.yaml"))]
+    )
+    yield proc
+    assert proc.alive(), "planning_node died:\n" + proc.log()
+
+
+@pytest.fixture(scope="module")
+def tester(planner_node, rclpy_session):
+    from conftest import SpinningNode
+
+    spinning = SpinningNode("plan_action_tests")
+    yield spinning
+    spinning.destroy()
+
+
+@pytest.fixture(scope="module")
+def client(planner_node, tester):
+    from maru_planner.ros.planning_client import PlanningClient
+
+    planning = PlanningClient(node=tester.node)
+    assert planning.plan_client.wait_for_service(timeout_sec=120.0), (
+        "plan_motion never appeared:\n" + planner_node.log()
+    )
+    planning.wait_until_ready(timeout=120.0)
+    assert planning.plan_action_client.wait_for_server(timeout_sec=60.0)
+    return planning
+
+
+class Stages:
+    """Feedback collector: every message with its arrival time; an event per stage seen."""
+
+    def __init__(self):
+        self.messages: list[tuple[float, object]] = []
+        self._seen: dict[str, threading.Event] = {}
+        self._lock = threading.Lock()
+
+    def __call__(self, feedback) -> None:
+        with self._lock:
+            self.messages.append((time.monotonic(), feedback))
+            self._seen.setdefault(feedback.stage, threading.Event()).set()
+
+    def wait_for(self, stage: str, timeout: float = 30.0) -> bool:
+        with self._lock:
+            event = self._seen.setdefault(stage, threading.Event())
+        return event.wait(timeout)
+
+    def between(self, t0: float, t1: float) -> list:
+        with self._lock:
+            return [feedback for t, feedback in self.messages if t0 <= t <= t1]
+
+
+def _status():
+    from action_msgs.msg import GoalStatus
+
+    return GoalStatus
+
+
+def _codes():
+    from maru_planner_interfaces.msg import PlanningError
+
+    return PlanningError
+
+
+def _describe(status: int, result) -> str:
+    from maru_planner.ros.planning_client import status_name
+    from maru_planner.ros.planning_conversions import code_name
+
+    return f"{status_name(status)}, {code_name(result.error.code)}: {result.error.message}"
+
+
+# ---------------------------------------------------------------- acceptance: feedback and cancel
+
+
+def test_feedback_arrives_at_5_hz_and_a_cancelled_goal_keeps_its_statistics(client):
+    stages = Stages()
+    goal = client.plan_action(PAPER_GOAL, seed=5, feedback_callback=stages, **HARD)
+    t0 = time.monotonic()
+    time.sleep(FEEDBACK_WINDOW)
+    received = stages.between(t0, t0 + FEEDBACK_WINDOW)
+    assert not goal.done, "the hard goal ended early; the feedback window proved nothing"
+    assert goal.cancel()
+    status, result = goal.result()
+
+    rate = len(received) / FEEDBACK_WINDOW
+    assert rate >= 5.0, f"{len(received)} feedback messages in {FEEDBACK_WINDOW} s"
+    assert {feedback.stage for feedback in received} <= {"queued", "validation", "search"}
+    assert received[-1].stage == "search"
+    elapsed = [feedback.elapsed for feedback in received]
+    assert elapsed == sorted(elapsed) and elapsed[-1] > elapsed[0]
+    assert status == _status().STATUS_CANCELED, _describe(status, result)
+    assert "cancelled during search" in result.error.message
+    assert result.stats.planner_id == "RRT" and result.stats.nodes > 0 and result.stats.collision_checks > 0
+
+
+def test_cancel_stops_the_search_within_100_ms_median_over_20(client):
+    latencies, outcomes = [], []
+    for seed in range(CANCELS):
+        stages = Stages()
+        goal = client.plan_action(PAPER_GOAL, seed=seed, feedback_callback=stages, **HARD)
+        assert stages.wait_for("search"), "the goal never reported its search"
+        t0 = time.perf_counter()
+        goal.handle.cancel_goal_async()
+        status, result = goal.result()
+        latencies.append(time.perf_counter() - t0)
+        outcomes.append((status, result))
+    for status, result in outcomes:
+        assert status == _status().STATUS_CANCELED, _describe(status, result)
+    ms = sorted(round(s * 1e3, 1) for s in latencies)
+    print(f"cancel -> result latency (ms): {ms}")
+    assert statistics.median(latencies) < 0.1, f"cancel latencies (ms): {ms}"
+
+
+# ---------------------------------------------------------------- same answers as the service
+
+
+def test_a_successful_goal_ends_with_the_service_response(client):
+    request = dict(start=PAPER_START, planner_id="RRTConnect", time_budget=20.0, seed=3)
+    response = client.plan(PAPER_GOAL, **request)
+    stages = Stages()
+    status, result = client.plan_action(PAPER_GOAL, feedback_callback=stages, **request).result()
+
+    assert status == _status().STATUS_SUCCEEDED, _describe(status, result)
+    assert response.error.code == result.error.code == _codes().SUCCESS
+    assert result.trajectory.joint_names == response.trajectory.joint_names
+    for field in ("positions", "velocities", "accelerations"):
+        np.testing.assert_array_equal(
+            [getattr(p, field) for p in result.trajectory.points],
+            [getattr(p, field) for p in response.trajectory.points],
+        )
+    times = [(p.time_from_start.sec, p.time_from_start.nanosec) for p in result.trajectory.points]
+    assert times == [(p.time_from_start.sec, p.time_from_start.nanosec) for p in response.trajectory.points]
+    for field in ("planner_id", "seed", "nodes", "waypoints", "path_length", "collision_checks"):
+        assert getattr(result.stats, field) == getattr(response.stats, field), field
+    assert stages.messages and stages.messages[0][1].stage == "queued"
+
+
+@pytest.mark.parametrize(
+    ("fields", "code"),
+    [
+        (dict(time_budget=0.0), "INVALID_REQUEST"),
+        (dict(group="no_such_group"), "INVALID_GROUP_NAME"),
+        (dict(planner_id="NoSuchPlanner"), "INVALID_PLANNER"),
+        (dict(goal_joints={**PAPER_GOAL, "no_such_joint": 0.0}), "INVALID_JOINT_NAMES"),
+        (dict(goal_joints={**PAPER_GOAL, "r_arm_j1": float("nan")}), "INVALID_ROBOT_STATE"),
+    ],
+)
+def test_a_bad_goal_is_aborted_with_the_service_error_code(client, fields, code):
+    request = dict(start=PAPER_START, time_budget=5.0, seed=1, goal_joints=PAPER_GOAL) | fields
+    goal_joints = request.pop("goal_joints")
+    response = client.plan(goal_joints, **request)
+    status, result = client.plan_action(goal_joints, **request).result()
+
+    assert response.error.code == getattr(_codes(), code), response.error.message
+    assert status == _status().STATUS_ABORTED, _describe(status, result)
+    assert (result.error.code, result.error.message) == (response.error.code, response.error.message)
+
+
+def test_a_goal_beyond_the_admission_queue_is_aborted_busy(node_process, tester):
+    """workers 1, queue_size 0: while one goal plans, the next is accepted and at once ABORTED with BUSY."""
+    from maru_planner.paths import config_path
+    from maru_planner.ros.planning_client import PlanningClient
+
+    proc = node_process(
+        "maru_planner.ros.planning_node",
+        ["--ros-args", "-r", "__ns:=/busy", "--params-file", str(config_path("planner.yaml")),
+         "-p", "workers:=1", "-p", "queue_size:=0"],
+    )  # fmt: skip
+    busy = PlanningClient(node=tester.node, namespace="/busy")
+    assert busy.plan_client.wait_for_service(timeout_sec=120.0), "busy node never appeared:\n" + proc.log()
+    busy.wait_until_ready(timeout=120.0)
+    stages = Stages()
+    running = busy.plan_action(PAPER_GOAL, seed=1, feedback_callback=stages, **HARD)
+    assert stages.wait_for("search")
+    status, result = busy.plan_action(PAPER_GOAL, seed=2, **HARD).result()
+    assert not running.done
+    running.cancel()
+    first_status, _ = running.result()
+
+    assert status == _status().STATUS_ABORTED, _describe(status, result)
+    assert result.error.code == _codes().BUSY
+    assert first_status == _status().STATUS_CANCELED
