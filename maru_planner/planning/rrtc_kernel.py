@@ -29,7 +29,17 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from maru_planner.collision.sphere_kernels import AMBIGUOUS, COLLIDING, VALID, scan_nb
+from maru_planner.collision.batch_fk import joint_poses_nb
+from maru_planner.collision.sphere_kernels import (
+    AMBIGUOUS,
+    COLLIDING,
+    VALID,
+    box_distance,
+    cylinder_distance,
+    scan_nb,
+    unpack_robot,
+    unpack_scene,
+)
 
 SOLVED, RUNNING, NEED_EXACT, FULL = 0, 1, 2, 3  # what run() returns
 DIRECT, EXTEND, CONNECT = 0, 1, 2  # phases: the straight start-goal edge, extend toward a sample, connect
@@ -136,16 +146,131 @@ def bisection_order(n):
     return out
 
 
+@njit(cache=True, inline="always")
+def _world(rot, pos, joint, local, i):
+    """World position of ``local[i]``, fixed in the frame of joint ``joint[i]`` (sphere_centers_nb's arithmetic)."""
+    j = joint[i]
+    x = pos[j, 0] + rot[j, 0, 0] * local[i, 0] + rot[j, 0, 1] * local[i, 1] + rot[j, 0, 2] * local[i, 2]
+    y = pos[j, 1] + rot[j, 1, 0] * local[i, 0] + rot[j, 1, 1] * local[i, 1] + rot[j, 1, 2] * local[i, 2]
+    z = pos[j, 2] + rot[j, 2, 0] * local[i, 0] + rot[j, 2, 1] * local[i, 1] + rot[j, 2, 2] * local[i, 2]
+    return x, y, z
+
+
+@njit(cache=True, inline="always")
+def _obstacle_distance(x, y, z, k, scene):
+    """Signed distance from a point to obstacle ``k`` (point_obstacle_distance's arithmetic, on scalars)."""
+    box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, _ = scene
+    nb, ns = box_c.shape[0], sph_c.shape[0]
+    if k < nb:
+        return box_distance(x, y, z, k, box_c, box_r, box_h)
+    k -= nb
+    if k < ns:
+        d0, d1, d2 = x - sph_c[k, 0], y - sph_c[k, 1], z - sph_c[k, 2]
+        return np.sqrt(d0 * d0 + d1 * d1 + d2 * d2) - sph_r[k]
+    return cylinder_distance(x, y, z, k - ns, cyl_c, cyl_a, cyl_h, cyl_r)
+
+
+@njit(cache=True, inline="always")
+def _norm(dx, dy, dz):
+    return np.sqrt(dx * dx + dy * dy + dz * dz)
+
+
+@njit(cache=True)
+def _group_vs_scene(g, robot, scene, rot, pos):
+    """0: group ``g``'s outer spheres clear every obstacle; 1: some touch one; 2: an inner ball hits an exact one."""
+    c_start, c_joint, c_center, c_radius, g_clusters = robot[16], robot[17], robot[18], robot[19], robot[20]
+    s_joint, s_center, s_radius, s_inner, g_joint, g_center, g_radius, padding = (
+        robot[6], robot[7], robot[8], robot[9], robot[11], robot[12], robot[13], robot[15])  # fmt: skip
+    exact = scene[9]
+    gx, gy, gz = _world(rot, pos, g_joint, g_center, g)
+    touched = 0
+    for k in range(exact.shape[0]):
+        if _obstacle_distance(gx, gy, gz, k, scene) >= g_radius[g] + padding:
+            continue
+        for c in range(g_clusters[g], g_clusters[g + 1]):
+            cx, cy, cz = _world(rot, pos, c_joint, c_center, c)
+            if _obstacle_distance(cx, cy, cz, k, scene) >= c_radius[c] + padding:
+                continue
+            for s in range(c_start[c], c_start[c + 1]):
+                sx, sy, sz = _world(rot, pos, s_joint, s_center, s)
+                d = _obstacle_distance(sx, sy, sz, k, scene)
+                if exact[k] and d < s_inner[s] + padding:
+                    return 2
+                if d < s_radius[s] + padding:
+                    touched = 1
+    return touched
+
+
+@njit(cache=True)
+def _pair_vs_pair(ga, gb, robot, rot, pos):
+    """Self-collision pair (ga, gb) as _group_vs_scene answers: 0 clear, 1 outer spheres touch, 2 inner balls hit."""
+    c_start, c_joint, c_center, c_radius, g_clusters = robot[16], robot[17], robot[18], robot[19], robot[20]
+    s_joint, s_center, s_radius, s_inner, g_joint, g_center, g_radius, padding = (
+        robot[6], robot[7], robot[8], robot[9], robot[11], robot[12], robot[13], robot[15])  # fmt: skip
+    ax, ay, az = _world(rot, pos, g_joint, g_center, ga)
+    bx, by, bz = _world(rot, pos, g_joint, g_center, gb)
+    if _norm(ax - bx, ay - by, az - bz) >= g_radius[ga] + g_radius[gb] + padding:
+        return 0
+    touched = 0
+    for ca in range(g_clusters[ga], g_clusters[ga + 1]):
+        cax, cay, caz = _world(rot, pos, c_joint, c_center, ca)
+        if _norm(cax - bx, cay - by, caz - bz) >= c_radius[ca] + g_radius[gb] + padding:
+            continue
+        for cb in range(g_clusters[gb], g_clusters[gb + 1]):
+            cbx, cby, cbz = _world(rot, pos, c_joint, c_center, cb)
+            if _norm(cax - cbx, cay - cby, caz - cbz) >= c_radius[ca] + c_radius[cb] + padding:
+                continue
+            for sa in range(c_start[ca], c_start[ca + 1]):
+                sax, say, saz = _world(rot, pos, s_joint, s_center, sa)
+                if _norm(sax - cbx, say - cby, saz - cbz) >= s_radius[sa] + c_radius[cb] + padding:
+                    continue
+                for sb in range(c_start[cb], c_start[cb + 1]):
+                    sbx, sby, sbz = _world(rot, pos, s_joint, s_center, sb)
+                    d = _norm(sax - sbx, say - sby, saz - sbz)
+                    if d < s_inner[sa] + s_inner[sb] + padding:
+                        return 2
+                    if d < s_radius[sa] + s_radius[sb] + padding:
+                        touched = 1
+    return touched
+
+
+@njit(cache=True)
+def classify(q, robot, scene, rot, pos):
+    """VALID, COLLIDING or AMBIGUOUS for one full configuration: the answer of the sphere checker's
+    classify_state without a grid, computed in a tight loop that places a sphere only when its
+    cluster's bound reaches an obstacle or the other side of a self-collision pair.
+
+    ``robot``/``scene``: unpack_robot/unpack_scene tuples; ``rot``/``pos``: joint pose work arrays.
+    """
+    joint_poses_nb(q, robot[0], robot[1], robot[2], robot[3], robot[4], robot[5], rot, pos)
+    g_joint, self_pairs = robot[11], robot[14]
+    touched = 0
+    for g in range(g_joint.shape[0]):
+        if g_joint[g] == 0:  # fixed to the world: like the exact checker, never tested against the scene
+            continue
+        hit = _group_vs_scene(g, robot, scene, rot, pos)
+        if hit == 2:
+            return COLLIDING
+        touched |= hit
+    for p in range(self_pairs.shape[0]):
+        hit = _pair_vs_pair(self_pairs[p, 0], self_pairs[p, 1], robot, rot, pos)
+        if hit == 2:
+            return COLLIDING
+        touched |= hit
+    return AMBIGUOUS if touched else VALID
+
+
 @njit(cache=True)
 def check_edge(qa, qb, resolution, base, indices, ri, rf, sf, grid_i, grid_f, amb, mark, confirm, amb_states, st):
     """VALID, COLLIDING or AMBIGUOUS for the edge qa → qb (qa excluded) on the sphere model.
 
     The edge's states, as full configurations (``base`` supplies the joints outside the group's
-    ``indices``), go in bisection order through the sphere checker's own scan (``scan_nb``, its
-    packed robot/scene/grid and work arrays ``amb``/``mark``). COLLIDING at the first colliding
-    state. With ``confirm``, states that are only ambiguous are copied to ``amb_states`` (``st[N_AMB]``
-    of them) and the edge is AMBIGUOUS if no state collides; without it an ambiguous state collides
-    (the pure, conservative sphere model).
+    ``indices``), are classified in bisection order: by :func:`classify` on the sphere checker's
+    packed robot and scene (``ri``/``rf``/``sf``), or, when the checker looks obstacles up in a grid
+    (a large scene, ``grid_i``/``grid_f``), by its own scan (``scan_nb`` with its work arrays
+    ``amb``/``mark``). COLLIDING at the first colliding state. With ``confirm``, states that are only
+    ambiguous are copied to ``amb_states`` (``st[N_AMB]`` of them) and the edge is AMBIGUOUS if no
+    state collides; without it an ambiguous state collides (the pure, conservative sphere model).
     """
     dim = qa.shape[0]
     steps = 0.0
@@ -159,19 +284,25 @@ def check_edge(qa, qb, resolution, base, indices, ri, rf, sf, grid_i, grid_f, am
         states[r] = base
         for a in range(dim):
             states[r, indices[a]] = qa[a] + t * (qb[a] - qa[a])
+    robot, scene = unpack_robot(ri, rf), unpack_scene(sf)
+    rot, pos = np.empty((robot[0].shape[0], 3, 3)), np.empty((robot[0].shape[0], 3))
     n_amb, row = 0, 0
     while row < n:
-        hit, status, _ = scan_nb(states, row, ri, rf, sf, grid_i, grid_f, amb, mark, confirm)
+        if grid_i[0] > 0:
+            hit, status, _ = scan_nb(states, row, ri, rf, sf, grid_i, grid_f, amb, mark, True)
+        else:
+            hit, status = row, classify(states[row], robot, scene, rot, pos)
         if hit < 0:
             st[CHECKS] += n - row
             break
         st[CHECKS] += hit + 1 - row
-        if status == COLLIDING:
-            return COLLIDING
-        for a in range(dim):
-            amb_states[n_amb, a] = states[hit, indices[a]]
-        n_amb += 1
         row = hit + 1
+        if status == COLLIDING or (status == AMBIGUOUS and not confirm):
+            return COLLIDING
+        if status == AMBIGUOUS:
+            for a in range(dim):
+                amb_states[n_amb, a] = states[hit, indices[a]]
+            n_amb += 1
     st[N_AMB] = n_amb
     return AMBIGUOUS if n_amb > 0 else VALID
 
