@@ -6,14 +6,15 @@ Paths: the paper's 13-DOF and 6-DOF Maru-1 problems (``--seeds`` seeds each) and
 MotionBenchMaker Panda problems (spread over the sets), planned by ``MotionPlanner`` (RRTConnect,
 sphere checker, verified on the exact model, shortcut). Every path is then time-parameterised by
 each method of :mod:`maru_planner.planning.timing` with the same limits, blend deviation and
-collision re-check (exact model, :data:`timing.CERTIFY_STEP`) as the planner uses.
+blend certification (``PathCertifier``: continuous, the safety margin, chords ``resolution`` apart
+plus their error) as the planner uses.
 
 Reported per family and method: trajectory duration, its ratio to the trapezoids and to the
 cruise-only lower bound (every segment at its fastest synchronised speed, no acceleration),
 the largest velocity / acceleration / jerk over its limit (from a fine sampling: the reported
 values and finite differences, jerk from differences of accelerations; ruckig only, the others
 jump in acceleration), the largest distance from the planned path, the time spent parameterising
-(without the collision re-check of blends, reported apart) and collisions when the finely sampled
+(without the certification of blends, reported apart) and collisions when the finely sampled
 trajectory (joint step ≤ 0.005 rad) is re-checked on the exact model.
 
 Writes bench/results/trajectories.{json,md} and trajectories_13dof.png (one 13-DOF trajectory,
@@ -39,6 +40,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from maru_planner.collision import CollisionChecker  # noqa: E402
+from maru_planner.collision.certify import PathCertifier  # noqa: E402
 from maru_planner.moveit_scene import PANDA_FINGERS_OPEN, iter_mbm_problems  # noqa: E402
 from maru_planner.paths import benchmarks_dir  # noqa: E402
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig, timing  # noqa: E402
@@ -58,14 +60,20 @@ def log(msg: str) -> None:
 
 @dataclass
 class Case:
-    """One planned path (rows: group configurations) and what re-checks it."""
+    """One planned path (rows: group configurations) and what checks it.
+
+    Blends are certified as ``MotionPlanner`` does (``PathCertifier``, the planner's safety margin,
+    chords ``resolution`` apart plus their error); the finished trajectory is re-checked on the exact
+    checker alone, finely.
+    """
 
     family: str
     name: str
     joint_names: list[str]
     path: np.ndarray
     limits: timing.Limits
-    exact_checker: object
+    exact_checker: CollisionChecker
+    certifier: PathCertifier
     base: np.ndarray  # full configuration: joints outside the group
     indices: list[int]
     check_cpu: float = 0.0  # thread CPU seconds spent in curve_free
@@ -75,14 +83,18 @@ class Case:
         out[:, self.indices] = states
         return out
 
-    def curve_free(self, states: np.ndarray, _chord_deviation: np.ndarray) -> bool:
+    def curve_free(self, states: np.ndarray, chord_deviation: np.ndarray) -> bool:
         t0 = time.thread_time()
-        free = self.exact_checker.first_invalid(self.full(states)) < 0
+        deviation = np.zeros(len(self.base))
+        deviation[self.indices] = chord_deviation
+        free = self.certifier.certify_path(self.full(states), deviation=deviation).valid
         self.check_cpu += time.thread_time() - t0
         return free
 
 
-def planned_case(planner: MotionPlanner, family: str, name: str, request: MotionRequest) -> Case | None:
+def planned_case(
+    planner: MotionPlanner, family: str, name: str, request: MotionRequest, certifier: PathCertifier
+) -> Case | None:
     result = planner.plan(request)
     if not result.success:
         log(f"  {name}: {result.status.value} {result.message}")
@@ -92,8 +104,8 @@ def planned_case(planner: MotionPlanner, family: str, name: str, request: Motion
     base = np.asarray(robot.neutral(), float).copy()
     base[robot.joint_indices(list(request.start))] = list(request.start.values())
     limits = timing.Limits.scaled(robot.velocity_limits[indices], robot.acceleration_limits[indices])
-    return Case(family, name, list(result.joint_names), np.asarray(result.path), limits,
-                planner.exact_checker, base, indices)  # fmt: skip
+    return Case(family, name, list(result.joint_names), np.asarray(result.path), limits, certifier.checker,
+                certifier, base, indices)  # fmt: skip
 
 
 def paper_cases(family: str, seeds: int) -> list[Case]:
@@ -102,13 +114,14 @@ def paper_cases(family: str, seeds: int) -> list[Case]:
     planner = MotionPlanner.from_scene(
         robot, Scene.from_yaml(problem.scene_path), PlannerConfig(collision_model="spheres")
     )
+    certifier = PathCertifier(robot, planner.exact_checker, planner.config.safety_margin)
     names = robot.groups[problem.group]
     start = dict(robot.named_states.get("home", {})) | problem.start_dict(names)  # as bench/paper000.py
     cases = []
     for seed in range(1, seeds + 1):
         request = MotionRequest(problem.group, start=start, goal_joints=problem.goal_dict(names),
                                 planner_id="RRTConnect", time_budget=30.0, seed=seed)  # fmt: skip
-        case = planned_case(planner, family, f"{family}/seed{seed}", request)
+        case = planned_case(planner, family, f"{family}/seed{seed}", request, certifier)
         if case is not None:
             cases.append(case)
         log(f"  planned {family} seed {seed}: {'ok' if case else 'failed'}")
@@ -128,9 +141,10 @@ def mbm_cases(count: int) -> list[Case]:
         goal = {j: v for j, v in problem.request.goal.items() if j in PANDA_ARM}
         request = MotionRequest("arm", start=problem.request.start, goal_joints=goal, planner_id="RRTConnect",
                                 time_budget=10.0, seed=k)  # fmt: skip
-        case = planned_case(planner, "mbm_panda", f"mbm/{problem.name}", request)
+        # a certifier of its own: the planner's follows the planner's next scene
+        certifier = PathCertifier(robot, CollisionChecker(robot, problem.scene), planner.config.safety_margin)
+        case = planned_case(planner, "mbm_panda", f"mbm/{problem.name}", request, certifier)
         if case is not None:
-            case.exact_checker = CollisionChecker(robot, problem.scene)  # the planner's follows its next scene
             cases.append(case)
         if (k + 1) % 10 == 0 or k + 1 == len(chosen):
             log(f"  planned {k + 1}/{len(chosen)} MotionBenchMaker problems")
@@ -158,12 +172,14 @@ def measure(case: Case, method: str, config: PlannerConfig) -> tuple[dict, objec
     t0, cpu0, check0 = time.perf_counter(), time.thread_time(), case.check_cpu
     traj, report = timing.parameterize(case.path, case.joint_names, case.limits, method, curve_free=case.curve_free,
                                        max_deviation=config.blend_deviation, dt=config.trajectory_dt,
-                                       max_points=config.max_trajectory_points)  # fmt: skip
+                                       max_points=config.max_trajectory_points,
+                                       certify_step=config.resolution)  # fmt: skip
     elapsed = time.perf_counter() - t0
     cpu = time.thread_time() - cpu0 - (case.check_cpu - check0)
     fine_dt = timing.CERTIFY_STEP / float(np.max(case.limits.velocity))
     fine, _ = timing.parameterize(case.path, case.joint_names, case.limits, method, curve_free=case.curve_free,
-                                  max_deviation=config.blend_deviation, dt=fine_dt, max_points=10**7)  # fmt: skip
+                                  max_deviation=config.blend_deviation, dt=fine_dt, max_points=10**7,
+                                  certify_step=config.resolution)  # fmt: skip
     v, a, j = limit_ratios(fine, case.limits)
     states = case.full(fine.positions)
     collisions = int(len(states) - np.count_nonzero(case.exact_checker.are_valid(states)))
@@ -255,7 +271,8 @@ def markdown(summary: dict, args, checks: dict) -> str:
         f"Command: `.venv/bin/python bench/trajectories.py{quick} --seeds {args.seeds} --mbm {args.mbm}`. "
         f"Blend deviation {args.deviation} rad, sample period 0.05 s; limits re-checked on a sampling with joint "
         "steps ≤ 0.005 rad (values and finite differences); the same sampling re-checked for collision on the "
-        "exact model. Parameterisation time excludes the collision re-check of blends (listed apart); wall time "
+        "exact model. Blends certified as by MotionPlanner (PathCertifier, safety margin, chords 0.02 rad apart). "
+        "Parameterisation time excludes that certification of blends (listed apart); wall time "
         "depends on the machine's load, the 5 ms target is checked on CPU time.",
         "",
     ]

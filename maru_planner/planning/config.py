@@ -70,7 +70,7 @@ class PlannerConfig:
         choices=TIME_PARAMETERIZATIONS,
     )
     blend_deviation: float = param(
-        0.5,
+        0.8,
         "largest distance (rad) of a blended corner from the path's corner; blends are re-checked for collision "
         "and shrunk (or the motion stops there) when they collide; 0 = stop at every waypoint",
         lower=0.0,

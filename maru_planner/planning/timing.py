@@ -495,31 +495,70 @@ def _ruckig(waypoints, limits: Limits, check: _Check, max_deviation: float):
 
 
 def _ruckig_section(path: BlendedPath, limits: Limits) -> tuple[_RuckigPieces, list[int]]:
-    """Ruckig through the section's piece boundaries (see :func:`_via_speeds`); also each piece's blend waypoint."""
+    """Ruckig through the section's piece boundaries (see :func:`_via_speeds`); also each piece's blend waypoint.
+
+    A straight piece is a one-joint Ruckig trajectory along the line (so it stays on it; Ruckig's own phase
+    synchronisation gave up on lines whose joints have unequal limits), a blend a time-synchronised one.
+    """
     speed, toppra_duration = _via_speeds(path, limits)
     k = max(1.0, toppra_duration / RUCKIG_DURATION)
-    positions = list(path.p0) + [path.end]
+    fast = Limits(limits.velocity * k, limits.acceleration * k**2, limits.jerk * k**3)
+    ends = list(path.p0) + [path.end]
     directions = list(path.v0) + [np.zeros(path.dof)]
-    otg = ruckig.Ruckig(path.dof)
-    trajectories = []
+    pieces = []
     for i in range(len(path.p0)):
-        inp = ruckig.InputParameter(path.dof)
-        inp.current_position, inp.target_position = positions[i], positions[i + 1]
-        inp.current_velocity = directions[i] * speed[i] * k
-        inp.target_velocity = directions[i + 1] * speed[i + 1] * k
-        inp.current_acceleration = inp.target_acceleration = np.zeros(path.dof)
-        inp.max_velocity, inp.max_acceleration = limits.velocity * k, limits.acceleration * k**2
-        inp.max_jerk = limits.jerk * k**3
-        inp.synchronization = ruckig.Synchronization.Phase if path.blend_of[i] < 0 else ruckig.Synchronization.Time
-        trajectory = ruckig.Trajectory(path.dof)
-        try:
-            result = otg.calculate(inp, trajectory)
-        except (ValueError, ruckig.RuckigError) as exc:  # an error code the binding has no name for
-            raise _ParameterizationFailed(f"ruckig failed on piece {i}: {exc}") from exc
-        if result not in (ruckig.Result.Working, ruckig.Result.Finished):
-            raise _ParameterizationFailed(f"ruckig: {result} on piece {i}")
-        trajectories.append(trajectory)
-    return _RuckigPieces(trajectories, float(np.max(limits.velocity)), k), list(path.blend_of)
+        v0, v1 = speed[i] * k, speed[i + 1] * k
+        if path.blend_of[i] < 0:
+            length = float(np.linalg.norm(ends[i + 1] - ends[i]))
+            line = _ruckig_trajectory([0.0], [length], [v0], [v1], _along(path.v0[i], fast), i)
+            pieces.append(_LinePiece(ends[i], path.v0[i], line))
+        else:
+            pieces.append(_ruckig_trajectory(ends[i], ends[i + 1], directions[i] * v0, directions[i + 1] * v1, fast, i))
+    return _RuckigPieces(pieces, float(np.max(limits.velocity)), k), list(path.blend_of)
+
+
+def _ruckig_trajectory(start, end, start_velocity, end_velocity, limits: Limits, piece: int):
+    """Ruckig's time-optimal jerk-limited trajectory between two states at zero acceleration."""
+    dof = len(limits.velocity)
+    inp = ruckig.InputParameter(dof)
+    inp.current_position, inp.target_position = start, end
+    inp.current_velocity, inp.target_velocity = start_velocity, end_velocity
+    inp.current_acceleration = inp.target_acceleration = np.zeros(dof)
+    inp.max_velocity, inp.max_acceleration, inp.max_jerk = limits.velocity, limits.acceleration, limits.jerk
+    trajectory = ruckig.Trajectory(dof)
+    try:
+        result = ruckig.Ruckig(dof).calculate(inp, trajectory)
+    except (ValueError, ruckig.RuckigError) as exc:  # an error code the binding has no name for
+        raise _ParameterizationFailed(f"ruckig failed on piece {piece}: {exc}") from exc
+    if result not in (ruckig.Result.Working, ruckig.Result.Finished):
+        raise _ParameterizationFailed(f"ruckig: {result} on piece {piece}")
+    return trajectory
+
+
+def _along(direction: np.ndarray, limits: Limits) -> Limits:
+    """Limits of the arc length along a unit ``direction``: the tightest joint's, projected."""
+    moving = np.abs(direction) > 1e-12
+    scale = np.abs(direction[moving])
+    return Limits(
+        np.array([np.min(limits.velocity[moving] / scale)]),
+        np.array([np.min(limits.acceleration[moving] / scale)]),
+        np.array([np.min(limits.jerk[moving] / scale)]),
+    )
+
+
+class _LinePiece:
+    """A one-joint Ruckig trajectory of the arc length along a straight line, seen as joint motion."""
+
+    def __init__(self, start: np.ndarray, direction: np.ndarray, trajectory):
+        self.start, self.direction, self.trajectory = start, direction, trajectory
+
+    @property
+    def duration(self) -> float:
+        return self.trajectory.duration
+
+    def at_time(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        s, sd, sdd = (values[0] for values in self.trajectory.at_time(t)[:3])
+        return self.start + s * self.direction, sd * self.direction, sdd * self.direction
 
 
 def _via_speeds(path: BlendedPath, limits: Limits) -> tuple[np.ndarray, float]:
