@@ -195,7 +195,7 @@ def measure(case: Case, method: str, config: PlannerConfig) -> tuple[dict, objec
         "certify_checks": report.certify_checks,
         "velocity_ratio": v,
         "acceleration_ratio": a,
-        "jerk_ratio": j if method == "ruckig" else None,
+        "jerk_ratio": j if report.method == "ruckig" else None,  # the others jump in acceleration
         "max_deviation": float(timing.deviation_from_path(fine.positions, case.path).max()),
         "blends": report.blends,
         "stops": report.stops,
