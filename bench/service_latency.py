@@ -6,6 +6,8 @@ process:
 
 - ``plan_motion``: a small right-arm move; overhead = round trip - ``planning_time``
   (the core's total time reported in the response);
+- ``plan_motion`` action: the same moves as action goals; overhead = send goal .. result
+  arrived - ``planning_time`` (goal, result request and status: more messages than one service call);
 - ``get_scene``: a node service without planning (conversions + DDS only);
 - ``trigger``: an empty rclpy service (what DDS + rclpy alone cost).
 
@@ -76,10 +78,15 @@ def start_process(args: list[str], log_file) -> subprocess.Popen:
 
 
 def timed_calls(client, make_request, calls: int, label: str, timeout: float = 60.0):
-    """Round-trip seconds and responses of ``calls`` sequential calls (after 3 warm-up calls)."""
-    from maru_planner.ros.planning_client import call_service
+    """Round-trip seconds and responses of ``calls`` sequential calls (after 3 warm-up calls).
 
-    for _ in range(3):
+    The first warm-up call is repeated until answered: right after discovery an answer can be lost
+    (``call_until_answered``); every request here may be served twice.
+    """
+    from maru_planner.ros.planning_client import call_service, call_until_answered
+
+    call_until_answered(client, make_request(0), timeout)
+    for _ in range(2):
         call_service(client, make_request(0), timeout)
     rtts, responses = [], []
     for i in range(calls):
@@ -93,12 +100,46 @@ def timed_calls(client, make_request, calls: int, label: str, timeout: float = 6
     return np.array(rtts), responses
 
 
+def timed_goals(client, make_goal, calls: int, label: str, timeout: float = 60.0):
+    """Seconds from sending to the result's arrival, and results, of ``calls`` sequential goals (after 3 warm-ups)."""
+    from maru_planner.ros.planning_client import send_plan_goal
+
+    for _ in range(3):
+        send_plan_goal(client, make_goal(0), timeout=timeout).result(timeout)
+    rtts, results = [], []
+    for i in range(calls):
+        goal = make_goal(i)
+        t0 = time.perf_counter()
+        _status, result = send_plan_goal(client, goal, timeout=timeout).result(timeout)
+        rtts.append(time.perf_counter() - t0)
+        results.append(result)
+        if (i + 1) % 20 == 0:
+            log(f"  {label}: {i + 1}/{calls}")
+    return np.array(rtts), results
+
+
+def small_move(i: int) -> tuple[dict, dict]:
+    """Goal joints and request fields of the i-th small right-arm move (service call and action goal alike)."""
+    goal = dict(START, r_arm_j4=START["r_arm_j4"] + 0.1 + 0.002 * (i % 50))
+    return goal, dict(start=START, group="upper_body", planner_id="RRTConnect", time_budget=5.0, seed=i)
+
+
 def plan_request_factory():
     from maru_planner.ros.planning_client import plan_request
 
     def make(i: int):
-        goal = dict(START, r_arm_j4=START["r_arm_j4"] + 0.1 + 0.002 * (i % 50))
-        return plan_request(goal, start=START, group="upper_body", planner_id="RRTConnect", time_budget=5.0, seed=i)
+        goal, fields = small_move(i)
+        return plan_request(goal, **fields)
+
+    return make
+
+
+def plan_goal_factory():
+    from maru_planner.ros.planning_client import plan_goal
+
+    def make(i: int):
+        goal, fields = small_move(i)
+        return plan_goal(goal, **fields)
 
     return make
 
@@ -128,9 +169,11 @@ def summarize(values_s: np.ndarray) -> dict:
 
 def run(calls: int, paper_calls: int) -> dict:
     import rclpy
+    from rclpy.action import ActionClient
     from rclpy.executors import MultiThreadedExecutor
     from std_srvs.srv import Trigger
 
+    from maru_planner_interfaces.action import PlanMotion as PlanMotionAction
     from maru_planner_interfaces.msg import PlanningError
     from maru_planner_interfaces.srv import GetScene, PlanMotion
 
@@ -151,6 +194,7 @@ def run(calls: int, paper_calls: int) -> dict:
         plan_client = client_node.create_client(PlanMotion, "plan_motion")
         scene_client = client_node.create_client(GetScene, "get_scene")
         trigger_client = client_node.create_client(Trigger, "latency_trigger")
+        action_client = ActionClient(client_node, PlanMotionAction, "plan_motion")
         log("waiting for planning_node and the trigger server ...")
         for c in (plan_client, scene_client, trigger_client):
             if not c.wait_for_service(timeout_sec=120.0):
@@ -161,6 +205,11 @@ def run(calls: int, paper_calls: int) -> dict:
         if failures:
             raise RuntimeError(f"{len(failures)} plan calls failed, e.g. {failures[0]}")
         core = np.array([r.planning_time for r in plan_responses])
+        action_rtt, action_results = timed_goals(action_client, plan_goal_factory(), calls, "plan_motion action")
+        failures = [r.error.message for r in action_results if r.error.code != PlanningError.SUCCESS]
+        if failures:
+            raise RuntimeError(f"{len(failures)} plan goals failed, e.g. {failures[0]}")
+        action_core = np.array([r.planning_time for r in action_results])
         paper_rtt, paper_responses = timed_calls(plan_client, paper_request_factory(), paper_calls, "paper problem")
         paper_core = np.array([r.planning_time for r in paper_responses])
         paper_points = int(np.median([len(r.trajectory.points) for r in paper_responses]))
@@ -185,6 +234,8 @@ def run(calls: int, paper_calls: int) -> dict:
         "plan_motion_overhead": summarize(plan_rtt - core),
         "plan_motion_round_trip": summarize(plan_rtt),
         "plan_motion_core_time": summarize(core),
+        "plan_motion_action_overhead": summarize(action_rtt - action_core),
+        "plan_motion_action_round_trip": summarize(action_rtt),
         "paper_problem_calls": paper_calls,
         "paper_problem_trajectory_points": paper_points,
         "paper_problem_overhead": summarize(paper_rtt - paper_core),
@@ -193,6 +244,7 @@ def run(calls: int, paper_calls: int) -> dict:
         "trigger_round_trip (empty rclpy service, baseline)": summarize(trigger_rtt),
         "raw_ms": {
             "plan_overhead": ((plan_rtt - core) * 1e3).tolist(),
+            "action_overhead": ((action_rtt - action_core) * 1e3).tolist(),
             "paper_overhead": ((paper_rtt - paper_core) * 1e3).tolist(),
             "get_scene": (scene_rtt * 1e3).tolist(),
             "trigger": (trigger_rtt * 1e3).tolist(),
@@ -208,8 +260,10 @@ def table(results: dict) -> str:
         "plan_motion: a small right-arm move (upper_body group, RRTConnect); paper problem: the 13-DOF",
         f"desk-and-box problem ({results['paper_problem_calls']} calls, RRTConnect seed 3, "
         f"{results['paper_problem_trajectory_points']} trajectory points). Overhead = client round trip - the",
-        "core's planning_time from the response. Baselines: get_scene (node service, no planning) and an",
-        "empty std_srvs/Trigger rclpy service in its own process.",
+        "core's planning_time from the response. The plan_motion action: the same small moves as goals, from",
+        "sending the goal to the result's arrival (goal, result request, status) minus the result's planning_time.",
+        "Baselines: get_scene (node service, no planning) and an empty std_srvs/Trigger rclpy service in its",
+        "own process.",
         "",
         "| measure | median ms | mean ms | p90 ms | max ms |",
         "|---|---|---|---|---|",
@@ -232,13 +286,17 @@ def plot(results: dict, path: Path) -> None:
     raw = results["raw_ms"]
     labels = [
         "plan_motion\noverhead",
+        "plan_motion action\noverhead",
         "paper problem\noverhead",
         "get_scene\nround trip",
         "empty Trigger\nround trip (baseline)",
     ]
-    fig, ax = plt.subplots(figsize=(8, 4))
-    ax.boxplot([raw["plan_overhead"], raw["paper_overhead"], raw["get_scene"], raw["trigger"]], showfliers=True)
-    ax.set_xticks([1, 2, 3, 4], labels)
+    fig, ax = plt.subplots(figsize=(9, 4))
+    ax.boxplot(
+        [raw["plan_overhead"], raw["action_overhead"], raw["paper_overhead"], raw["get_scene"], raw["trigger"]],
+        showfliers=True,
+    )
+    ax.set_xticks([1, 2, 3, 4, 5], labels)
     ax.axhline(TARGET_MS, color="tab:red", linestyle="--", label=f"target {TARGET_MS} ms")
     ax.set_ylabel("ms")
     ax.set_title(f"planning_node service latency, {results['calls']} calls each (loopback DDS)")
