@@ -146,3 +146,21 @@ class NoPath(PlanningFailed):
 
 class NoPathProven(NoPath):
     """No path exists, decided without a search (e.g. the start is enclosed)."""
+
+
+class InvalidLink(InvalidRequest):
+    """A link (frame) name the robot does not have."""
+
+
+class InvalidObject(InvalidScene):
+    """An attach/detach names an object the scene does not have (or an attached object that is not)."""
+
+
+class ObjectAlreadyAttached(InvalidObject):
+    """An object is attached again, or a new obstacle takes the name of an attached object."""
+
+
+class StartViolatesConstraints(InvalidRequest):
+    """The start state already breaks the request's path constraints (they cannot hold along the motion)."""
+
+    source = "constraints"

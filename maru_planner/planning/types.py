@@ -32,6 +32,10 @@ class PlanStatus(enum.Enum):
     INVALID_SCENE = "INVALID_SCENE"
     INVALID_REQUEST = "INVALID_REQUEST"
     NO_START_STATE = "NO_START_STATE"
+    INVALID_LINK = "INVALID_LINK"
+    INVALID_OBJECT = "INVALID_OBJECT"
+    OBJECT_ALREADY_ATTACHED = "OBJECT_ALREADY_ATTACHED"
+    START_VIOLATES_CONSTRAINTS = "START_VIOLATES_CONSTRAINTS"
 
 
 # Most specific class first: the first isinstance match wins.
@@ -42,10 +46,14 @@ _STATUS_OF_ERROR: list[tuple[type[errors.MaruError], PlanStatus]] = [
     (errors.InvalidJointCount, PlanStatus.INVALID_JOINT_COUNT),
     (errors.InvalidState, PlanStatus.INVALID_STATE),
     (errors.NoStartState, PlanStatus.NO_START_STATE),
+    (errors.InvalidLink, PlanStatus.INVALID_LINK),
+    (errors.StartViolatesConstraints, PlanStatus.START_VIOLATES_CONSTRAINTS),
     (errors.InvalidRequest, PlanStatus.INVALID_REQUEST),
     (errors.StartInCollision, PlanStatus.START_IN_COLLISION),
     (errors.GoalInCollision, PlanStatus.GOAL_IN_COLLISION),
     (errors.NoIKSolution, PlanStatus.NO_IK_SOLUTION),
+    (errors.ObjectAlreadyAttached, PlanStatus.OBJECT_ALREADY_ATTACHED),
+    (errors.InvalidObject, PlanStatus.INVALID_OBJECT),
     (errors.InvalidScene, PlanStatus.INVALID_SCENE),
     (errors.PlanningTimedOut, PlanStatus.TIMED_OUT),
     (errors.PlanningFailed, PlanStatus.PLANNING_FAILED),

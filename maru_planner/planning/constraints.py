@@ -1,0 +1,163 @@
+"""Path constraints: a link's orientation within tolerances and/or its origin inside a box, all along a motion.
+
+After MoveIt's ``OrientationConstraint`` / ``PositionConstraint``:
+
+- orientation: ``r = log(R_target^T R_link)`` (the rotation from the target to the link, as a rotation
+  vector in the target frame) must satisfy ``|r_i| <= tolerance_i`` for each axis i; a tolerance >= pi
+  leaves that axis free (a cup kept upright: tolerances (0.1, 0.1, pi) about a z-up target);
+- position: the link origin, expressed in the box frame, must lie within the box's half sides.
+
+:meth:`PathConstraints.violation` measures how far outside a state is (0 = inside);
+:meth:`PathConstraints.project` pulls a state onto the allowed region by damped least squares on the
+violated components (the projection step of constrained sampling planners).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from maru_planner import errors
+from maru_planner.scene import pose_matrix, rpy_matrix
+
+WORLD = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+PROJECTION_ITERATIONS = 30
+PROJECTION_TOLERANCE = 1e-4  # rad / m: how far inside each bound projection aims (then the bound holds)
+
+
+@dataclass(frozen=True)
+class OrientationConstraint:
+    link: str
+    target: np.ndarray  # (3, 3) rotation in the root frame
+    tolerance: np.ndarray  # (3,) rad about the target's x, y, z
+
+    def __post_init__(self) -> None:
+        _check_matrix(self.target, (3, 3), f"orientation constraint on {self.link!r}: target")
+        tol = np.asarray(self.tolerance, dtype=float)
+        if tol.shape != (3,) or not np.all(np.isfinite(tol)) or np.any(tol <= 0):
+            raise errors.InvalidRequest(
+                f"orientation constraint on {self.link!r}: tolerance must be 3 finite values > 0 rad, got {tol}"
+            )
+
+    def excess(self, pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(rotation vector r in the target frame, per-axis amount outside the tolerance)."""
+        r = pin.log3(self.target.T @ pose[:3, :3])
+        return r, np.maximum(np.abs(r) - self.tolerance, 0.0)
+
+
+@dataclass(frozen=True)
+class PositionConstraint:
+    link: str
+    box_pose: np.ndarray  # (4, 4) box frame in the root frame
+    box_size: np.ndarray  # (3,) full side lengths (m)
+
+    def __post_init__(self) -> None:
+        _check_matrix(self.box_pose, (4, 4), f"position constraint on {self.link!r}: box pose")
+        size = np.asarray(self.box_size, dtype=float)
+        if size.shape != (3,) or not np.all(np.isfinite(size)) or np.any(size <= 0):
+            raise errors.InvalidRequest(
+                f"position constraint on {self.link!r}: box size must be 3 finite values > 0 m, got {size}"
+            )
+
+    def excess(self, pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(link origin in the box frame, per-axis amount outside the box)."""
+        local = self.box_pose[:3, :3].T @ (pose[:3, 3] - self.box_pose[:3, 3])
+        return local, np.maximum(np.abs(local) - 0.5 * np.asarray(self.box_size), 0.0)
+
+
+@dataclass(frozen=True)
+class PathConstraints:
+    """An orientation and/or a position constraint (either may be None)."""
+
+    orientation: OrientationConstraint | None = None
+    position: PositionConstraint | None = None
+
+    @property
+    def empty(self) -> bool:
+        return self.orientation is None and self.position is None
+
+    def links(self) -> list[str]:
+        return [c.link for c in (self.orientation, self.position) if c is not None]
+
+    def check_links(self, robot) -> None:
+        """InvalidLink for a constrained link the robot does not have."""
+        for link in self.links():
+            if not robot.model.existFrame(link):
+                raise errors.InvalidLink(f"path constraint link {link!r} is not a link of {robot.name}")
+
+    def violation(self, robot, q: np.ndarray) -> tuple[float, float]:
+        """(orientation violation in rad, position violation in m) at ``q``: how far outside; 0 = satisfied."""
+        orientation = position = 0.0
+        if self.orientation is not None:
+            orientation = float(self.orientation.excess(robot.frame_pose(q, self.orientation.link))[1].max())
+        if self.position is not None:
+            position = float(np.linalg.norm(self.position.excess(robot.frame_pose(q, self.position.link))[1]))
+        return orientation, position
+
+    def satisfied(self, robot, q: np.ndarray, slack: float = 0.0) -> bool:
+        orientation, position = self.violation(robot, q)
+        return orientation <= slack and position <= slack
+
+    def project(self, robot, q: np.ndarray, indices: np.ndarray) -> np.ndarray | None:
+        """``q`` moved (only the joints ``indices``, within limits) until the constraints hold; None if it fails."""
+        q = np.array(q, dtype=float)
+        lo, hi = robot.lower_limits[indices], robot.upper_limits[indices]
+        for _ in range(PROJECTION_ITERATIONS):
+            rows, residual = self._residual(robot, q, indices)
+            if not len(residual):
+                return q
+            step = rows.T @ np.linalg.solve(rows @ rows.T + 1e-6 * np.eye(len(residual)), residual)
+            q[indices] = np.clip(q[indices] - step, lo, hi)
+        return q if self.satisfied(robot, q) else None
+
+    def _residual(self, robot, q: np.ndarray, indices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Jacobian rows and signed excess of the violated components (aiming slightly inside each bound)."""
+        rows, residual = [], []
+        if self.orientation is not None:
+            c = self.orientation
+            fid = robot.frame_id(c.link)
+            r, out = c.excess(robot.frame_pose(q, fid))
+            J = c.target.T @ robot.frame_jacobian(q, fid)[3:, indices]  # angular rate in the target frame
+            J = pin.Jlog3(pin.exp3(r)) @ J
+            for i in np.flatnonzero(out > 0):
+                rows.append(J[i])
+                residual.append(r[i] - math.copysign(c.tolerance[i] - PROJECTION_TOLERANCE, r[i]))
+        if self.position is not None:
+            c = self.position
+            fid = robot.frame_id(c.link)
+            local, out = c.excess(robot.frame_pose(q, fid))
+            J = c.box_pose[:3, :3].T @ robot.frame_jacobian(q, fid)[:3, indices]
+            half = 0.5 * np.asarray(c.box_size)
+            for i in np.flatnonzero(out > 0):
+                rows.append(J[i])
+                residual.append(local[i] - math.copysign(half[i] - PROJECTION_TOLERANCE, local[i]))
+        return np.array(rows).reshape(len(rows), len(indices)), np.array(residual)
+
+    @classmethod
+    def from_dict(cls, d: dict | None) -> PathConstraints:
+        """From ``{orientation: {link, rpy | matrix, tolerance}, position: {link, box: {xyz, rpy}, size}}``."""
+        d = d or {}
+        unknown = set(d) - {"orientation", "position"}
+        if unknown:
+            raise errors.InvalidRequest(f"path constraints: unknown field(s) {sorted(unknown)}")
+        orientation = position = None
+        if d.get("orientation"):
+            o = d["orientation"]
+            orientation = OrientationConstraint(
+                str(o["link"]), rpy_matrix(*o.get("rpy", (0.0, 0.0, 0.0))), np.asarray(o["tolerance"], dtype=float)
+            )
+        if d.get("position"):
+            p = d["position"]
+            position = PositionConstraint(
+                str(p["link"]), pose_matrix(p.get("box"), "position constraint box"), np.asarray(p["size"], float)
+            )
+        return cls(orientation, position)
+
+
+def _check_matrix(value: np.ndarray, shape: tuple[int, int], what: str) -> None:
+    value = np.asarray(value, dtype=float)
+    if value.shape != shape or not np.all(np.isfinite(value)):
+        raise errors.InvalidRequest(f"{what} must be a finite {shape[0]}x{shape[1]} matrix")
