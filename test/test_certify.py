@@ -20,6 +20,7 @@ from maru_planner.collision.certify import (
 from maru_planner.collision.spheres import densify, verify_path
 from maru_planner.paths import config_path
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig, PlanStatus
+from maru_planner.planning.types import PlanStats
 from maru_planner.robot import RobotModel, load_example_robot
 from maru_planner.scene import Obstacle, Scene
 
@@ -255,3 +256,11 @@ def test_motion_planner_rejects_a_negative_safety_margin(arm):
                             safety_margin=-0.01)  # fmt: skip
     result = MotionPlanner.from_scene(arm, Scene()).plan(request)
     assert result.status is PlanStatus.INVALID_REQUEST and "safety_margin" in result.message
+
+
+def test_planner_stats_message_carries_the_certification():
+    conversions = pytest.importorskip("maru_planner.ros.planning_conversions")
+    msg = conversions.stats_msg(PlanStats(certified=True, certify_time=0.02, min_clearance=0.004, repairs=2))
+    assert msg.certified and msg.repairs == 2
+    assert msg.certify_time == pytest.approx(0.02) and msg.min_clearance == pytest.approx(0.004)
+    assert conversions.stats_msg(PlanStats()).min_clearance == 0.0  # not certified: inf is sent as 0
