@@ -28,7 +28,7 @@ import numpy as np
 import yaml
 
 from maru_planner import shapes
-from maru_planner.errors import InvalidRequest, InvalidScene
+from maru_planner.errors import InvalidRequest, InvalidScene, one_line
 from maru_planner.scene import Obstacle, Scene
 
 PANDA_FINGERS_OPEN = {"panda_finger_joint1": 0.065, "panda_finger_joint2": 0.065}  # MotionBenchMaker's convention
@@ -105,7 +105,8 @@ def _load_yaml(source: str | Path | Mapping, kind: str) -> dict:
     try:
         data = yaml.safe_load(text)
     except yaml.YAMLError as exc:
-        raise (InvalidScene if kind == "scene" else InvalidRequest)(f"{kind} YAML does not parse: {exc}") from None
+        error = InvalidScene if kind == "scene" else InvalidRequest
+        raise error(f"{kind} YAML does not parse: {one_line(exc, 160)}") from None
     if not isinstance(data, dict):
         raise (InvalidScene if kind == "scene" else InvalidRequest)(f"{kind} YAML must be a mapping")
     return data

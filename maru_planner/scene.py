@@ -28,7 +28,7 @@ import coal
 import numpy as np
 import yaml
 
-from maru_planner.errors import InvalidScene
+from maru_planner.errors import InvalidScene, one_line
 from maru_planner.shapes import KernelPrimitive, ShapeSpec, numbers, posed, shape, validate
 
 
@@ -85,6 +85,9 @@ def pose_matrix(pose: Any, where: str = "pose") -> np.ndarray:
     raise InvalidScene(f"{where}: pose must be a 4x4, {{xyz, rpy}}, xyz or xyz+rpy, got shape {arr.shape}")
 
 
+MAX_NAME_LENGTH = 256  # characters of an obstacle name
+
+
 class Obstacle:
     """One named obstacle of a registered shape (:mod:`maru_planner.shapes`); validated on creation.
 
@@ -94,7 +97,9 @@ class Obstacle:
 
     def __init__(self, name: str, type: str, pose: Any = None, **dimensions: Any):
         if not isinstance(name, str) or not name:
-            raise InvalidScene(f"obstacle {name!r}: field 'name' must be a non-empty string")
+            raise InvalidScene(f"obstacle {name!r:.60}: field 'name' must be a non-empty string")
+        if len(name) > MAX_NAME_LENGTH:
+            raise InvalidScene(f"obstacle name {name!r:.60} has {len(name)} characters, more than {MAX_NAME_LENGTH}")
         where = f"obstacle '{name}'"
         self.name = name
         self.type: str = type
@@ -127,11 +132,11 @@ class Obstacle:
     @classmethod
     def from_dict(cls, d: dict, base_dir: Path | None = None) -> Obstacle:
         if not isinstance(d, dict):
-            raise InvalidScene(f"obstacle entry must be a mapping, got {d!r}")
+            raise InvalidScene(f"obstacle entry must be a mapping, got {d!r:.60}")
         name = d.get("name")
         if "type" not in d:
-            raise InvalidScene(f"obstacle {name!r}: missing field 'type'")
-        spec = shape(d["type"], f"obstacle {name!r}")
+            raise InvalidScene(f"obstacle {name!r:.60}: missing field 'type'")
+        spec = shape(d["type"], f"obstacle {name!r:.60}")
         dimensions = {k: v for k, v in d.items() if k not in ("name", "type", "pose")}
         for dim in spec.dimensions:
             value = dimensions.get(dim.name)
@@ -263,8 +268,8 @@ class Scene:
         """Load from a YAML file path or a YAML string."""
         base_dir = None
         text = str(source)
-        one_line = "\n" not in text
-        is_path = isinstance(source, Path) or (one_line and (text.endswith((".yaml", ".yml")) or _is_file(text)))
+        single_line = "\n" not in text
+        is_path = isinstance(source, Path) or (single_line and (text.endswith((".yaml", ".yml")) or _is_file(text)))
         if is_path:
             path = Path(source)
             if not path.is_file():
@@ -273,7 +278,7 @@ class Scene:
         try:
             data = yaml.safe_load(text)
         except yaml.YAMLError as exc:
-            raise InvalidScene(f"scene YAML does not parse: {exc}") from None
+            raise InvalidScene(f"scene YAML does not parse: {one_line(exc, 160)}") from None
         return cls.from_dict(data, base_dir, max_obstacles=max_obstacles, budget=budget)
 
     def to_dict(self) -> dict:

@@ -470,9 +470,9 @@ def scene_documents(draw):
                                        "quat": st.lists(HOSTILE_FLOAT, max_size=5)}),
                 ANY_YAML_VALUE))  # fmt: skip
         obstacles.append(entry)
-    if draw(st.integers(0, 9)) == 0:
+    if draw(st.integers(0, 19)) == 0:  # many small spheres (pure-Python YAML reads ~1 ms per obstacle)
         obstacles = [{"name": f"s{i}", "type": "sphere", "radius": 0.01} for i in range(draw(st.sampled_from(
-            [2_000, 20_000])))]  # fmt: skip
+            [300, 1_000])))]  # fmt: skip
     doc = {"obstacles": obstacles}
     if draw(st.booleans()):
         doc[draw(st.sampled_from(["frame", "extra"]))] = draw(ANY_YAML_VALUE)
@@ -587,9 +587,13 @@ def loader_outcome(load: Callable[[], object], what: str, error_types: tuple[typ
     return Outcome(accepted=True)
 
 
-def cli_outcome(main: Callable[[list[str]], int], argv: list[str], prog: str, codes: dict[int, str],
-                bad_input: int, internal: int | None = None) -> Outcome:
-    """Run a CLI's ``main(argv)`` in this process: exit code documented, one stderr line on bad input."""
+CLI_LATE_MARGIN = 10.0  # s beyond a CLI's planning budget (loading the robot, scene or map is outside it)
+
+
+def cli_outcome(main: Callable[[list[str]], int], argv: list[str], prog: str, codes: set[int], bad_input: int,
+                internal: int | None = None, budget: float = 0.0) -> Outcome:
+    """Run a CLI's ``main(argv)`` in this process: a documented exit code, on bad input exactly one
+    stderr line naming the program, on other failures a proper last line; never an exception."""
     out, err = io.StringIO(), io.StringIO()
     started = time.monotonic()
     try:
@@ -597,22 +601,165 @@ def cli_outcome(main: Callable[[list[str]], int], argv: list[str], prog: str, co
             try:
                 code = main(argv)
             except SystemExit as exc:  # argparse's own exits (--help, bad options)
-                code = exc.code if isinstance(exc.code, int) else 2
+                code = exc.code if isinstance(exc.code, int) else bad_input
     except Exception as exc:  # noqa: BLE001 - a user would see this traceback
         return Outcome(crash=True, traceback=True, detail=f"{prog} {argv!r:.300}: {type(exc).__name__}: {exc!s:.200}")
-    stderr = err.getvalue()
-    detail = f"{prog} {argv!r:.300} -> exit {code} in {time.monotonic() - started:.1f} s, stderr {stderr[-300:]!r}"
+    elapsed = time.monotonic() - started
+    lines = err.getvalue().strip().splitlines()
+    detail = f"{prog} {argv!r:.300} -> exit {code} in {elapsed:.1f} s, stderr {lines[-3:]!r:.300}"
+    late = elapsed > budget + CLI_LATE_MARGIN
+    traceback = any("Traceback" in line for line in lines)
     if code not in codes:
-        return Outcome(detail=detail + " (undocumented exit code)")
+        return Outcome(late=late, traceback=traceback, detail=detail + " (undocumented exit code)")
     if code == internal:
-        return Outcome(internal=True, detail=detail)
+        return Outcome(internal=True, late=late, detail=detail)
     if code == 0:
-        return Outcome(accepted=True, detail=detail)
-    lines = [line for line in stderr.strip().splitlines() if line.startswith(prog)]
-    problem = "no line starting with the program name" if not lines else message_problem(lines[-1])
-    if code == bad_input and len(stderr.strip().splitlines()) != 1:
-        problem = f"{len(stderr.strip().splitlines())} stderr lines on bad input"
-    return Outcome(proper_error=not problem, traceback="Traceback" in stderr, detail=f"{detail} {problem}")
+        return Outcome(accepted=True, late=late, traceback=traceback, detail=detail)
+    if code == bad_input and (len(lines) != 1 or not lines[0].startswith(prog)):
+        problem = f"{len(lines)} stderr lines on bad input (one, starting with {prog!r}, expected)"
+    else:
+        problem = message_problem(lines[-1]) if lines else "nothing on stderr"
+    return Outcome(proper_error=not problem, late=late, traceback=traceback, detail=f"{detail} {problem}")
+
+
+# ---------------------------------------------------------------- CLI argument vectors
+
+NUMBER_TEXT = st.one_of(
+    st.sampled_from(["nan", "inf", "-inf", "-1", "0", "1e309", "1e-320", "abc", "", "0x10", "1_0", " 1", "-0", "1e-5"]),
+    st.floats(allow_nan=False).map(repr),
+    st.integers(-(2**70), 2**70).map(str),
+)
+SHORT_NUMBER_TEXT = st.sampled_from(["nan", "inf", "-1", "0", "3601", "1e9", "abc", "", "0.2", "1"])
+
+
+def output_paths(tmp: FilePath, valid_ok: bool = True) -> st.SearchStrategy:
+    """Hostile output paths (a directory, under a file, a missing directory, /dev/full, read-only), or a valid one."""
+    (tmp / "a_file").write_text("not a directory")
+    bad = [str(tmp), str(tmp / "a_file" / "out"), str(tmp / "no" / "such" / "out"), "/dev/full", "/proc/version",
+           "", "/"]  # fmt: skip
+    return st.sampled_from(bad + ([str(tmp / "out.json")] if valid_ok else []))
+
+
+class Files:
+    """Writes generated documents as numbered files under ``root`` (for --scene, --map, --world)."""
+
+    def __init__(self, root: FilePath):
+        self.root = root
+        self._count = itertools.count()
+
+    def document(self, document) -> str:
+        return str(write_document(self.root / f"doc_{next(self._count)}.yaml", document))
+
+    def map_file(self, files: tuple) -> str:
+        directory = self.root / f"map_{next(self._count)}"
+        directory.mkdir()
+        document, pgm = files
+        if pgm is not None:
+            (directory / "m.pgm").write_bytes(pgm)
+        return str(write_document(directory / "m.yaml", document))
+
+
+@st.composite
+def argv_from(draw, base: dict[str, list[str] | None], mutations: dict[str, st.SearchStrategy]):
+    """``base`` options with up to three of them replaced (or added) by hostile values, as an argv list
+    (a name ending in ``=`` gives one ``--name=value`` argument)."""
+    options = dict(base)
+    for name in draw(st.lists(st.sampled_from(sorted(mutations)), max_size=3, unique=True)):
+        value = draw(mutations[name])
+        options[name] = value if isinstance(value, list) or value is None else [value]
+    argv = []
+    for name, values in options.items():
+        if name.endswith("="):  # --option=VALUE, one argument
+            argv.append(name + values[0])
+        else:
+            argv.append(name)
+            argv.extend(values or [])
+    return argv
+
+
+def maru_plan_argv(tmp: FilePath) -> st.SearchStrategy:
+    from maru_planner.planning.problems import PROBLEMS
+
+    files = Files(tmp)
+    base = {"--quiet": None, "--problem": ["maru6"], "--time": ["0.3"], "--seed": ["1"]}
+    numbers = {f"--{name}": NUMBER_TEXT for name in ("time", "max-time", "seed", "attempts", "resolution",
+                                                    "velocity-scaling", "acceleration-scaling", "jerk-scaling")}
+    return argv_from(base, {
+        **numbers,
+        "--problem": names_from(sorted(PROBLEMS)),
+        "--robot": names_from(["maru1", "r2d2"]),
+        "--planner": names_from(PLANNER_IDS),
+        "--param": st.one_of(HOSTILE_TEXT, st.tuples(st.sampled_from(["step", "range", "goal_bias", "x"]),
+                                                     NUMBER_TEXT).map("=".join)),
+        "--group": names_from(["upper_body", "right_arm", "legs"]),
+        "--start": st.lists(NUMBER_TEXT, max_size=8),
+        "--goal": st.lists(NUMBER_TEXT, max_size=8),
+        "--scene": st.one_of(scene_documents().map(files.document), st.sampled_from(["none", str(tmp), "/nope.yaml"])),
+        "--collision-model": names_from(["exact", "spheres"]),
+        "--time-parameterization": names_from(TIME_PARAMETERIZATIONS),
+        "--json": output_paths(tmp),
+        "--png": output_paths(tmp, valid_ok=False),
+        "--bogus": st.none(),
+    })  # fmt: skip
+
+
+def maru_base_plan_argv(tmp: FilePath) -> st.SearchStrategy:
+    from maru_planner.paths import config_path
+
+    files = Files(tmp)
+    base = {"--map": [str(config_path("maps", "paper002_medium.yaml"))], "--start": ["1", "2", "0"],
+            "--goal": ["5", "2", "0"], "--time-limit": ["0.5"]}  # fmt: skip
+    footprints = st.one_of(HOSTILE_TEXT, st.sampled_from([
+        "rect:-1:0.5", "disc:0", "disc:1e30", "rect:100:100", "1,2 3", "0,0 1,0", "rect:nan:1", "disc:", "0,0;1,0;1,1",
+        "rect:0.9:0.3", "-0.4,-0.2 0.4,-0.2 0.4,0.2 -0.4,0.2"]))  # fmt: skip
+    return argv_from(base, {
+        "--map": st.one_of(map_files().map(files.map_file), st.sampled_from([str(tmp), "/nope.yaml", ""])),
+        "--world": biped_worlds().map(files.document),
+        "--planner": names_from(BASE_PLANNER_IDS[1:]),
+        "--start": st.lists(NUMBER_TEXT, max_size=4),
+        "--goal": st.lists(NUMBER_TEXT, max_size=4),
+        "--footprint=": footprints,  # one argument: a first vertex may start with '-'
+        "--param": st.one_of(HOSTILE_TEXT, st.tuples(st.sampled_from(["headings", "x"]), NUMBER_TEXT).map("=".join)),
+        "--time-limit": SHORT_NUMBER_TEXT,
+        "--unknown-free": st.none(),
+        "--json": output_paths(tmp),
+        "--png": output_paths(tmp, valid_ok=False),
+    })  # fmt: skip
+
+
+SIM_WORLD = {"obstacles": [{"type": "circle", "center": [1.5, 0.4], "radius": 0.2}],
+             "robot": {"start": [0, 0, 0], "goal": [2, 0, 0]}, "max_time": 2}  # fmt: skip
+
+
+def maru_reactive_sim_argv(tmp: FilePath) -> st.SearchStrategy:
+    files = Files(tmp)
+    good = files.document(SIM_WORLD)
+    base = {"--world": [good], "--max-time": ["1"], "--quiet": None, "--no-arm": None, "--no-jitter": None}
+    return argv_from(base, {
+        "--world": st.one_of(sim_worlds().map(files.document), st.sampled_from([str(tmp), "/nope.yaml", ""])),
+        "--strip": names_from(["modified", "plain"]),
+        "--seed": NUMBER_TEXT,
+        "--max-time": SHORT_NUMBER_TEXT,
+        "--json": output_paths(tmp),
+        "--png": output_paths(tmp, valid_ok=False),
+        "--gif": output_paths(tmp, valid_ok=False),
+        "--continue-after-collision": st.none(),
+    })  # fmt: skip
+
+
+def number_or_zero(text: str) -> float:
+    """A CLI's budget argument as a number (0 when it is not one: the CLI must refuse it at once)."""
+    try:
+        value = float(text)
+    except ValueError:
+        return 0.0
+    return value if math.isfinite(value) and value > 0 else 0.0
+
+
+def option_value(argv: list[str], option: str, default: str) -> str:
+    """The last value given to ``option`` in ``argv``."""
+    indices = [i for i, arg in enumerate(argv[:-1]) if arg == option]
+    return argv[indices[-1] + 1] if indices else default
 
 
 # ---------------------------------------------------------------- node processes

@@ -35,7 +35,7 @@ import yaml
 from scipy.ndimage import distance_transform_edt
 
 from maru_planner.base.grid import OccupancyGrid
-from maru_planner.errors import InvalidScene, MaruError
+from maru_planner.errors import InvalidScene, MaruError, one_line
 from maru_planner.reactive.scan import MAX_SCAN_BEAMS
 from maru_planner.sim.geometry import box_polygon, polygon_segments
 
@@ -182,7 +182,7 @@ class World:
         except OSError as exc:
             raise WorldError(f"world {path}: cannot read ({exc})") from exc
         except yaml.YAMLError as exc:
-            raise WorldError(f"world {path}: invalid YAML ({exc})") from exc
+            raise WorldError(f"world {path}: invalid YAML ({one_line(exc, 160)})") from exc
         return cls.from_dict(data, base_dir=path.parent, name=path.stem)
 
     @classmethod
