@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -139,3 +141,18 @@ def test_bad_requests_get_their_status(maru1, changes, status):
     result = MotionPlanner.from_scene(robot, Scene()).cartesian_path(CartesianRequest(**{**fields, **changes}))
     assert result.status is status, result.message
     assert result.message and result.trajectory is None
+
+
+def test_cli_writes_a_cartesian_path_and_refuses_bad_offsets(tmp_path, capsys):
+    from maru_planner.planning.cli import EXIT_BAD_INPUT, EXIT_OK, main
+
+    out = tmp_path / "line.json"
+    start = ["0", "-0.785", "0", "-2.356", "0", "1.571", "0.785"]
+    args = ["--robot", "panda", "--group", "arm", "--start", *start, "--quiet"]
+    assert main([*args, "--cartesian", "0.1", "0", "0", "0.1", "0.1", "0", "--json", str(out)]) == EXIT_OK
+    answer = json.loads(out.read_text())
+    assert answer["fraction"] == 1.0 and answer["certified"] and answer["link"] == "panda_hand_tcp"
+    assert answer["trajectory"]["joint_names"] == [f"panda_joint{i}" for i in range(1, 8)]
+    assert main([*args, "--cartesian", "0.1", "0", "--json", str(out)]) == EXIT_BAD_INPUT
+    assert main([*args, "--cartesian", "0.1", "0", "0", "--link", "nope", "--json", str(out)]) == EXIT_BAD_INPUT
+    assert "INVALID_LINK" in capsys.readouterr().err

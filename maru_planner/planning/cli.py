@@ -28,9 +28,11 @@ from typing import Any, NoReturn
 import numpy as np
 
 from maru_planner import errors
+from maru_planner.planning.cartesian import CartesianRequest, CartesianResult, default_link
 from maru_planner.planning.config import COLLISION_MODELS, TIME_PARAMETERIZATIONS, PlannerConfig
 from maru_planner.planning.motion_planner import MotionPlanner
 from maru_planner.planning.problems import PROBLEMS
+from maru_planner.planning.queries import check_link
 from maru_planner.planning.registry import PLANNERS, get_spec, merged_params
 from maru_planner.planning.types import MotionRequest, MotionResult, PlanStatus, status_of_error
 from maru_planner.robot import RobotModel, load_example_robot
@@ -148,6 +150,13 @@ def build_parser() -> argparse.ArgumentParser:
         "trapezoid: rest at every waypoint",
     )
     p.add_argument("--jerk-scaling", type=_scaling, default=1.0, help="scales the jerk limits (ruckig)")
+    p.add_argument("--cartesian", type=float, nargs="+", metavar="DX DY DZ",
+                   help="instead of --goal: a Cartesian path of --link through these offsets (m, root frame, "
+                   "3 per waypoint) from its start position, orientation kept (docs/manipulation.md)")  # fmt: skip
+    p.add_argument("--link", default="", help="--cartesian: the link moved (default: the group's end effector)")
+    p.add_argument("--max-step", type=_positive, default=0.01, help="--cartesian: task-space step (m)")
+    p.add_argument("--jump-threshold", type=_margin, default=0.0,
+                   help="--cartesian: largest joint step as a multiple of the mean step (0: no test)")  # fmt: skip
     p.add_argument("--no-simplify", action="store_true", help="keep the raw planner path")
     p.add_argument("--json", type=Path, default=None, help="write the result JSON here (default: stdout)")
     p.add_argument("--png", type=Path, default=None, help="draw the hand traces over the scene (two views)")
@@ -253,8 +262,8 @@ def _rest_state(robot: RobotModel) -> dict[str, float]:
     return values
 
 
-def run(args: argparse.Namespace, params: dict[str, Any], progress: _Progress) -> MotionResult:
-    """Load robot and scene, plan, draw; typed errors for bad robots, scenes, groups and joints."""
+def run(args: argparse.Namespace, params: dict[str, Any], progress: _Progress) -> MotionResult | CartesianResult:
+    """Load robot and scene, plan (or a Cartesian path), draw; typed errors for bad robots, scenes, groups, joints."""
     progress(f"loading robot {args.robot}")
     robot = load_robot(args.robot)
     if args.list_groups:
@@ -264,7 +273,7 @@ def run(args: argparse.Namespace, params: dict[str, Any], progress: _Progress) -
     if not args.group:
         raise errors.InvalidGroup(f"no --group given; known: {', '.join(robot.groups)}")
     start = _values(robot, args.group, args.start, "start")
-    goal = _values(robot, args.group, args.goal, "goal")
+    goal = _values(robot, args.group, args.goal, "goal") if args.cartesian is None else {}
     scene = load_scene(args.scene)
     config = PlannerConfig(
         resolution=args.resolution,
@@ -275,6 +284,8 @@ def run(args: argparse.Namespace, params: dict[str, Any], progress: _Progress) -
     progress(f"building the {args.collision_model} collision model")
     planner = MotionPlanner.from_scene(robot, scene, config)
     rest = _rest_state(robot)
+    if args.cartesian is not None:
+        return _cartesian(args, planner, {**{n: v for n, v in rest.items() if n not in start}, **start}, progress)
     request = MotionRequest(
         group=args.group,
         start={**{n: v for n, v in rest.items() if n not in start}, **start},
@@ -305,6 +316,31 @@ def run(args: argparse.Namespace, params: dict[str, Any], progress: _Progress) -
         base_q = np.array([request.start.get(n, 0.0) for n in robot.joint_names])  # type: ignore[union-attr]
         plot_plan(robot, scene, result, args.png, title=f"{args.problem or args.group}: {args.planner}", base_q=base_q)
         progress(f"picture written to {args.png}")
+    return result
+
+
+def _cartesian(args: argparse.Namespace, planner: MotionPlanner, start: dict[str, float], progress) -> CartesianResult:
+    """The Cartesian path of ``--cartesian`` (offsets of the link from its start position)."""
+    offsets = np.asarray(args.cartesian, dtype=float)
+    if offsets.size % 3 or not np.all(np.isfinite(offsets)):
+        raise CliError(f"--cartesian needs finite values, 3 per waypoint; got {offsets.size}")
+    robot = planner.robot
+    link = args.link or default_link(robot, args.group)
+    check_link(robot, link, "--link")
+    begin = robot.frame_pose(np.array([start[n] for n in robot.joint_names]), link)
+    waypoints = []
+    for offset in offsets.reshape(-1, 3):
+        pose = begin.copy()
+        pose[:3, 3] += offset
+        waypoints.append(pose)
+    request = CartesianRequest(
+        args.group, start, waypoints, link=link, max_step=args.max_step, jump_threshold=args.jump_threshold,
+        velocity_scaling=args.velocity_scaling, acceleration_scaling=args.acceleration_scaling,
+        time_parameterization=args.time_parameterization, time_budget=args.time,
+    )  # fmt: skip
+    progress(f"Cartesian path of {link} through {len(waypoints)} waypoint(s)")
+    result = planner.cartesian_path(request)
+    progress(f"{result.status.value} in {result.seconds:.3f} s: {result.message}")
     return result
 
 
