@@ -606,7 +606,7 @@ def cli_outcome(main: Callable[[list[str]], int], argv: list[str], prog: str, co
         return Outcome(crash=True, traceback=True, detail=f"{prog} {argv!r:.300}: {type(exc).__name__}: {exc!s:.200}")
     elapsed = time.monotonic() - started
     lines = err.getvalue().strip().splitlines()
-    detail = f"{prog} {argv!r:.300} -> exit {code} in {elapsed:.1f} s, stderr {lines[-3:]!r:.300}"
+    detail = f"{prog} -> exit {code} in {elapsed:.1f} s, stderr {lines[-3:]!r:.300}; argv {argv!r:.300}"
     late = elapsed > budget + CLI_LATE_MARGIN
     traceback = any("Traceback" in line for line in lines)
     if code not in codes:

@@ -360,9 +360,10 @@ def main(argv: list[str] | None = None) -> int:
     try:
         result = run(args, planner_params(args.planner, args.param), progress)
     except errors.MaruError as exc:
-        result = MotionResult(status=status_of_error(exc), message=_one_line(exc), error=exc)
+        result = MotionResult(status=status_of_error(exc), message=errors.one_line(exc), error=exc)
     except (OSError, ValueError) as exc:  # robot files that do not load, bad values inside them
-        result = MotionResult(status=PlanStatus.INVALID_REQUEST, message=f"{type(exc).__name__}: {_one_line(exc)}")
+        message = errors.one_line(f"{type(exc).__name__}: {exc}")
+        result = MotionResult(status=PlanStatus.INVALID_REQUEST, message=message)
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
@@ -375,7 +376,7 @@ def main(argv: list[str] | None = None) -> int:
     if result.success:
         return EXIT_OK
     code = EXIT_FAILED if result.status in (PlanStatus.PLANNING_FAILED, PlanStatus.TIMED_OUT) else EXIT_BAD_INPUT
-    print(f"{PROG}: {result.status.value}: {_one_line(result.message)}", file=sys.stderr)
+    print(f"{PROG}: {result.status.value}: {errors.one_line(result.message)}", file=sys.stderr)
     return code
 
 
@@ -389,13 +390,8 @@ def _write_json(args: argparse.Namespace, result: MotionResult, progress: _Progr
 
 
 def _fail(code: int, exc: BaseException, what: str = "error") -> int:
-    print(f"{PROG}: {what}: {_one_line(exc)}", file=sys.stderr)
+    print(f"{PROG}: {what}: {errors.one_line(exc)}", file=sys.stderr)
     return code
-
-
-def _one_line(message: object, limit: int = 400) -> str:
-    text = " ".join(str(message).split())
-    return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 def _json_default(value: object) -> object:

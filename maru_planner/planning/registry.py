@@ -123,7 +123,7 @@ def get_spec(planner_id: str) -> ArmPlannerSpec:
     """The spec of ``planner_id``; InvalidPlanner (naming the known ids) if it is not registered."""
     spec = PLANNERS.get(planner_id) if isinstance(planner_id, str) else None
     if spec is None:
-        raise InvalidPlanner(f"unknown planner {planner_id!r}; known: {', '.join(PLANNERS)}")
+        raise InvalidPlanner(f"unknown planner {planner_id!r:.60}; known: {', '.join(PLANNERS)}")
     return spec
 
 
