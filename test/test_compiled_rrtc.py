@@ -54,13 +54,14 @@ def arm_space(robot) -> GroupSpace:
     return GroupSpace(ARM, indices, robot.lower_limits[indices], robot.upper_limits[indices], robot.neutral())
 
 
-def kernel_edge(checker, gs: GroupSpace, qa, qb) -> tuple[int, np.ndarray]:
-    """(VALID | COLLIDING | AMBIGUOUS, the ambiguous states) of the kernel's check of qa → qb."""
+def kernel_edge(checker, gs: GroupSpace, qa, qb, exact_near: float = np.inf) -> tuple[int, np.ndarray]:
+    """(VALID | COLLIDING | AMBIGUOUS, the ambiguous states) of the kernel's check of qa → qb, ambiguous states
+    within ``exact_near`` of qa left to the exact model."""
     st = np.zeros(len(kernel.STATE_FIELDS), dtype=np.int64)
     amb_states = np.empty((int(np.ceil(np.abs(qb - qa).max() / RESOLUTION)) + 1, gs.dim))
     status = kernel.check_edge(np.asarray(qa, float), np.asarray(qb, float), RESOLUTION, gs.base,
                                gs.indices.astype(np.int64), *sphere_kernel_inputs(checker), checker.confirm,
-                               amb_states, st)  # fmt: skip
+                               amb_states, st, np.array([qa, qa], dtype=float), exact_near)  # fmt: skip
     return int(status), amb_states[: st[kernel.N_AMB]]
 
 
@@ -109,6 +110,16 @@ def test_with_confirmation_ambiguous_edges_get_the_checkers_exact_answer(panda):
             valid = status == kernel.VALID
         assert valid == edges.edge_valid(qa, qb)
     assert seen == {kernel.VALID, kernel.COLLIDING, kernel.AMBIGUOUS}
+
+
+def test_away_from_the_start_and_goal_ambiguous_states_collide(panda):
+    """exact_near 0: only the roots themselves are decided exactly, so the answers are the pure sphere model's."""
+    confirmed = SphereCollisionChecker(panda, clutter(5))
+    pure = EdgeChecker(arm_space(panda), SphereCollisionChecker(panda, clutter(5), confirm=False), RESOLUTION)
+    gs = arm_space(panda)
+    for qa, qb in random_edges(gs, 80, 6):
+        status = kernel_edge(confirmed, gs, qa, qb, exact_near=0.0)[0]
+        assert status != kernel.AMBIGUOUS and (status == kernel.VALID) == pure.edge_valid(qa, qb)
 
 
 def test_edge_states_are_checked_in_bisection_order():

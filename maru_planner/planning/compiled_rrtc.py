@@ -5,10 +5,17 @@ The search (:mod:`maru_planner.planning.rrtc_kernel`) plans on the sphere model 
 and edge checks at the facade's motion resolution never leave compiled code, except
 
 * every few hundred edges, to evaluate OMPL's termination condition;
-* for an edge whose states the spheres leave ambiguous (outer spheres touch, no inner ball does):
-  when the checker confirms on the exact model (``confirm=True``, its default), those states go to
-  ``checker.first_invalid`` and the edge gets the checker's own answer. So an edge is valid exactly
-  when the sphere checker says so (``confirm=False``: the pure, conservative sphere model).
+* for an edge whose states the spheres leave ambiguous (outer spheres touch, no inner ball does)
+  within ``exact_near`` (L∞, rad) of the start or the goal: when the checker confirms on the exact
+  model (``confirm=True``, its default), those states go to ``checker.first_invalid``.
+
+So a state's answer is always the sphere checker's: its exact-confirmed answer near the start and
+goal, its pure, conservative sphere model elsewhere (and everywhere when ``confirm=False``). Keeping
+the search off near contacts away from the endpoints is what lets the facade certify the path with
+its safety margin (a path grazing an obstacle is proven free but not ``safety_margin`` away); the
+start and goal themselves are often near contacts (a grasp), so their neighbourhood is decided
+exactly. Measured on MotionBenchMaker problems, ``exact_near`` 0.1 rad certified more paths, sooner,
+than deciding every ambiguous state exactly (a large value, the checker's own answers everywhere).
 
 The path goes into the ProblemDefinition like any OMPL planner's, so ``SimpleSetup`` and the
 facade's exact verification apply unchanged. Samples come from a generator seeded by ``seed`` or,
@@ -40,6 +47,13 @@ COMPILED_RRTC_PARAMS: dict[str, ParamSpec] = {
     spec.name: spec
     for spec in (
         ParamSpec("range", 0.0, "max extension (rad, L2); 0 = OMPL's automatic 20 % of the space extent", lower=0.0),
+        ParamSpec(
+            "exact_near",
+            0.1,
+            "L-inf distance (rad) from the start or goal within which states the spheres leave ambiguous are "
+            "decided on the exact model; farther away they count as colliding (module doc)",
+            lower=0.0,
+        ),
         ParamSpec(
             "seed",
             None,
@@ -183,6 +197,7 @@ class CompiledRRTConnect(ob.Planner):
                 *inputs,
                 checker.confirm,
                 batch,
+                float(self._values["exact_near"]),
             )
             checker.check_count += int(st[kernel.CHECKS])
             st[kernel.CHECKS] = 0

@@ -15,10 +15,10 @@ edge at a time and applies its verdict, and returns to the caller
 * every ``max_edges`` edges (:data:`RUNNING`), so the caller can evaluate OMPL's termination
   condition;
 * when a tree's arrays are full (:data:`FULL`): the caller grows them and calls again;
-* when the edge's states are only *ambiguous* on the sphere model (outer spheres touch, no inner
-  ball does) and ``confirm`` is set (:data:`NEED_EXACT`): the ambiguous states are in
-  ``amb_states[:st[N_AMB]]``, the caller decides them on the exact model and passes the edge's
-  verdict to the next call;
+* when some of the edge's states are only *ambiguous* on the sphere model (outer spheres touch, no
+  inner ball does), lie within ``exact_near`` of the start or goal, and ``confirm`` is set
+  (:data:`NEED_EXACT`): those states are in ``amb_states[:st[N_AMB]]``, the caller decides them on
+  the exact model and passes the edge's verdict to the next call;
 * with a solution (:data:`SOLVED`): :func:`solution_path`.
 
 Deterministic: the samples come from a splitmix64 generator whose state (``rng``) the caller seeds.
@@ -261,7 +261,21 @@ def classify(q, robot, scene, rot, pos):
 
 
 @njit(cache=True)
-def check_edge(qa, qb, resolution, base, indices, ri, rf, sf, grid_i, grid_f, amb, mark, confirm, amb_states, st):
+def _near_roots(q, indices, roots, exact_near):
+    """Whether full configuration ``q`` is within ``exact_near`` (L∞ over the group's ``indices``) of a root."""
+    for r in range(2):
+        far = 0.0
+        for a in range(indices.shape[0]):
+            far = max(far, abs(q[indices[a]] - roots[r, a]))
+        if far <= exact_near:
+            return True
+    return False
+
+
+@njit(cache=True)
+def check_edge(
+    qa, qb, resolution, base, indices, ri, rf, sf, grid_i, grid_f, amb, mark, confirm, amb_states, st, roots, exact_near
+):
     """VALID, COLLIDING or AMBIGUOUS for the edge qa → qb (qa excluded) on the sphere model.
 
     The edge's states, as full configurations (``base`` supplies the joints outside the group's
@@ -269,8 +283,9 @@ def check_edge(qa, qb, resolution, base, indices, ri, rf, sf, grid_i, grid_f, am
     packed robot and scene (``ri``/``rf``/``sf``), or, when the checker looks obstacles up in a grid
     (a large scene, ``grid_i``/``grid_f``), by its own scan (``scan_nb`` with its work arrays
     ``amb``/``mark``). COLLIDING at the first colliding state. With ``confirm``, states that are only
-    ambiguous are copied to ``amb_states`` (``st[N_AMB]`` of them) and the edge is AMBIGUOUS if no
-    state collides; without it an ambiguous state collides (the pure, conservative sphere model).
+    ambiguous and within ``exact_near`` (L∞) of one of the ``roots`` (start, goal) are copied to
+    ``amb_states`` (``st[N_AMB]`` of them) and the edge is AMBIGUOUS if no state collides; other
+    ambiguous states collide (the pure, conservative sphere model, everywhere without ``confirm``).
     """
     dim = qa.shape[0]
     steps = 0.0
@@ -297,7 +312,9 @@ def check_edge(qa, qb, resolution, base, indices, ri, rf, sf, grid_i, grid_f, am
             break
         st[CHECKS] += hit + 1 - row
         row = hit + 1
-        if status == COLLIDING or (status == AMBIGUOUS and not confirm):
+        if status == AMBIGUOUS and not (confirm and _near_roots(states[hit], indices, roots, exact_near)):
+            status = COLLIDING
+        if status == COLLIDING:
             return COLLIDING
         if status == AMBIGUOUS:
             for a in range(dim):
@@ -371,11 +388,11 @@ def _apply(nodes, parent, st, q_new, valid):
 
 @njit(cache=True)
 def run(nodes, parent, st, q_new, amb_states, verdict, lower, upper, rng, max_range, resolution, base, indices,
-        ri, rf, sf, grid_i, grid_f, amb, mark, confirm, max_edges):  # fmt: skip
+        ri, rf, sf, grid_i, grid_f, amb, mark, confirm, max_edges, exact_near):  # fmt: skip
     """Advance the search by at most ``max_edges`` edge checks; SOLVED, RUNNING, NEED_EXACT or FULL (module doc).
 
     ``verdict``: the exact answer for the pending edge after a NEED_EXACT return (ignored otherwise);
-    ``ri`` … ``mark``: the sphere checker's kernel inputs (:func:`check_edge`).
+    ``ri`` … ``mark``: the sphere checker's kernel inputs; ``exact_near``: see :func:`check_edge`.
     """
     if st[PENDING]:
         st[PENDING] = 0
@@ -388,7 +405,7 @@ def run(nodes, parent, st, q_new, amb_states, verdict, lower, upper, rng, max_ra
         _propose(nodes, st, q_new, lower, upper, rng, max_range)
         tree = st[TREE]
         status = check_edge(nodes[tree, st[FROM]], q_new, resolution, base, indices, ri, rf, sf, grid_i, grid_f,
-                            amb, mark, confirm, amb_states, st)  # fmt: skip
+                            amb, mark, confirm, amb_states, st, nodes[:, 0], exact_near)  # fmt: skip
         if status == AMBIGUOUS:
             st[PENDING] = 1
             return NEED_EXACT
