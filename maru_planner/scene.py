@@ -12,6 +12,16 @@ YAML schema (what benchmarks and external checks write)::
 Box sizes are full side lengths; cylinders are along their local z, centred. Each obstacle's
 fields are its shape's dimensions (``maru_planner/shapes.py``); a relative file path (a mesh) is
 resolved against the YAML file's directory.
+Objects attached to the robot (``attached``) move with their link: each is a shape with its pose in
+the link's frame, the link, and the links it may touch (the link itself always may)::
+
+    attached:
+      - {name: cup, type: cylinder, radius: 0.04, length: 0.1, pose: {xyz: [0, 0, 0.08]}, link: r_hand,
+         touch_links: [r_arm_link5]}
+
+:meth:`Scene.attach` takes a scene obstacle (or a new shape) onto a link, :meth:`Scene.detach` puts it
+back into the scene where it is; the collision model that carries them is
+:func:`maru_planner.scene_attached.robot_with_attached`.
 Every change bumps ``scene.version`` so planners can cache on it.
 """
 
@@ -28,7 +38,7 @@ import coal
 import numpy as np
 import yaml
 
-from maru_planner.errors import InvalidScene, one_line
+from maru_planner.errors import InvalidObject, InvalidScene, ObjectAlreadyAttached, one_line
 from maru_planner.shapes import KernelPrimitive, ShapeSpec, numbers, posed, shape, validate
 
 
@@ -156,6 +166,38 @@ class Obstacle:
         return f"Obstacle({self.name!r}, {self.type!r}, {fields}, xyz={self.pose[:3, 3].tolist()})"
 
 
+class AttachedObject:
+    """An obstacle fixed to a robot link: ``obstacle.pose`` is in the link's frame."""
+
+    def __init__(self, obstacle: Obstacle, link: str, touch_links: Any = ()):
+        where = f"attached object '{obstacle.name}'"
+        if not isinstance(link, str) or not link:
+            raise InvalidScene(f"{where}: field 'link' must be a link name, got {link!r}")
+        if isinstance(touch_links, str) or not all(isinstance(t, str) and t for t in touch_links):
+            raise InvalidScene(f"{where}: field 'touch_links' must be a list of link names, got {touch_links!r}")
+        self.obstacle, self.link, self.touch_links = obstacle, link, tuple(dict.fromkeys(touch_links))
+
+    @property
+    def name(self) -> str:
+        return self.obstacle.name
+
+    def key(self) -> tuple:
+        """Everything that shapes the robot's collision model (equal keys: the same attached geometry)."""
+        dims = tuple(sorted((k, str(v)) for k, v in self.obstacle.dimensions.items()))
+        pose = tuple(np.round(self.obstacle.pose, 12).ravel())
+        return (self.name, self.obstacle.type, dims, pose, self.link, self.touch_links)
+
+    @classmethod
+    def from_dict(cls, d: dict, base_dir: Path | None = None) -> AttachedObject:
+        if not isinstance(d, dict):
+            raise InvalidScene(f"attached entry must be a mapping, got {d!r}")
+        fields = {k: v for k, v in d.items() if k not in ("link", "touch_links")}
+        return cls(Obstacle.from_dict(fields, base_dir), d.get("link"), d.get("touch_links") or ())
+
+    def to_dict(self) -> dict:
+        return {**self.obstacle.to_dict(), "link": self.link, "touch_links": list(self.touch_links)}
+
+
 def _is_file(text: str) -> bool:
     try:
         return Path(text).is_file()
@@ -193,6 +235,7 @@ class Scene:
         self.frame = frame
         self.max_obstacles = int(max_obstacles)
         self.obstacles: OrderedDict[str, Obstacle] = OrderedDict()
+        self.attached: OrderedDict[str, AttachedObject] = OrderedDict()
         self.version = 0
         for obstacle in obstacles or []:
             self.add(obstacle)
@@ -202,6 +245,8 @@ class Scene:
         """Add (or replace, keeping its position in the order) an obstacle."""
         if not isinstance(obstacle, Obstacle):
             raise InvalidScene(f"expected an Obstacle, got {type(obstacle).__name__}")
+        if obstacle.name in self.attached:
+            raise ObjectAlreadyAttached(f"obstacle '{obstacle.name}': an attached object has that name")
         if obstacle.name not in self.obstacles and len(self.obstacles) >= self.max_obstacles:
             raise InvalidScene(f"obstacle '{obstacle.name}': the scene is full ({self.max_obstacles} obstacles)")
         self.obstacles[obstacle.name] = obstacle
@@ -219,8 +264,42 @@ class Scene:
         self.version += 1
 
     def clear(self) -> None:
+        """Remove every obstacle (attached objects stay on the robot)."""
         self.obstacles.clear()
         self.version += 1
+
+    def attach(
+        self, name: str, link: str, link_pose: Any = None, touch_links: Any = (), obstacle: Obstacle | None = None
+    ) -> AttachedObject:
+        """Fix obstacle ``name`` to ``link`` where it is (``link_pose``: the link's pose in the scene now), or,
+        given ``obstacle`` (its pose in the link's frame), a new shape. InvalidObject / ObjectAlreadyAttached."""
+        if name in self.attached:
+            raise ObjectAlreadyAttached(f"object '{name}' is already attached to '{self.attached[name].link}'")
+        if obstacle is None:
+            if name not in self.obstacles:
+                have = list(itertools.islice(self.obstacles, 10))
+                raise InvalidObject(f"object '{name}': not in the scene (have {have})")
+            link_from_scene = np.linalg.inv(pose_matrix(link_pose, f"attach '{name}': link pose"))
+            source = self.obstacles[name]
+            obstacle = Obstacle(name, source.type, link_from_scene @ source.pose, **source.dimensions)
+        elif obstacle.name != name or name in self.obstacles:
+            raise InvalidObject(f"object '{name}': a new shape needs a name no obstacle has (got {obstacle.name!r})")
+        attached = AttachedObject(obstacle, link, touch_links)
+        self.obstacles.pop(name, None)
+        self.attached[name] = attached
+        self.version += 1
+        return attached
+
+    def detach(self, name: str, link_pose: Any) -> Obstacle:
+        """Put attached object ``name`` back into the scene at its current pose (``link_pose``: its link's pose)."""
+        if name not in self.attached:
+            raise InvalidObject(f"object '{name}': not attached (attached: {list(self.attached)})")
+        obstacle = self.attached[name].obstacle
+        pose = pose_matrix(link_pose, f"detach '{name}': link pose") @ obstacle.pose
+        placed = Obstacle(name, obstacle.type, pose, **obstacle.dimensions)
+        del self.attached[name]
+        self.add(placed)
+        return placed
 
     def _get(self, name: str) -> Obstacle:
         if name not in self.obstacles:
@@ -245,7 +324,7 @@ class Scene:
             return cls(max_obstacles=max_obstacles)
         if not isinstance(d, dict):
             raise InvalidScene(f"scene must be a mapping with 'obstacles', got {type(d).__name__}")
-        unknown = set(d) - {"frame", "obstacles"}
+        unknown = set(d) - {"frame", "obstacles", "attached"}
         if unknown:
             raise InvalidScene(f"scene: unknown field(s) {sorted(unknown)}")
         entries = d.get("obstacles") or []
@@ -261,7 +340,14 @@ class Scene:
         dupes = sorted(name for name, count in Counter(o.name for o in obstacles).items() if count > 1)
         if dupes:
             raise InvalidScene(f"scene: duplicate obstacle name(s) {dupes}")
-        return cls(obstacles, frame=str(d.get("frame", "base_link")), max_obstacles=max_obstacles)
+        scene = cls(obstacles, frame=str(d.get("frame", "base_link")), max_obstacles=max_obstacles)
+        attached = d.get("attached") or []
+        if not isinstance(attached, list):
+            raise InvalidScene("scene: field 'attached' must be a list")
+        for entry in attached:
+            item = AttachedObject.from_dict(entry, base_dir)
+            scene.attach(item.name, item.link, touch_links=item.touch_links, obstacle=item.obstacle)
+        return scene
 
     @classmethod
     def from_yaml(cls, source: str | Path, *, max_obstacles: int = MAX_OBSTACLES, budget: float | None = None) -> Scene:
@@ -282,7 +368,10 @@ class Scene:
         return cls.from_dict(data, base_dir, max_obstacles=max_obstacles, budget=budget)
 
     def to_dict(self) -> dict:
-        return {"frame": self.frame, "obstacles": [o.to_dict() for o in self.obstacles.values()]}
+        d = {"frame": self.frame, "obstacles": [o.to_dict() for o in self.obstacles.values()]}
+        if self.attached:
+            d["attached"] = [a.to_dict() for a in self.attached.values()]
+        return d
 
     def to_yaml(self) -> str:
         return yaml.safe_dump(self.to_dict(), sort_keys=False)

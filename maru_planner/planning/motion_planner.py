@@ -62,6 +62,7 @@ from maru_planner.planning.types import (
     Trajectory,
     status_of_error,
 )
+from maru_planner.scene_attached import attachment_key, robot_with_attached
 
 OMPL_LOCK = threading.RLock()
 REPAIR_RESOLUTION = 0.02  # rad: the coarsest motion step of a repair's local search
@@ -133,6 +134,7 @@ class MotionPlanner:
     def from_scene(cls, robot, scene=None, config: PlannerConfig | None = None) -> MotionPlanner:
         """A planner on the checker ``config.collision_model`` names ("exact" | "spheres")."""
         config = config or PlannerConfig()
+        robot = robot_with_attached(robot, scene)
         checkers = make_checkers(robot, scene, config.collision_model)
         planner = cls(robot, checkers.checker, config, exact_checker=checkers.exact)
         planner.scene = scene
@@ -140,19 +142,40 @@ class MotionPlanner:
 
     # --- scene ------------------------------------------------------------------------------
     def set_scene(self, scene) -> None:
-        """Give the checker(s) a new scene; cached roadmaps are re-validated at their next query."""
+        """Give the checker(s) a new scene; cached roadmaps are re-validated at their next query.
+
+        When the scene's attached objects differ from those the robot carries, the robot, checkers and
+        certifier are rebuilt around them (:func:`~maru_planner.scene_attached.robot_with_attached`).
+        """
         with self._lock:
-            self.checker.set_scene(scene)
-            if self.exact_checker is not None:
-                self.exact_checker.set_scene(scene)
+            if attachment_key(scene) != attachment_key(self.robot):
+                self._carry(robot_with_attached(self.robot, scene), scene)
+            else:
+                self.checker.set_scene(scene)
+                if self.exact_checker is not None:
+                    self.exact_checker.set_scene(scene)
             self.scene = scene
             self._scene_epoch += 1
+
+    def _carry(self, robot, scene) -> None:
+        """Plan for ``robot`` (the robot with other attached objects): new checkers, certifier and caches."""
+        checkers = make_checkers(robot, scene, collision_model_of(self.checker))
+        self.robot, self.checker, self.exact_checker = robot, checkers.checker, checkers.exact
+        self.certifier = self._make_certifier()
+        self._roadmaps, self._setups = {}, {}
+
+    def _follow_attachments(self) -> None:
+        """Pick up objects attached or detached by editing the scene in place since the last call."""
+        scene = getattr(self.checker, "scene", None)
+        if scene is not None and attachment_key(scene) != attachment_key(self.robot):
+            self.set_scene(scene)
 
     # --- planning ---------------------------------------------------------------------------
     def cartesian_path(self, request: CartesianRequest) -> CartesianResult:
         """A straight task-space path (:mod:`~maru_planner.planning.cartesian`) on this planner's robot,
         checker and certifier; never raises."""
         with self._lock:
+            self._follow_attachments()
             return compute_cartesian_path(self, request)
 
     def plan(self, request: MotionRequest, monitor: PlanMonitor | None = None) -> MotionResult:
@@ -162,6 +185,7 @@ class MotionPlanner:
         """
         t0 = time.monotonic()
         with self._lock:
+            self._follow_attachments()
             self._monitor = monitor or PlanMonitor()
             try:
                 result = self._plan_once(request, t0, self.config.resolution)
