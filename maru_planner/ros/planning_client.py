@@ -35,7 +35,16 @@ from maru_planner.ros import planning_conversions as conv
 from maru_planner.ros.env import network_from_environment
 from maru_planner_interfaces.action import PlanMotion as PlanMotionAction
 from maru_planner_interfaces.msg import SceneObstacle
-from maru_planner_interfaces.srv import ApplyScene, ComputeIK, GetScene, PlanMotion
+from maru_planner_interfaces.srv import (
+    ApplyScene,
+    CheckStateValidity,
+    ComputeCartesianPath,
+    ComputeFK,
+    ComputeIK,
+    GetScene,
+    PlanMotion,
+    QueryPlanners,
+)
 
 
 class PlanningClient:
@@ -57,6 +66,10 @@ class PlanningClient:
         self.ik_client = self.node.create_client(ComputeIK, prefix + "compute_ik")
         self.apply_client = self.node.create_client(ApplyScene, prefix + "apply_scene")
         self.scene_client = self.node.create_client(GetScene, prefix + "get_scene")
+        self.fk_client = self.node.create_client(ComputeFK, prefix + "compute_fk")
+        self.validity_client = self.node.create_client(CheckStateValidity, prefix + "check_state_validity")
+        self.planners_client = self.node.create_client(QueryPlanners, prefix + "query_planners")
+        self.cartesian_client = self.node.create_client(ComputeCartesianPath, prefix + "compute_cartesian_path")
         self.plan_action_client = ActionClient(self.node, PlanMotionAction, prefix + "plan_motion")
         self._executor = None
         if self._owns_node:
@@ -151,6 +164,65 @@ class PlanningClient:
 
     def get_scene(self, timeout: float = 30.0) -> GetScene.Response:
         return self.call(self.scene_client, GetScene.Request(), timeout)
+
+    def attach(
+        self, name: str, link: str, *, touch_links: list[str] = (), shape: str = "", dimensions=(), pose=None,
+        robot_state: dict[str, float] | None = None, frame_id: str = "base_link", **kwargs,
+    ) -> ApplyScene.Response:  # fmt: skip
+        """Attach scene obstacle ``name`` to ``link`` where it is, or (``shape`` given) a new shape at ``pose``
+        (4x4 in ``frame_id``); ``robot_state`` places the link (None: the node's latest /joint_states)."""
+        msg = obstacle_msg(name, shape, dimensions, pose, frame_id) if shape else SceneObstacle(name=name)
+        msg.operation, msg.link_name, msg.touch_links = SceneObstacle.ATTACH, link, list(touch_links)
+        msg.header.frame_id = frame_id
+        if robot_state:
+            msg.robot_state = _joint_state(robot_state)
+        return self.apply_scene([msg], **kwargs)
+
+    def detach(self, name: str, *, robot_state: dict[str, float] | None = None, **kwargs) -> ApplyScene.Response:
+        """Put attached object ``name`` back into the scene where ``robot_state`` (None: the latest) holds it."""
+        msg = SceneObstacle(name=name, operation=SceneObstacle.DETACH)
+        if robot_state:
+            msg.robot_state = _joint_state(robot_state)
+        return self.apply_scene([msg], **kwargs)
+
+    def compute_fk(
+        self, robot_state: dict[str, float] | None = None, links: list[str] = (), timeout: float = 30.0
+    ) -> ComputeFK.Response:
+        """Poses of ``links`` (empty: every link) at ``robot_state`` (None: the node's latest /joint_states)."""
+        request = ComputeFK.Request(links=list(links))
+        if robot_state:
+            request.robot_state = _joint_state(robot_state)
+        return self.call(self.fk_client, request, timeout)
+
+    def check_state_validity(
+        self, robot_state: dict[str, float] | None = None, constraints=None, timeout: float = 30.0
+    ) -> CheckStateValidity.Response:
+        """Validity, colliding pairs, clearance (and ``PathConstraints`` message violations) at ``robot_state``."""
+        request = CheckStateValidity.Request()
+        if robot_state:
+            request.robot_state = _joint_state(robot_state)
+        if constraints is not None:
+            request.constraints = constraints
+        return self.call(self.validity_client, request, timeout)
+
+    def query_planners(self, timeout: float = 30.0) -> QueryPlanners.Response:
+        return self.call(self.planners_client, QueryPlanners.Request(), timeout)
+
+    def cartesian_path(
+        self, waypoints: list, *, start: dict[str, float] | None = None, group: str = "", link: str = "",
+        max_step: float = 0.0, jump_threshold: float = 0.0, avoid_collisions: bool = True,
+        velocity_scaling: float = 0.0, acceleration_scaling: float = 0.0, timeout: float = 60.0,
+    ) -> ComputeCartesianPath.Response:  # fmt: skip
+        """Straight-line path of ``link`` through ``waypoints`` (4x4 poses or ``Pose`` s in the planning frame)."""
+        request = ComputeCartesianPath.Request(
+            group=group, link=link, max_step=float(max_step), jump_threshold=float(jump_threshold),
+            avoid_collisions=avoid_collisions, max_velocity_scaling_factor=float(velocity_scaling),
+            max_acceleration_scaling_factor=float(acceleration_scaling),
+        )  # fmt: skip
+        request.waypoints = [_pose(w) for w in waypoints]
+        if start:
+            request.start_state = _joint_state(start)
+        return self.call(self.cartesian_client, request, timeout)
 
     # ------------------------------------------------------------ lifetime
 

@@ -30,10 +30,14 @@ ERROR_CODES: tuple[tuple[type[errors.MaruError], int], ...] = (
     (errors.InvalidJointCount, PlanningError.INVALID_JOINT_COUNT),
     (errors.InvalidState, PlanningError.INVALID_ROBOT_STATE),
     (errors.NoStartState, PlanningError.NO_START_STATE),
+    (errors.InvalidLink, PlanningError.INVALID_LINK_NAME),
+    (errors.StartViolatesConstraints, PlanningError.START_STATE_VIOLATES_PATH_CONSTRAINTS),
     (errors.InvalidRequest, PlanningError.INVALID_REQUEST),
     (errors.StartInCollision, PlanningError.START_STATE_IN_COLLISION),
     (errors.GoalInCollision, PlanningError.GOAL_IN_COLLISION),
     (errors.NoIKSolution, PlanningError.NO_IK_SOLUTION),
+    (errors.ObjectAlreadyAttached, PlanningError.OBJECT_ALREADY_ATTACHED),
+    (errors.InvalidObject, PlanningError.INVALID_OBJECT_NAME),
     (errors.InvalidScene, PlanningError.INVALID_SCENE),
     (errors.PlanningTimedOut, PlanningError.TIMED_OUT),
     (errors.PlanningFailed, PlanningError.PLANNING_FAILED),
@@ -56,6 +60,10 @@ STATUS_CODES: dict[str, int] = {
     "INVALID_SCENE": PlanningError.INVALID_SCENE,
     "INVALID_REQUEST": PlanningError.INVALID_REQUEST,
     "NO_START_STATE": PlanningError.NO_START_STATE,
+    "INVALID_LINK": PlanningError.INVALID_LINK_NAME,
+    "INVALID_OBJECT": PlanningError.INVALID_OBJECT_NAME,
+    "OBJECT_ALREADY_ATTACHED": PlanningError.OBJECT_ALREADY_ATTACHED,
+    "START_VIOLATES_CONSTRAINTS": PlanningError.START_STATE_VIOLATES_PATH_CONSTRAINTS,
 }
 
 CODE_NAMES: dict[int, str] = {
