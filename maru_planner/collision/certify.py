@@ -41,6 +41,7 @@ from maru_planner.scene import Scene
 
 DEFAULT_SAFETY_MARGIN = 0.01  # m (PlannerConfig.safety_margin's default too)
 DISTANCE_TOLERANCE = 1e-6  # m: coal's GJK tolerance, taken off every exact distance
+UNBOUNDED = 1e6  # m: an obstacle bounding box this large is treated as infinite
 MIN_INTERVAL = 1e-9  # rad: a piece of segment this short that is still unproven fails as "unproven"
 REVOLUTE = ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned")
 PRISMATIC = ("JointModelPX", "JointModelPY", "JointModelPZ", "JointModelPrismaticUnaligned")
@@ -479,6 +480,8 @@ def _bounding_box(obj: pin.GeometryObject) -> tuple[np.ndarray, np.ndarray, np.n
     geometry.computeLocalAABB()
     lo, hi = np.asarray(geometry.aabb_local.min_, dtype=float), np.asarray(geometry.aabb_local.max_, dtype=float)
     placement = obj.placement
+    if not (np.abs(lo).max() < UNBOUNDED and np.abs(hi).max() < UNBOUNDED):  # a half-space: coal decides each query
+        return placement.translation.copy(), placement.rotation.copy(), np.full(3, np.inf), False
     return placement.act(0.5 * (lo + hi)), placement.rotation.copy(), 0.5 * (hi - lo), isinstance(geometry, coal.Box)
 
 
