@@ -66,6 +66,7 @@ from maru_planner.scene_attached import attachment_key, robot_with_attached
 
 OMPL_LOCK = threading.RLock()
 REPAIR_RESOLUTION = 0.02  # rad: the coarsest motion step of a repair's local search
+REPAIR_SHORTCUT_TRIES = 10  # a repair's local path is short: few failed shortcuts end its simplification
 # Slowest scaling a request may ask for (10,000x the full-speed duration); far below it the time
 # parameterisations overflow (1e-300 gave NaN durations and internal errors).
 MIN_SCALING = 1e-4
@@ -272,13 +273,16 @@ class MotionPlanner:
         """The local planner of a repair: RRTConnect between two waypoints of the request's group.
 
         It plans on the exact model padded by the margin, at ``config.resolution`` or :data:`REPAIR_RESOLUTION`
-        if finer (a coarse search's gaps are what certification caught).
+        if finer (a coarse search's gaps are what certification caught), with a short simplification.
         """
         from maru_planner.collision import CollisionChecker  # lazy like make_checkers: exact model only
 
-        resolution = min(self.config.resolution, REPAIR_RESOLUTION)
         config = dataclasses.replace(
-            self.config, resolution=resolution, certify=False, time_parameterization="trapezoid"
+            self.config,
+            resolution=min(self.config.resolution, REPAIR_RESOLUTION),
+            simplify_max_tries=min(self.config.simplify_max_tries, REPAIR_SHORTCUT_TRIES),
+            certify=False,
+            time_parameterization="trapezoid",
         )
         names = self.robot.joint_names
         group = [names[i] for i in self.robot.group_joint_indices(request.group)]
