@@ -34,6 +34,18 @@ def maru1():
     return RobotModel.maru1()
 
 
+@pytest.fixture(scope="module", autouse=True)
+def compiled_kernel(panda):
+    """numba compiles the kernel on its first call after a change: do that outside the requests' time budgets."""
+    gs = arm_space(panda)
+    ss = og.SimpleSetup(gs.space)
+    ss.setPlanner(CompiledRRTConnect(ss.getSpaceInformation(), EdgeChecker(gs, SphereCollisionChecker(panda), 0.05)))
+    ss.setStateValidityChecker(lambda _state: True)
+    start = gs.base[gs.indices]
+    ss.setStartAndGoalStates(gs.to_state(start), gs.to_state(0.9 * start + 0.05 * (gs.lower + gs.upper)))
+    ss.solve(ob.timedPlannerTerminationCondition(60.0))
+
+
 def clutter(seed: int) -> Scene:
     """Boxes, spheres and cylinders in the Panda's workspace."""
     rng = np.random.default_rng(seed)

@@ -30,6 +30,7 @@ collision model.
 
 from __future__ import annotations
 
+import time
 from functools import partial
 from typing import Any
 
@@ -66,8 +67,9 @@ COMPILED_RRTC_PARAMS: dict[str, ParamSpec] = {
 }
 
 _CAPACITY = 1024  # initial nodes per tree; doubled when full
-_FIRST_EDGES = 64  # edges of the first kernel call between two termination checks ...
-_MAX_EDGES = 1024  # ... doubled per call up to this many
+_FIRST_EDGES = 32  # edges of the first kernel call; later calls are sized to last about _CALL_SECONDS
+_MAX_EDGES = 4096
+_CALL_SECONDS = 0.002  # between two evaluations of the termination condition
 
 
 class CompiledRRTConnect(ob.Planner):
@@ -166,39 +168,16 @@ class CompiledRRTConnect(ob.Planner):
     # --- the search ------------------------------------------------------------------------
     def _search(self, start: np.ndarray, goal: np.ndarray, ptc: ob.PlannerTerminationCondition) -> np.ndarray | None:
         kernel = _kernel()
-        edges = self._edges
-        checker, gs = edges.checker, edges.gs
-        seed = self._values["seed"]
-        rng = kernel.seed_rng(int(seed if seed is not None else self._seed_rng.uniformInt(0, 2**31 - 2)))
-        max_range = float(self._values["range"]) or 0.2 * self._si.getMaximumExtent()
-        lower, upper = gs.lower, gs.upper
+        checker, gs = self._edges.checker, self._edges.gs
         nodes, parent, st = kernel.new_state(start, goal, _CAPACITY)
         self._trees = (nodes, parent, st)
-        q_new = np.empty(len(start))
-        amb_states = np.empty((int(np.ceil((upper - lower).max() / edges.resolution)) + 2, len(start)))
-        inputs = sphere_kernel_inputs(checker)
-        indices = gs.indices.astype(np.int64)
+        amb_states = np.empty((int(np.ceil((gs.upper - gs.lower).max() / self._edges.resolution)) + 2, len(start)))
+        fixed = (st, np.empty(len(start)), amb_states, *self._search_args(kernel), *sphere_kernel_inputs(checker),
+                 checker.confirm, float(self._values["exact_near"]))  # fmt: skip
         verdict, batch = False, _FIRST_EDGES
         while True:
-            code = kernel.run(
-                nodes,
-                parent,
-                st,
-                q_new,
-                amb_states,
-                verdict,
-                lower,
-                upper,
-                rng,
-                max_range,
-                edges.resolution,
-                gs.base,
-                indices,
-                *inputs,
-                checker.confirm,
-                batch,
-                float(self._values["exact_near"]),
-            )
+            t_call = time.perf_counter()
+            code = kernel.run(nodes, parent, verdict, batch, *fixed)
             checker.check_count += int(st[kernel.CHECKS])
             st[kernel.CHECKS] = 0
             if code == kernel.SOLVED:
@@ -208,9 +187,16 @@ class CompiledRRTConnect(ob.Planner):
             elif code == kernel.FULL:
                 nodes, parent = kernel.grow(nodes, parent)
                 self._trees = (nodes, parent, st)
-            batch = min(2 * batch, _MAX_EDGES)
+            batch = _next_batch(batch, time.perf_counter() - t_call)
             if ptc():
                 return None
+
+    def _search_args(self, kernel) -> tuple:
+        """The kernel's sampling bounds, generator, range, resolution, base configuration and group indices."""
+        gs, seed = self._edges.gs, self._values["seed"]
+        rng = kernel.seed_rng(int(seed if seed is not None else self._seed_rng.uniformInt(0, 2**31 - 2)))
+        max_range = float(self._values["range"]) or 0.2 * self._si.getMaximumExtent()
+        return gs.lower, gs.upper, rng, max_range, self._edges.resolution, gs.base, gs.indices.astype(np.int64)
 
     def _node_count(self) -> int:
         st = self._trees[2]
@@ -229,6 +215,12 @@ class CompiledRRTConnect(ob.Planner):
         for i, v in enumerate(q):
             state[i] = float(v)
         return state
+
+
+def _next_batch(batch: int, seconds: float) -> int:
+    """Edges for the next kernel call, so that it lasts about _CALL_SECONDS (at most doubling)."""
+    target = batch * _CALL_SECONDS / max(seconds, 1e-6)
+    return int(min(max(target, 1), 2 * batch, _MAX_EDGES))
 
 
 def _kernel():

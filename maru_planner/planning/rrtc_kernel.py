@@ -387,8 +387,8 @@ def _apply(nodes, parent, st, q_new, valid):
 
 
 @njit(cache=True)
-def run(nodes, parent, st, q_new, amb_states, verdict, lower, upper, rng, max_range, resolution, base, indices,
-        ri, rf, sf, grid_i, grid_f, amb, mark, confirm, max_edges, exact_near):  # fmt: skip
+def run(nodes, parent, verdict, max_edges, st, q_new, amb_states, lower, upper, rng, max_range, resolution, base,
+        indices, ri, rf, sf, grid_i, grid_f, amb, mark, confirm, exact_near):  # fmt: skip
     """Advance the search by at most ``max_edges`` edge checks; SOLVED, RUNNING, NEED_EXACT or FULL (module doc).
 
     ``verdict``: the exact answer for the pending edge after a NEED_EXACT return (ignored otherwise);
