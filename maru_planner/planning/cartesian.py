@@ -28,7 +28,7 @@ import pinocchio as pin
 
 from maru_planner import errors
 from maru_planner.planning import timing
-from maru_planner.planning.queries import check_link
+from maru_planner.planning.links import check_link
 from maru_planner.planning.types import PlanStatus, Trajectory, status_of_error
 
 LOCAL = pin.ReferenceFrame.LOCAL
@@ -282,15 +282,20 @@ def _collision_cut(planner, states, reason: str, deadline: float, margin: float,
 
 
 def _timed(planner, request: CartesianRequest, states, indices, deadline: float, margin: float) -> Trajectory:
-    robot, config = planner.robot, planner.config
-    limits = timing.Limits.scaled(
-        robot.velocity_limits[indices],
-        robot.acceleration_limits[indices],
-        _scaling(request.velocity_scaling, "velocity_scaling"),
-        _scaling(request.acceleration_scaling, "acceleration_scaling"),
-    )
-    base = states[0]
+    scalings = (_scaling(request.velocity_scaling, "velocity_scaling"),
+                _scaling(request.acceleration_scaling, "acceleration_scaling"))  # fmt: skip
+    method = request.time_parameterization or planner.config.time_parameterization
     certifier = planner.certifier if request.avoid_collisions else None
+    return time_dense_path(planner.robot, planner.config, certifier, states, indices, method, scalings, deadline,
+                           margin)  # fmt: skip
+
+
+def time_dense_path(robot, config, certifier, states: np.ndarray, indices: np.ndarray, method: str,
+                    scalings: tuple[float, float], deadline: float, margin: float) -> Trajectory:  # fmt: skip
+    """A trajectory through the full configurations ``states`` (only ``indices`` move) that stays within
+    :data:`BLEND_DEVIATION` rad of their polyline; blends certified by ``certifier`` (None: unchecked)."""
+    limits = timing.Limits.scaled(robot.velocity_limits[indices], robot.acceleration_limits[indices], *scalings)
+    base = states[0]
 
     def curve_free(group_states: np.ndarray, chord_deviation: np.ndarray) -> bool:
         if certifier is None:
@@ -305,7 +310,7 @@ def _timed(planner, request: CartesianRequest, states, indices, deadline: float,
         states[:, indices],
         [robot.joint_names[i] for i in indices],
         limits,
-        request.time_parameterization or config.time_parameterization,
+        method,
         curve_free=curve_free,
         max_deviation=BLEND_DEVIATION,
         dt=config.trajectory_dt,

@@ -30,9 +30,9 @@ import numpy as np
 from maru_planner import errors
 from maru_planner.planning.cartesian import CartesianRequest, CartesianResult, default_link
 from maru_planner.planning.config import COLLISION_MODELS, TIME_PARAMETERIZATIONS, PlannerConfig
+from maru_planner.planning.links import check_link
 from maru_planner.planning.motion_planner import MotionPlanner
 from maru_planner.planning.problems import PROBLEMS
-from maru_planner.planning.queries import check_link
 from maru_planner.planning.registry import PLANNERS, get_spec, merged_params
 from maru_planner.planning.types import MotionRequest, MotionResult, PlanStatus, status_of_error
 from maru_planner.robot import RobotModel, load_example_robot
@@ -58,7 +58,7 @@ class CliError(errors.InvalidRequest):
 class _Parser(argparse.ArgumentParser):
     def error(self, message: str) -> NoReturn:
         """One line on stderr (argparse's usage block is in --help)."""
-        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message} (see --help)\n")
+        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {errors.one_line(message)} (see --help)\n")
 
 
 def _positive(text: str) -> float:

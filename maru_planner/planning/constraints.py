@@ -101,36 +101,43 @@ class PathConstraints:
         orientation, position = self.violation(robot, q)
         return orientation <= slack and position <= slack
 
-    def project(self, robot, q: np.ndarray, indices: np.ndarray) -> np.ndarray | None:
-        """``q`` moved (only the joints ``indices``, within limits) until the constraints hold; None if it fails."""
+    def project(self, robot, q: np.ndarray, indices: np.ndarray, inset: float = 0.0) -> np.ndarray | None:
+        """``q`` moved (only the joints ``indices``, within limits) until the constraints hold; None if it fails.
+
+        A violated component is pulled to ``1 - inset`` of its bound, so straight motions between projected
+        states keep some room before they leave the region.
+        """
         q = np.array(q, dtype=float)
         lo, hi = robot.lower_limits[indices], robot.upper_limits[indices]
         for _ in range(PROJECTION_ITERATIONS):
-            rows, residual = self._residual(robot, q, indices)
+            rows, residual = self._residual(robot, q, indices, 1.0 - inset)
             if not len(residual):
                 return q
             step = rows.T @ np.linalg.solve(rows @ rows.T + 1e-6 * np.eye(len(residual)), residual)
             q[indices] = np.clip(q[indices] - step, lo, hi)
         return q if self.satisfied(robot, q) else None
 
-    def _residual(self, robot, q: np.ndarray, indices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Jacobian rows and signed excess of the violated components (aiming slightly inside each bound)."""
+    def _residual(self, robot, q: np.ndarray, indices: np.ndarray, keep: float) -> tuple[np.ndarray, np.ndarray]:
+        """Jacobian rows and signed excess of the components outside ``keep`` x their bound (aiming just inside)."""
         rows, residual = [], []
         if self.orientation is not None:
             c = self.orientation
             fid = robot.frame_id(c.link)
-            r, out = c.excess(robot.frame_pose(q, fid))
+            r = c.excess(robot.frame_pose(q, fid))[0]
+            bound = np.minimum(c.tolerance * keep, math.pi)
+            out = np.abs(r) - bound
             J = c.target.T @ robot.frame_jacobian(q, fid)[3:, indices]  # angular rate in the target frame
             J = pin.Jlog3(pin.exp3(r)) @ J
             for i in np.flatnonzero(out > 0):
                 rows.append(J[i])
-                residual.append(r[i] - math.copysign(c.tolerance[i] - PROJECTION_TOLERANCE, r[i]))
+                residual.append(r[i] - math.copysign(bound[i] - PROJECTION_TOLERANCE, r[i]))
         if self.position is not None:
             c = self.position
             fid = robot.frame_id(c.link)
-            local, out = c.excess(robot.frame_pose(q, fid))
+            local = c.excess(robot.frame_pose(q, fid))[0]
             J = c.box_pose[:3, :3].T @ robot.frame_jacobian(q, fid)[:3, indices]
-            half = 0.5 * np.asarray(c.box_size)
+            half = 0.5 * np.asarray(c.box_size) * keep
+            out = np.abs(local) - half
             for i in np.flatnonzero(out > 0):
                 rows.append(J[i])
                 residual.append(local[i] - math.copysign(half[i] - PROJECTION_TOLERANCE, local[i]))

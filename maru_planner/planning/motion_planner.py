@@ -43,6 +43,7 @@ from maru_planner.planning.checkers import (
     make_checkers,
 )
 from maru_planner.planning.config import PlannerConfig
+from maru_planner.planning.constrained_planner import plan_constrained
 from maru_planner.planning.pose_goal import solve_pose_goal
 from maru_planner.planning.registry import (
     ArmPlannerSpec,
@@ -187,6 +188,9 @@ class MotionPlanner:
         t0 = time.monotonic()
         with self._lock:
             self._follow_attachments()
+            constraints = getattr(request, "path_constraints", None)
+            if constraints is not None and not constraints.empty:
+                return plan_constrained(self, request, constraints)
             self._monitor = monitor or PlanMonitor()
             try:
                 result = self._plan_once(request, t0, self.config.resolution)
@@ -536,6 +540,16 @@ class MotionPlanner:
         for i, v in values.items():
             q[i] = v
         return q
+
+    def goal_configuration(self, req: MotionRequest, start_full: np.ndarray, indices) -> np.ndarray:
+        """The full goal configuration of ``req``: its joint goal (checked), or IK of its goal poses."""
+        if req.goal_poses:
+            return self._solve_pose_goal(req, start_full, indices, time.monotonic() + float(req.time_budget))
+        return self._goal_state(req, start_full, indices)
+
+    def check_free(self, q: np.ndarray, error_cls, what: str) -> None:
+        """Raise ``error_cls`` naming the colliding pairs if the full configuration ``q`` collides."""
+        self._check_free(q, error_cls, what)
 
     def _goal_state(self, req: MotionRequest, start_full: np.ndarray, indices) -> np.ndarray:
         if req.goal_joints is None:

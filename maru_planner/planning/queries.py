@@ -19,22 +19,10 @@ import pinocchio as pin
 
 from maru_planner import errors
 from maru_planner.params import ParamSpec
+from maru_planner.planning import constrained_planner
 from maru_planner.planning.constraints import PathConstraints
+from maru_planner.planning.links import check_link, link_names
 from maru_planner.planning.registry import PLANNERS, ArmPlannerSpec
-
-
-def link_names(robot) -> list[str]:
-    """The robot's links: its body frames, in model order."""
-    return [f.name for f in robot.model.frames if f.type == pin.FrameType.BODY]
-
-
-def check_link(robot, link: str, what: str = "link") -> int:
-    """The frame id of ``link``; InvalidLink naming it (and a few known links) otherwise."""
-    if not isinstance(link, str) or not link or not robot.model.existFrame(link):
-        known = link_names(robot)
-        shown = ", ".join(known[:8]) + (", ..." if len(known) > 8 else "")
-        raise errors.InvalidLink(f"{what} {link!r} is not a link of {robot.name} (links: {shown})")
-    return robot.model.getFrameId(link)
 
 
 def compute_fk(robot, q: np.ndarray, links: Sequence[str] = ()) -> dict[str, np.ndarray]:
@@ -126,9 +114,21 @@ class PlannerDescription:
 
 
 def query_planners(overrides: Mapping[str, Mapping[str, Any]] | None = None) -> list[PlannerDescription]:
-    """Every registered planner, its parameters' current values from ``overrides`` ({id: {name: value}})."""
+    """Every registered planner, then CBiRRT (path constraints), their parameters' current values from
+    ``overrides`` ({id: {name: value}})."""
     overrides = overrides or {}
-    return [_describe(spec, overrides.get(spec.id, {})) for spec in PLANNERS.values()]
+    listed = [_describe(spec, overrides.get(spec.id, {})) for spec in PLANNERS.values()]
+    return [*listed, _constrained(overrides.get(constrained_planner.PLANNER_ID, {}))]
+
+
+def _constrained(values: Mapping[str, Any]) -> PlannerDescription:
+    params = constrained_planner.PARAMS
+    return PlannerDescription(
+        constrained_planner.PLANNER_ID,
+        constrained_planner.DESCRIPTION,
+        ("path_constraints", "tree"),
+        tuple(PlannerParameter(p, values.get(name, p.default)) for name, p in params.items()),
+    )
 
 
 def _describe(spec: ArmPlannerSpec, values: Mapping[str, Any]) -> PlannerDescription:

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from maru_planner import errors
+from maru_planner.planning.constraints import PathConstraints
 
 if TYPE_CHECKING:  # the sphere module loads numba; results only carry its PathVerification
     from maru_planner.collision.spheres import PathVerification
@@ -80,6 +81,8 @@ class MotionRequest:
     planner's ``PlannerConfig.time_parameterization``. ``jerk_scaling`` scales the jerk limits
     ("ruckig" only). ``safety_margin`` (m): the clearance the certified path keeps from every
     obstacle and link pair (``docs/certification.md``); None = ``PlannerConfig.safety_margin``.
+    ``path_constraints``: kept along the whole motion, planned by CBiRRT
+    (:mod:`~maru_planner.planning.constrained_planner`, ``docs/manipulation.md``).
     """
 
     group: str
@@ -96,6 +99,7 @@ class MotionRequest:
     time_parameterization: str = ""
     jerk_scaling: float = 1.0
     safety_margin: float | None = None
+    path_constraints: PathConstraints | None = None
 
 
 @dataclass

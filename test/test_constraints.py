@@ -1,0 +1,123 @@
+"""Path constraints: projection, CBiRRT keeping a link upright / in a box all along, errors."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from maru_planner.planning import MotionPlanner, MotionRequest, PlanStatus
+from maru_planner.planning.constraints import OrientationConstraint, PathConstraints, PositionConstraint
+from maru_planner.robot import RobotModel
+from maru_planner.scene import Scene
+
+LINK = "panda_hand_tcp"
+
+
+@pytest.fixture(scope="module")
+def panda():
+    robot = RobotModel.from_profile("panda")
+    return robot, robot.named_state("default"), robot.group_joint_indices("arm")
+
+
+def _upright(robot, q) -> PathConstraints:
+    """The hand's orientation at ``q`` kept within 0.1 rad about x and y, free about z."""
+    target = robot.frame_pose(q, LINK)[:3, :3]
+    return PathConstraints(OrientationConstraint(LINK, target, np.array([0.1, 0.1, math.pi])))
+
+
+def _tilting_goal(robot, q0, idx, constraints) -> np.ndarray:
+    """A goal on the constraints whose straight joint-space line leaves them (so planning must work for it)."""
+    rng = np.random.default_rng(0)
+    for _ in range(200):
+        q = q0.copy()
+        q[idx] += rng.uniform(-1.0, 1.0, len(idx))
+        goal = constraints.project(robot, np.clip(q, robot.lower_limits, robot.upper_limits), idx)
+        if goal is None:
+            continue
+        line = [q0 + t * (goal - q0) for t in np.linspace(0, 1, 21)]
+        if max(constraints.violation(robot, q)[0] for q in line) > 0.1:
+            return goal
+    raise AssertionError("no tilting goal found")
+
+
+def _violation_along(robot, q0, idx, trajectory, constraints) -> tuple[float, float]:
+    q, worst = q0.copy(), np.zeros(2)
+    for row in trajectory.positions:
+        q[idx] = row
+        worst = np.maximum(worst, constraints.violation(robot, q))
+    return float(worst[0]), float(worst[1])
+
+
+def test_projection_lands_on_the_constraints(panda):
+    robot, q0, idx = panda
+    constraints = _upright(robot, q0)
+    rng = np.random.default_rng(3)
+    landed = 0
+    for _ in range(20):
+        q = robot.random_configuration(rng)
+        projected = constraints.project(robot, q, idx)
+        if projected is not None:
+            landed += 1
+            assert constraints.satisfied(robot, projected)
+            assert np.all(projected >= robot.lower_limits) and np.all(projected <= robot.upper_limits)
+    assert landed >= 10
+
+
+def test_cbirrt_keeps_the_hand_upright_all_along(panda):
+    robot, q0, idx = panda
+    constraints = _upright(robot, q0)
+    goal = _tilting_goal(robot, q0, idx, constraints)
+    planner = MotionPlanner.from_scene(robot, Scene())
+    start = dict(zip(robot.joint_names, q0.tolist(), strict=True))
+    goal_joints = {robot.joint_names[i]: float(goal[i]) for i in idx}
+    result = planner.plan(
+        MotionRequest("arm", start=start, goal_joints=goal_joints, seed=2, time_budget=30, path_constraints=constraints)
+    )
+    assert result.status is PlanStatus.SUCCESS, result.message
+    assert result.stats.planner_id == "CBiRRT" and result.stats.certified
+    orientation, _ = _violation_along(robot, q0, idx, result.trajectory, constraints)
+    assert orientation <= 1e-6
+    assert np.allclose(result.trajectory.positions[-1], goal[idx], atol=1e-6)
+
+
+def test_cbirrt_keeps_the_hand_in_a_box(panda):
+    robot, q0, idx = panda
+    hand = robot.frame_pose(q0, LINK)
+    box = hand.copy()
+    box[:3, 3] += (0.0, 0.15, 0.0)
+    constraints = PathConstraints(position=PositionConstraint(LINK, box, np.array([0.3, 0.5, 0.1])))
+    q = q0.copy()
+    q[idx[0]] += 0.6
+    goal = constraints.project(robot, q, idx)
+    assert goal is not None
+    result = MotionPlanner.from_scene(robot, Scene()).plan(MotionRequest(
+        "arm", start=dict(zip(robot.joint_names, q0.tolist(), strict=True)),
+        goal_joints={robot.joint_names[i]: float(goal[i]) for i in idx}, seed=1, time_budget=30,
+        path_constraints=constraints,
+    ))  # fmt: skip
+    assert result.success, result.message
+    assert _violation_along(robot, q0, idx, result.trajectory, constraints)[1] <= 1e-6
+
+
+def test_constraint_impossible_at_the_start_unknown_link_and_unsupported_planner(panda):
+    robot, q0, idx = panda
+    tilted = robot.frame_pose(q0, LINK)[:3, :3] @ np.array([[1, 0, 0], [0, 0, -1], [0, 1, 0]])
+    away = PathConstraints(OrientationConstraint(LINK, tilted, np.array([0.1, 0.1, 0.1])))
+    start = dict(zip(robot.joint_names, q0.tolist(), strict=True))
+    goal = {robot.joint_names[i]: float(q0[i]) for i in idx}
+    goal["panda_joint1"] += 0.1
+    planner = MotionPlanner.from_scene(robot, Scene())
+
+    def plan(constraints, planner_id=""):
+        return planner.plan(MotionRequest("arm", start=start, goal_joints=goal, planner_id=planner_id,
+                                          path_constraints=constraints))  # fmt: skip
+
+    impossible = plan(away)
+    assert impossible.status is PlanStatus.START_VIOLATES_CONSTRAINTS and "start" in impossible.message
+    unknown = PathConstraints(OrientationConstraint("no_link", np.eye(3), np.ones(3)))
+    assert plan(unknown).status is PlanStatus.INVALID_LINK
+    assert plan(_upright(robot, q0), "PRM").status is PlanStatus.INVALID_PLANNER
+    with pytest.raises(ValueError, match="tolerance"):
+        OrientationConstraint(LINK, np.eye(3), np.array([0.1, -1.0, 0.1]))
