@@ -21,11 +21,11 @@ The path goes into the ProblemDefinition like any OMPL planner's, so ``SimpleSet
 facade's exact verification apply unchanged. Samples come from a generator seeded by ``seed`` or,
 unset, by a draw from OMPL's seeded RNG: same seed, same path.
 
-**Other checkers** (the exact pinocchio/coal checker, the tests' toy checkers, no edge checker): the
-kernel cannot call them, so the planner falls back to OMPL's ``RRTConnect`` with the same ``range``
-on the SpaceInformation's validators (``compiled`` tells which ran). Falling back rather than
-rejecting keeps the id usable from every entry point (``maru-plan``, the node) whatever the
-collision model.
+**Other checkers** (the exact pinocchio/coal checker, the tests' toy checkers, a sphere checker
+without numba, no edge checker): the kernel cannot call them, so the planner falls back to OMPL's
+``RRTConnect`` with the same ``range`` on the SpaceInformation's validators (``compiled`` tells
+which ran). Falling back rather than rejecting keeps the id usable from every entry point
+(``maru-plan``, the node) whatever the collision model.
 """
 
 from __future__ import annotations
@@ -104,7 +104,8 @@ class CompiledRRTConnect(ob.Planner):
     @property
     def compiled(self) -> bool:
         """Whether solve() runs the compiled kernel (a sphere checker) rather than the OMPL fallback."""
-        return self._edges is not None and is_sphere_checker(self._edges.checker)
+        edges = self._edges
+        return edges is not None and is_sphere_checker(edges.checker) and edges.checker.use_numba
 
     # --- hooks the MotionPlanner facade reads (maru_planner.planning.registry) ----------------
     def graph_size(self) -> tuple[int, int]:
