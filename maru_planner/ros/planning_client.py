@@ -252,12 +252,12 @@ class PlanGoal:
 
     def cancel(self, timeout: float = 30.0) -> bool:
         """Ask the node to cancel the goal; whether it accepted (False once the goal has ended)."""
-        response = _wait(self.handle.cancel_goal_async(), timeout, "plan_motion cancel")
+        response = wait_for_future(self.handle.cancel_goal_async(), timeout, "plan_motion cancel")
         return len(response.goals_canceling) > 0
 
     def result(self, timeout: float = 120.0) -> tuple[int, PlanMotionAction.Result]:
         """(``action_msgs/GoalStatus`` status, result) once the goal has ended: SUCCEEDED, ABORTED or CANCELED."""
-        response = _wait(self._result, timeout, "plan_motion result")
+        response = wait_for_future(self._result, timeout, "plan_motion result")
         return response.status, response.result
 
 
@@ -279,13 +279,13 @@ def send_plan_goal(
     if not client.wait_for_server(timeout_sec=timeout):
         raise TimeoutError(f"no plan_motion action server after {timeout} s")
     on_feedback = None if feedback_callback is None else (lambda message: feedback_callback(message.feedback))
-    handle = _wait(client.send_goal_async(goal, feedback_callback=on_feedback), timeout, "plan_motion goal")
+    handle = wait_for_future(client.send_goal_async(goal, feedback_callback=on_feedback), timeout, "plan_motion goal")
     if not handle.accepted:
         raise RuntimeError("plan_motion rejected the goal")
     return PlanGoal(handle)
 
 
-def _wait(future: Future, timeout: float, what: str):
+def wait_for_future(future: Future, timeout: float, what: str):
     """The result of an rclpy future that an executor thread completes (blocks without polling)."""
     answered = threading.Event()
     future.add_done_callback(lambda _future: answered.set())

@@ -13,7 +13,11 @@ with a reason (read-only ones: the robot, the start-up scene, the frame, executo
 Concurrency and admission: service callbacks are coroutines. They hand the core call to a
 :class:`WorkerPool` of ``workers`` threads, each owning its own robot model, collision checker
 and planner (pinocchio data and OMPL set-ups are not shared between threads), and ``await``
-the answer, so no executor thread is held while a plan runs. At most ``workers + queue_size``
+the answer, so no executor thread is held while a plan runs. With ``worker_processes`` (the
+default) each thread hands its plan to one of ``workers`` worker processes
+(:class:`~maru_planner.planning.process_pool.ProcessPool`: own OMPL, model and scene, brought to the
+node's scene before the next plan), so concurrent plans run on every core; threads alone take turns
+in OMPL (one process-wide lock). At most ``workers + queue_size``
 requests are admitted (planning or waiting); one more is answered BUSY at once. Time spent
 waiting counts against the request's own budget. The services' QoS queue
 (``request_queue_depth``) is deeper than that, so the middleware drops no request before the
@@ -35,6 +39,7 @@ import itertools
 import math
 import queue
 import sys
+import tempfile
 import threading
 import time
 from collections.abc import Callable
@@ -44,14 +49,13 @@ from typing import Any
 
 import numpy as np
 import rclpy
-from rclpy.action import ActionServer, CancelResponse
-from rclpy.action.server import ServerGoalHandle
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
 from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.task import Future
+from rclpy.wait_for_message import wait_for_message
 from sensor_msgs.msg import JointState
 from std_msgs.msg import String
 from trajectory_msgs.msg import JointTrajectory
@@ -63,13 +67,16 @@ from maru_planner.params import ParamSpec, dataclass_params, param
 from maru_planner.paths import config_path, urdf_path
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig
 from maru_planner.planning.config import PLANNER_CONFIG_PARAMS
+from maru_planner.planning.process_pool import ProcessPool, RobotSource
 from maru_planner.planning.registry import PLANNERS
 from maru_planner.robot import RobotModel
 from maru_planner.robot.ik import solve_ik
 from maru_planner.ros import parameters
 from maru_planner.ros import planning_conversions as conv
 from maru_planner.ros.env import network_from_environment
+from maru_planner.ros.lifecycle import ManagedNode
 from maru_planner.ros.markers import plan_markers, scene_markers
+from maru_planner.ros.plan_actions import PlanActionServer
 from maru_planner.scene import Obstacle, Scene
 from maru_planner_interfaces.action import PlanMotion as PlanMotionAction
 from maru_planner_interfaces.msg import PlanningError, SceneObstacle
@@ -83,7 +90,6 @@ PLANNER_PREFIX = "planners"
 
 LATCHED = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL, reliability=ReliabilityPolicy.RELIABLE)
 JOINT_STATES_DEPTH = 10  # only the newest state matters; a deep queue of junk messages would only cost memory
-CANCEL_SETTLE_TIMEOUT = 1.0  # s a finished goal waits for rclpy to mark its accepted cancel (microseconds in practice)
 
 
 @dataclass
@@ -94,6 +100,27 @@ class NodeSettings:
     robot_srdf: str = param("", "SRDF file; empty = the package's urdf/maru1_upper_body.srdf", read_only=True)
     package_dirs: list[str] = param(
         default_factory=list, description="extra directories that resolve package:// mesh URIs", read_only=True
+    )
+    robot_description: str = param(
+        "", "URDF XML as robot_state_publisher takes it; set: used instead of robot_urdf", read_only=True
+    )
+    robot_description_semantic: str = param(
+        "", "SRDF XML (MoveIt's parameter); set: used instead of robot_srdf", read_only=True
+    )
+    robot_description_source: str = param(
+        "parameter",
+        "where the URDF comes from: parameter (robot_description if set, else robot_urdf) or topic (the "
+        "latched robot_description topic of robot_state_publisher, waited for when configuring)",
+        choices=("parameter", "topic"),
+        read_only=True,
+    )
+    robot_description_timeout: float = param(
+        10.0, "s configuring waits for the robot_description topic (source topic)", lower=0.1, upper=3600.0
+    )
+    publish_robot_description: bool = param(
+        False,
+        "publish the URDF on the latched robot_description topic, for setups without robot_state_publisher",
+        read_only=True,
     )
     planning_frame: str = param(
         "base_link", "frame of goal poses, obstacles, trajectories and markers (the URDF root)", read_only=True
@@ -114,6 +141,12 @@ class NodeSettings:
         read_only=True,
     )
     workers: int = param(2, "planning threads, each with its own robot model, checker and planner", lower=1, upper=32)
+    worker_processes: bool = param(
+        True,
+        "each planning thread hands its plans to a worker process (own OMPL, robot model and scene), so "
+        "concurrent plans use every core; false: plans run in the threads, whose OMPL searches take turns",
+        read_only=True,
+    )
     queue_size: int = param(
         16, "requests admitted to wait for a busy worker; beyond workers + queue_size: BUSY", lower=0, upper=1024
     )
@@ -160,13 +193,18 @@ def planner_config(values: dict[str, Any], base: PlannerConfig | None = None) ->
 
 
 class PlanningContext:
-    """Everything one worker thread needs to plan: its own robot, checker and planner."""
+    """Everything one worker thread needs to plan: its own robot, checker and planner.
 
-    def __init__(self, robot, checker, planner, scene_version: int):
+    With ``processes`` (``worker_processes``), plans go to those worker processes; the thread's own
+    robot and checker answer IK.
+    """
+
+    def __init__(self, robot, checker, planner, scene_version: int, processes: ProcessPool | None = None):
         self.robot = robot
         self.checker = checker
         self.planner = planner
         self.scene_version = scene_version
+        self.processes = processes
 
 
 class WorkerPool:
@@ -269,11 +307,12 @@ def _apply_obstacle(scene, msg: SceneObstacle, frame: str) -> None:
         raise errors.InvalidScene(f"obstacle '{msg.name}': operation {msg.operation} is not ADD, MOVE or REMOVE")
 
 
-class PlanningNode(Node):
-    """Plan, IK and scene services for the upper-body arm planner."""
+class PlanningNode(ManagedNode):
+    """Plan, IK and scene services for the upper-body arm planner; a managed node (:mod:`..lifecycle`)."""
 
     def __init__(self, **kwargs):
-        """Raises ``errors.InvalidParameter`` (one line) for a parameter of the wrong type or out of range."""
+        """Raises ``errors.InvalidParameter`` (one line) for a parameter of the wrong type or out of range,
+        and with ``autostart`` what configuring raises (robot or scene files)."""
         super().__init__(NODE_NAME, **kwargs)
         self._specs = parameter_specs()
         values = parameters.declare_parameters(self, self._specs)
@@ -285,15 +324,26 @@ class PlanningNode(Node):
         self._last_plan_markers = None
         self._marker_lock = threading.Lock()  # plan_markers uses self._robot's shared pinocchio data
         self._marker_subscribers = 0
+        self._pool_lock = threading.Lock()
+        self._processes: ProcessPool | None = None  # worker_processes: kept (reconfigured) across pool rebuilds
+        self._description_dir: tempfile.TemporaryDirectory | None = None  # URDF/SRDF given as XML text
+        parameters.add_on_set_parameters_callback(self, self._specs, self.when_configured(self._apply_parameters))
+        self.start()
 
+    # ------------------------------------------------------------ lifecycle
+
+    def configure(self) -> None:
+        """Read the parameters, load the robot and scene, start the workers, create topics and services."""
+        values = {name: parameters.read_parameter(self, name, spec) for name, spec in self._specs.items()}
+        self.settings = NodeSettings(**{name: values[name] for name in NODE_PARAMS})
+        self.config = _checked_config(lambda: planner_config(values))
+        self._description_files = self._robot_description_files()
         self._robot = self._make_robot()  # read-only use in the executor threads (names, markers)
         self._joint_names = frozenset(self._robot.joint_names)
         _check_group(self._robot, self.settings.default_group)
         self._scene = SceneStore(self._load_scene_dict())
-        self._pool_lock = threading.Lock()
         self._pool = self._make_pool(self.config, self.settings)
         self._make_interfaces()
-        parameters.add_on_set_parameters_callback(self, self._specs, self._apply_parameters)
         self.get_logger().info(
             f"ready: robot {len(self._robot.joint_names)} joints, groups {sorted(self._robot.groups)}, "
             f"scene {len(self._scene.snapshot()[0].get('obstacles', []))} obstacles, "
@@ -302,25 +352,82 @@ class PlanningNode(Node):
 
     # ------------------------------------------------------------ set-up
 
+    def activate(self) -> None:
+        self._marker_subscribers = 0  # the marker timer sends the scene to whoever listens now
+        if self._description_pub is not None:
+            self._description_pub.publish(String(data=Path(self._robot_files()[0]).read_text()))
+
+    def cleanup(self) -> None:
+        with self._pool_lock:
+            self._pool.close()
+            if self._processes is not None:
+                self._processes.close()
+        with self._joints_lock:
+            self._latest_joints.clear()
+        self._last_plan_markers = None
+        if self._description_dir is not None:
+            self._description_dir.cleanup()
+            self._description_dir = None
+
+    # ------------------------------------------------------------ set-up
+
     def _robot_files(self) -> tuple[str, str, list[str]]:
-        urdf = self.settings.robot_urdf or str(urdf_path(DEFAULT_URDF))
-        srdf = self.settings.robot_srdf or str(urdf_path(DEFAULT_SRDF))
-        package_dirs = [d for d in self.settings.package_dirs if d]
-        return urdf, srdf, package_dirs
+        urdf, srdf = self._description_files
+        return urdf, srdf, [d for d in self.settings.package_dirs if d]
+
+    def _robot_description_files(self) -> tuple[str, str]:
+        """URDF and SRDF files: robot_description(_semantic) XML written to a private directory, else the files."""
+        settings = self.settings
+        if settings.robot_description_source == "topic" and settings.publish_robot_description:
+            raise errors.InvalidParameter(
+                "publish_robot_description would echo the robot_description topic it reads "
+                "(robot_description_source topic); set one of them"
+            )
+        urdf_xml = settings.robot_description
+        if settings.robot_description_source == "topic":
+            urdf_xml = wait_for_robot_description(self, settings.robot_description_timeout)
+        urdf = self._written("robot_description.urdf", urdf_xml) if urdf_xml else settings.robot_urdf
+        srdf_xml = settings.robot_description_semantic
+        srdf = self._written("robot_description_semantic.srdf", srdf_xml) if srdf_xml else settings.robot_srdf
+        return urdf or str(urdf_path(DEFAULT_URDF)), srdf or str(urdf_path(DEFAULT_SRDF))
+
+    def _written(self, name: str, text: str) -> str:
+        if self._description_dir is None:
+            self._description_dir = tempfile.TemporaryDirectory(prefix=f"{NODE_NAME}_")
+        path = Path(self._description_dir.name) / name
+        path.write_text(text)
+        return str(path)
 
     def _make_robot(self) -> RobotModel:
         urdf, srdf, package_dirs = self._robot_files()
         return RobotModel.from_urdf(urdf, srdf, package_dirs=package_dirs or None)
 
-    def _make_context(self, config: PlannerConfig) -> PlanningContext:
+    def _make_context(self, config: PlannerConfig, processes: ProcessPool | None) -> PlanningContext:
         robot = self._make_robot()
         scene_dict, version = self._scene.snapshot()
         planner = MotionPlanner.from_scene(robot, Scene.from_dict(scene_dict), config)
-        return PlanningContext(robot, planner.checker, planner, version)
+        return PlanningContext(robot, planner.checker, planner, version, processes)
 
     def _make_pool(self, config: PlannerConfig, settings: NodeSettings) -> WorkerPool:
-        contexts = [self._make_context(config) for _ in range(settings.workers)]
+        processes = self._reconfigured_processes(config, settings)
+        contexts = [self._make_context(config, processes) for _ in range(settings.workers)]
+        if processes is not None:
+            processes.wait_ready()  # the workers build their planners meanwhile, in parallel
         return WorkerPool(contexts, settings.queue_size)
+
+    def _reconfigured_processes(self, config: PlannerConfig, settings: NodeSettings) -> ProcessPool | None:
+        """The worker processes (``worker_processes``), started once, then given ``config`` and ``workers``."""
+        if not settings.worker_processes:
+            return None
+        if self._processes is None or self._processes.closed:
+            urdf, srdf, package_dirs = self._robot_files()
+            scene_dict, version = self._scene.snapshot()
+            source = RobotSource(urdf, srdf, tuple(package_dirs))
+            self._processes = ProcessPool(source, scene_dict, config, settings.workers, scene_version=version)
+        else:
+            self._processes.set_config(config)
+            self._processes.resize(settings.workers)
+        return self._processes
 
     def _load_scene_dict(self) -> dict:
         scene_file = self.settings.scene_file
@@ -346,7 +453,7 @@ class PlanningNode(Node):
             (ApplyScene, "apply_scene", self._on_apply_scene),
             (GetScene, "get_scene", self._on_get_scene),
         ):
-            self.create_service(srv_type, name, callback, qos_profile=requests, callback_group=services)
+            self.create_managed_service(srv_type, name, callback, qos_profile=requests, callback_group=services)
         self.create_subscription(
             JointState,
             "/joint_states",
@@ -361,28 +468,31 @@ class PlanningNode(Node):
             50,
             callback_group=MutuallyExclusiveCallbackGroup(),
         )
-        self._trajectory_pub = self.create_publisher(JointTrajectory, "~/planned_trajectory", LATCHED)
-        self._marker_pub = self.create_publisher(MarkerArray, "~/markers", 10)
-        description = self.create_publisher(String, "robot_description", LATCHED)
-        description.publish(String(data=Path(self._robot_files()[0]).read_text()))
-        self._description_pub = description
+        self._trajectory_pub = self.create_lifecycle_publisher(JointTrajectory, "~/planned_trajectory", LATCHED)
+        self._marker_pub = self.create_lifecycle_publisher(MarkerArray, "~/markers", 10)
+        self._description_pub = (
+            self.create_lifecycle_publisher(String, "robot_description", LATCHED)
+            if self.settings.publish_robot_description
+            else None
+        )
         self._marker_timer = self.create_timer(
             self.settings.marker_period, self._on_marker_timer, callback_group=MutuallyExclusiveCallbackGroup()
         )
         self._make_plan_action(services, requests)
 
     def _make_plan_action(self, callback_group: ReentrantCallbackGroup, requests: QoSProfile) -> None:
-        self._goal_monitors: dict[bytes, PlanMonitor] = {}
-        self._plan_action = ActionServer(
+        self._plan_action = PlanActionServer(
             self,
             PlanMotionAction,
             "plan_motion",
-            self._execute_plan_goal,
+            plan=lambda goal, monitor: self._answer_plan(
+                goal, PlanMotionAction.Result(), "plan_motion action", monitor
+            ),
+            succeeded=lambda result: result.error.code == PlanningError.SUCCESS,
+            feedback=_feedback_msg,
+            period=lambda: self.settings.feedback_period,
             callback_group=callback_group,
-            handle_accepted_callback=self._on_plan_goal_accepted,
-            cancel_callback=self._on_plan_goal_cancel,
-            goal_service_qos_profile=requests,
-            result_service_qos_profile=requests,
+            requests_qos=requests,
         )
 
     # ------------------------------------------------------------ run-time parameter changes
@@ -435,12 +545,17 @@ class PlanningNode(Node):
         return future
 
     def _sync_scene(self, context: PlanningContext) -> None:
-        if context.scene_version == self._scene.version:
+        """Bring the context's planner (and the worker processes) to the node's latest scene."""
+        processes = context.processes
+        latest = self._scene.version
+        if context.scene_version == latest and (processes is None or processes.scene_version >= latest):
             return
         scene_dict, version = self._scene.snapshot()
         if context.scene_version != version:
             context.planner.set_scene(Scene.from_dict(scene_dict))
             context.scene_version = version
+        if processes is not None:
+            processes.set_scene(scene_dict, version)
 
     # ------------------------------------------------------------ topics
 
@@ -527,44 +642,6 @@ class PlanningNode(Node):
             f"core {answer.planning_time:.3f} s, in node {time.perf_counter() - started:.3f} s"
         )
         return answer
-
-    # ------------------------------------------------------------ plan_motion action
-
-    def _on_plan_goal_accepted(self, goal_handle: ServerGoalHandle) -> None:
-        """Every goal is accepted (its result says what was wrong); its monitor exists before a cancel can come."""
-        self._goal_monitors[bytes(goal_handle.goal_id.uuid)] = PlanMonitor()
-        goal_handle.execute()
-
-    def _on_plan_goal_cancel(self, goal_handle: ServerGoalHandle) -> CancelResponse:
-        monitor = self._goal_monitors.get(bytes(goal_handle.goal_id.uuid))
-        if monitor is not None:
-            monitor.cancel()
-        return CancelResponse.ACCEPT
-
-    async def _execute_plan_goal(self, goal_handle: ServerGoalHandle) -> PlanMotionAction.Result:
-        """Plan the goal with feedback every ``feedback_period``; SUCCEEDED, CANCELED or ABORTED with the result."""
-        key = bytes(goal_handle.goal_id.uuid)
-        monitor = self._goal_monitors[key]
-        goal_handle.publish_feedback(_feedback_msg(monitor.snapshot()))
-        feedback_timer = self.create_timer(
-            self.settings.feedback_period,
-            lambda: goal_handle.publish_feedback(_feedback_msg(monitor.snapshot())),
-            callback_group=MutuallyExclusiveCallbackGroup(),
-        )
-        try:
-            result = await self._answer_plan(
-                goal_handle.request, PlanMotionAction.Result(), "plan_motion action", monitor
-            )
-        finally:
-            self.destroy_timer(feedback_timer)
-            del self._goal_monitors[key]
-        if result.error.code == PlanningError.SUCCESS:
-            goal_handle.succeed()
-        elif monitor.cancelled and _cancel_settled(goal_handle):
-            goal_handle.canceled()
-        else:
-            goal_handle.abort()
-        return result
 
     def _publish_plan(self, trajectory_msg: JointTrajectory, trajectory, start: dict[str, float]) -> None:
         """Publish the last plan on ~/planned_trajectory and, when someone listens, its hand paths."""
@@ -669,10 +746,32 @@ class PlanningNode(Node):
     def _log_failure(self, service: str, error: PlanningError) -> None:
         self.get_logger().warning(f"{service}: {conv.code_name(error.code)}: {error.message}")
 
-    def destroy_node(self):
-        with self._pool_lock:
-            self._pool.close()
-        return super().destroy_node()
+
+def wait_for_robot_description(node: Node, timeout: float) -> str:
+    """The URDF on ``node``'s latched ``robot_description`` topic (robot_state_publisher's), read by a helper node.
+
+    The helper node (same context, not spun by any executor) keeps the wait off the node's executor,
+    which may be running the configure transition that asks.
+    """
+    topic = node.resolve_topic_name("robot_description")
+    reader = rclpy.create_node(
+        f"{node.get_name()}_description_reader",
+        namespace=node.get_namespace(),
+        context=node.context,
+        use_global_arguments=False,
+        start_parameter_services=False,
+        enable_rosout=False,
+    )
+    try:
+        received, msg = wait_for_message(String, reader, topic, qos_profile=LATCHED, time_to_wait=timeout)
+    finally:
+        reader.destroy_node()
+    if not received or not msg.data.strip():
+        raise errors.InvalidParameter(
+            f"robot_description_source is topic, but no URDF arrived on {topic} within {timeout} s "
+            "(is robot_state_publisher running?)"
+        )
+    return msg.data
 
 
 def _checked_config(build: Callable[[], PlannerConfig]) -> PlannerConfig:
@@ -710,7 +809,8 @@ def _plan_in_context(
     context: PlanningContext, motion_request: MotionRequest, deadline: float, monitor: PlanMonitor | None
 ):
     budget = _time_left(deadline, "allowed_planning_time")
-    return context.planner.plan(dataclasses.replace(motion_request, time_budget=budget), monitor)
+    planner = context.processes or context.planner
+    return planner.plan(dataclasses.replace(motion_request, time_budget=budget), monitor)
 
 
 def _feedback_msg(progress: Progress) -> PlanMotionAction.Feedback:
@@ -720,18 +820,6 @@ def _feedback_msg(progress: Progress) -> PlanMotionAction.Feedback:
         nodes=int(progress.info.get("nodes", 0)),
         best_cost=float(progress.info.get("best_cost", math.nan)),
     )
-
-
-def _cancel_settled(goal_handle: ServerGoalHandle) -> bool:
-    """Whether the goal is CANCELING (only then may it end CANCELED).
-
-    The cancel callback stops the plan before rclpy marks the goal CANCELING, so a plan that stops at
-    once may finish first; the mark follows within microseconds on the cancelling executor thread.
-    """
-    deadline = time.monotonic() + CANCEL_SETTLE_TIMEOUT
-    while not goal_handle.is_cancel_requested and time.monotonic() < deadline:
-        time.sleep(0.0005)
-    return goal_handle.is_cancel_requested
 
 
 def _ik_in_context(context: PlanningContext, group, targets, seed, strict, deadline, avoid_collisions) -> np.ndarray:
