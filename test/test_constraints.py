@@ -9,6 +9,7 @@ import pytest
 
 from maru_planner.planning import MotionPlanner, MotionRequest, PlanStatus
 from maru_planner.planning.constraints import OrientationConstraint, PathConstraints, PositionConstraint
+from maru_planner.planning.dual_arm import DUAL_CARRY, relative_pose_error
 from maru_planner.robot import RobotModel
 from maru_planner.scene import Scene
 
@@ -121,3 +122,15 @@ def test_constraint_impossible_at_the_start_unknown_link_and_unsupported_planner
     assert plan(_upright(robot, q0), "PRM").status is PlanStatus.INVALID_PLANNER
     with pytest.raises(ValueError, match="tolerance"):
         OrientationConstraint(LINK, np.eye(3), np.array([0.1, -1.0, 0.1]))
+
+
+def test_dual_arm_carry_keeps_the_hands_relative_pose():
+    robot = RobotModel.maru1()
+    result = MotionPlanner.from_scene(robot, DUAL_CARRY.scene()).plan(DUAL_CARRY.request(robot, seed=1))
+    assert result.success and result.stats.certified, result.message
+    assert abs(result.trajectory.positions[-1, 0] - result.trajectory.positions[0, 0]) == pytest.approx(1.0)
+    translation, rotation = relative_pose_error(robot, DUAL_CARRY, result.trajectory.positions)
+    # per-component tolerances of 1 mm and 0.01 rad bound the norms by sqrt(3) times that
+    assert translation.max() <= math.sqrt(3) * 1e-3 and rotation.max() <= math.sqrt(3) * 1e-2
+    straight = np.linspace(DUAL_CARRY.start, DUAL_CARRY.goal, 21)
+    assert relative_pose_error(robot, DUAL_CARRY, straight)[0].max() > 2e-3  # planning was needed

@@ -23,7 +23,7 @@ import pinocchio as pin
 from maru_planner import errors
 from maru_planner.scene import pose_matrix, rpy_matrix
 
-WORLD = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+LOCAL = pin.ReferenceFrame.LOCAL
 PROJECTION_ITERATIONS = 30
 PROJECTION_TOLERANCE = 1e-4  # rad / m: how far inside each bound projection aims (then the bound holds)
 
@@ -69,18 +69,58 @@ class PositionConstraint:
 
 
 @dataclass(frozen=True)
+class RelativePoseConstraint:
+    """``link_b``'s pose in ``link_a``'s frame kept at ``relative`` (two hands carrying one object).
+
+    The error is ``e = log6(relative^-1 T_a^-1 T_b)`` (translation; rotation vector, in ``link_b``'s frame);
+    each translation component must stay within ``position_tolerance`` m, each rotation component within
+    ``orientation_tolerance`` rad.
+    """
+
+    link_a: str
+    link_b: str
+    relative: np.ndarray  # (4, 4)
+    position_tolerance: float = 1e-3
+    orientation_tolerance: float = 1e-2
+
+    def __post_init__(self) -> None:
+        _check_matrix(self.relative, (4, 4), f"relative pose constraint {self.link_a!r}-{self.link_b!r}")
+        for name in ("position_tolerance", "orientation_tolerance"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise errors.InvalidRequest(f"relative pose constraint: {name} must be finite and > 0, got {value}")
+
+    @property
+    def tolerance(self) -> np.ndarray:
+        return np.r_[np.full(3, self.position_tolerance), np.full(3, self.orientation_tolerance)]
+
+    def error(self, pose_a: np.ndarray, pose_b: np.ndarray) -> np.ndarray:
+        """The 6-vector e (module doc)."""
+        actual = np.linalg.solve(pose_a, pose_b)
+        return pin.log6(pin.SE3(np.linalg.solve(self.relative, actual))).vector
+
+    @classmethod
+    def held(cls, robot, q: np.ndarray, link_a: str, link_b: str, **tolerances: float) -> RelativePoseConstraint:
+        """The relative pose the two links have at ``q``, to be kept."""
+        pose_a, pose_b = robot.frame_pose(q, link_a).copy(), robot.frame_pose(q, link_b)
+        return cls(link_a, link_b, np.linalg.solve(pose_a, pose_b), **tolerances)
+
+
+@dataclass(frozen=True)
 class PathConstraints:
-    """An orientation and/or a position constraint (either may be None)."""
+    """An orientation, a position and/or a relative-pose constraint (each may be None)."""
 
     orientation: OrientationConstraint | None = None
     position: PositionConstraint | None = None
+    relative: RelativePoseConstraint | None = None
 
     @property
     def empty(self) -> bool:
-        return self.orientation is None and self.position is None
+        return self.orientation is None and self.position is None and self.relative is None
 
     def links(self) -> list[str]:
-        return [c.link for c in (self.orientation, self.position) if c is not None]
+        links = [c.link for c in (self.orientation, self.position) if c is not None]
+        return links + ([self.relative.link_a, self.relative.link_b] if self.relative is not None else [])
 
     def check_links(self, robot) -> None:
         """InvalidLink for a constrained link the robot does not have."""
@@ -95,6 +135,10 @@ class PathConstraints:
             orientation = float(self.orientation.excess(robot.frame_pose(q, self.orientation.link))[1].max())
         if self.position is not None:
             position = float(np.linalg.norm(self.position.excess(robot.frame_pose(q, self.position.link))[1]))
+        if self.relative is not None:
+            c = self.relative
+            excess = np.abs(c.error(robot.frame_pose(q, c.link_a).copy(), robot.frame_pose(q, c.link_b))) - c.tolerance
+            position, orientation = max(position, excess[:3].max(), 0.0), max(orientation, excess[3:].max(), 0.0)
         return orientation, position
 
     def satisfied(self, robot, q: np.ndarray, slack: float = 0.0) -> bool:
@@ -141,7 +185,26 @@ class PathConstraints:
             for i in np.flatnonzero(out > 0):
                 rows.append(J[i])
                 residual.append(local[i] - math.copysign(half[i] - PROJECTION_TOLERANCE, local[i]))
+        if self.relative is not None:
+            self._relative_rows(robot, q, indices, keep, rows, residual)
         return np.array(rows).reshape(len(rows), len(indices)), np.array(residual)
+
+    def _relative_rows(self, robot, q, indices, keep: float, rows: list, residual: list) -> None:
+        """Rows of the relative-pose error: d e = Jlog6 (J_b - Ad(T_b^-1 T_a) J_a) dq, all in the local frames."""
+        c = self.relative
+        data = robot.model.createData()
+        pin.computeJointJacobians(robot.model, data, q)
+        fa, fb = robot.frame_id(c.link_a), robot.frame_id(c.link_b)
+        oMa, oMb = pin.updateFramePlacement(robot.model, data, fa), pin.updateFramePlacement(robot.model, data, fb)
+        J_a = pin.getFrameJacobian(robot.model, data, fa, LOCAL)[:, indices]
+        J_b = pin.getFrameJacobian(robot.model, data, fb, LOCAL)[:, indices]
+        error = pin.SE3(c.relative).actInv(oMa.actInv(oMb))
+        e = pin.log6(error).vector
+        J = pin.Jlog6(error) @ (J_b - oMb.actInv(oMa).action @ J_a)
+        bound = c.tolerance * keep
+        for i in np.flatnonzero(np.abs(e) > bound):
+            rows.append(J[i])
+            residual.append(e[i] - math.copysign(bound[i] - PROJECTION_TOLERANCE, e[i]))
 
     @classmethod
     def from_dict(cls, d: dict | None) -> PathConstraints:
