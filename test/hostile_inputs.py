@@ -364,6 +364,67 @@ def apply_scene_requests(draw):
     return req
 
 
+@dataclass
+class BurstResult:
+    """Answers to ``clients`` simultaneous plan_motion calls: seconds to each answer, codes, lost ones."""
+
+    clients: int
+    latencies: list[float]
+    codes: list[int]
+    lost: int
+
+    def count(self, code: int) -> int:
+        return self.codes.count(code)
+
+    def summary(self) -> dict:
+        latencies = sorted(self.latencies) or [math.nan]
+        return {"clients": self.clients, "answered": len(self.codes), "success": self.count(PlanningError.SUCCESS),
+                "busy": self.count(PlanningError.BUSY), "lost": self.lost,
+                "other": len(self.codes) - self.count(PlanningError.SUCCESS) - self.count(PlanningError.BUSY),
+                "p50_s": _percentile(latencies, 50), "p95_s": _percentile(latencies, 95), "max_s": latencies[-1]}
+
+
+def _percentile(values: list[float], q: float) -> float:
+    index = min(len(values) - 1, max(0, math.ceil(q / 100.0 * len(values)) - 1))
+    return values[index]
+
+
+def plan_burst(spinning, clients: int = 64, budget: float = 5.0) -> BurstResult:
+    """``clients`` plan_motion clients, each matched first, call at once (small right-arm moves).
+
+    Every client's response reader sees all the burst's answers (one reply topic per service), so
+    each keeps a queue twice as deep as the burst.
+    """
+    from rclpy.qos import QoSProfile
+
+    from maru_planner.ros.planning_client import call_until_answered, plan_request
+
+    node = spinning.node
+    deep = QoSProfile(depth=2 * clients)
+    callers = [node.create_client(PlanMotion, "plan_motion", qos_profile=deep) for _ in range(clients)]
+    try:
+        for caller in callers:
+            assert caller.wait_for_service(timeout_sec=60.0), "plan_motion never appeared"
+            call_until_answered(caller, PlanMotion.Request(), timeout=60.0)
+        goals = [{**PAPER_START, "r_arm_j4": PAPER_START["r_arm_j4"] + 0.2 + 0.002 * i} for i in range(clients)]
+        started = time.monotonic()
+        futures = [caller.call_async(plan_request(goal, start=PAPER_START, planner_id="RRTConnect",
+                                                  time_budget=budget, seed=i))
+                   for i, (caller, goal) in enumerate(zip(callers, goals, strict=True))]  # fmt: skip
+        answered_at: dict[int, float] = {}
+        deadline = started + budget + LOST_AFTER
+        while len(answered_at) < clients and time.monotonic() < deadline:
+            for i, future in enumerate(futures):
+                if i not in answered_at and future.done():
+                    answered_at[i] = time.monotonic() - started
+            time.sleep(0.001)
+        codes = [futures[i].result().error.code for i in sorted(answered_at)]
+        return BurstResult(clients, [answered_at[i] for i in sorted(answered_at)], codes, clients - len(answered_at))
+    finally:
+        for caller in callers:
+            node.destroy_client(caller)
+
+
 # ---------------------------------------------------------------- base_planner_node requests
 
 BASE_PLANNER_IDS = ["", "astar", "se2", "mspp", "mspp_local", "tunnel", "biped_track", "biped_wall"]
@@ -891,6 +952,12 @@ class PlanningNodeTarget:
     def restore_scene(self) -> None:
         self.client.apply_scene(self.initial_scene, clear=True)
 
+    def junk_joint_states(self, count: int) -> None:
+        """``count`` well-formed /joint_states of 100 junk names (and a NaN for a real joint) each."""
+        for i in range(count):
+            names = [f"junk_{i}_{k}" for k in range(100)] + ["waist_yaw"]
+            self.joint_states.publish(joint_state_msg(names, [0.1 * k for k in range(100)] + [math.nan]))
+
     def good_state_is_used(self, state: dict[str, float] = PAPER_START, timeout: float = 60.0) -> bool:
         """Publish ``state`` until a plan with an empty start starts there (topics and services are unordered)."""
         deadline = time.monotonic() + timeout
@@ -974,6 +1041,14 @@ class BaseNodeTarget:
         self.map_pub.publish(message)
         alive, traceback = self.process.alive(), "Traceback" in self.watch.new_text()
         return Outcome(proper_error=True, crash=not alive, traceback=traceback, detail="published /map")
+
+    def junk_maps(self, count: int) -> None:
+        """``count`` 100 x 100 maps of junk values, half of them malformed (one value short)."""
+        junk = OccupancyGrid()
+        junk.info.width, junk.info.height, junk.info.resolution = 100, 100, 0.05
+        for i in range(count):
+            junk.data = [i % 100] * (10_000 if i % 2 else 9_999)
+            self.map_pub.publish(junk)
 
     def good_request(self):
         req = PlanBasePath.Request(planner_id="mspp", allowed_planning_time=5.0)
@@ -1080,6 +1155,14 @@ class ReactiveNodeTarget:
     def callback_errors(self) -> int:
         found = re.findall(r"\bcallback errors (\d+)", self.process.log())
         return int(found[-1]) if found else -1
+
+    def junk_scans(self, count: int) -> None:
+        """``count`` scans stamped in the past, with NaN or negative ranges."""
+        junk = synthetic_scan(1.0)
+        for i in range(count):
+            junk.header.stamp.sec = i % 900
+            junk.ranges[i % len(junk.ranges)] = math.nan if i % 3 else -1.0
+            self.client.scan_pub.publish(junk)
 
     def good_step(self):
         """Good odometry + scan after the good goal: the command must move the base, within the limits."""

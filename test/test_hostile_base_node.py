@@ -65,11 +65,7 @@ def test_hostile_maps_then_a_good_map_recovers(node):
 
 def test_rss_over_10000_junk_maps(node):
     before = rss_mb(node.process.proc.pid)
-    junk = node.good_map.__class__()
-    junk.info.width, junk.info.height, junk.info.resolution = 100, 100, 0.05
-    for i in range(JUNK_MAPS):
-        junk.data = [i % 100] * (10_000 if i % 2 else 9_999)  # half of them malformed (size mismatch)
-        node.map_pub.publish(junk)
+    node.junk_maps(JUNK_MAPS)
     assert node.restore_map(), "no known-good plan after the junk maps"
     after = rss_mb(node.process.proc.pid)
     MEASURED.append(f"base_planner_node RSS {before:.1f} MB -> {after:.1f} MB over {JUNK_MAPS} junk /map messages")

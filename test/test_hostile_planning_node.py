@@ -90,13 +90,9 @@ def test_hostile_joint_states_are_never_stored(node):
 
 
 def test_rss_over_10000_junk_joint_states(node):
-    from maru_planner.ros.planning_conversions import joint_state_msg
-
     assert node.good_state_is_used()
     before = rss_mb(node.process.proc.pid)
-    for i in range(JUNK_MESSAGES):
-        names = [f"junk_{i}_{k}" for k in range(100)] + ["waist_yaw"]
-        node.joint_states.publish(joint_state_msg(names, [0.1 * k for k in range(100)] + [float("nan")]))
+    node.junk_joint_states(JUNK_MESSAGES)
     assert node.good_state_is_used(), "the node no longer takes /joint_states after the junk"
     after = rss_mb(node.process.proc.pid)
     MEASURED.append(f"planning_node RSS {before:.1f} MB -> {after:.1f} MB over {JUNK_MESSAGES} junk /joint_states")

@@ -30,7 +30,7 @@ from maru_planner.base.budget import DEFAULT_TIME_LIMIT
 from maru_planner.base.footprint import disc, rectangle
 from maru_planner.base.grid import OccupancyGrid
 from maru_planner.base.result import BasePlanResult, PlanStatus
-from maru_planner.errors import InvalidRequest, MaruError
+from maru_planner.errors import InvalidRequest, MaruError, one_line
 
 PROG = "maru-base-plan"
 EXIT_SOLVED, EXIT_NO_PATH, EXIT_BAD_INPUT, EXIT_OUTPUT = 0, 1, 2, 3
@@ -45,7 +45,7 @@ class _Parser(argparse.ArgumentParser):
     """argparse with a one-line error (no usage dump) and the bad-input exit code."""
 
     def error(self, message: str) -> NoReturn:
-        self.exit(EXIT_BAD_INPUT, f"{PROG}: {message}\n")
+        self.exit(EXIT_BAD_INPUT, f"{PROG}: {one_line(message)}\n")
 
 
 def parse_footprint(text: str) -> np.ndarray:
@@ -191,7 +191,7 @@ def main(argv: list[str] | None = None) -> int:
         spec, grid, footprint, params = _request(args)
         planner = registry.make_planner(spec.id, footprint, **params)
     except (MaruError, OSError, ValueError) as exc:
-        print(f"{PROG}: {exc}", file=sys.stderr)
+        print(f"{PROG}: {one_line(exc)}", file=sys.stderr)
         return EXIT_BAD_INPUT
     where = f"{args.map} ({grid.width} x {grid.height} cells)" if grid is not None else args.world
     print(f"planning with {spec.id} on {where}...", file=sys.stderr)

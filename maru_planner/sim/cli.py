@@ -13,7 +13,7 @@ import sys
 from pathlib import Path
 from typing import NoReturn
 
-from maru_planner.errors import InvalidRequest, MaruError
+from maru_planner.errors import InvalidRequest, MaruError, one_line
 from maru_planner.sim.runner import run_world
 from maru_planner.sim.world import MAX_SIM_TIME, World
 
@@ -34,7 +34,7 @@ class CliError(InvalidRequest):
 class _Parser(argparse.ArgumentParser):
     def error(self, message: str) -> NoReturn:
         """One line on stderr (argparse's usage block is in --help)."""
-        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message} (see --help)\n")
+        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {one_line(message)} (see --help)\n")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -65,6 +65,10 @@ def check_arguments(args: argparse.Namespace) -> None:
     for option in ("json", "png", "gif"):
         if getattr(args, option):
             check_writable(Path(getattr(args, option)), f"--{option}")
+    for option in ("png", "gif"):  # the picture writers pick their format by the suffix
+        path = getattr(args, option)
+        if path and Path(path).suffix.lower() != f".{option}":
+            raise CliError(f"--{option} {path[:80]}: the file name must end in .{option}")
 
 
 def check_writable(path: Path, option: str) -> None:
@@ -110,16 +114,12 @@ def main(argv: list[str] | None = None) -> int:
     try:
         run(args)
     except (MaruError, OSError) as exc:
-        print(f"{PROG}: error: {_one_line(exc)}", file=sys.stderr)
+        print(f"{PROG}: error: {one_line(exc)}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
     return EXIT_OK
-
-
-def _one_line(exc: Exception) -> str:
-    return " ".join(str(exc).split())
 
 
 if __name__ == "__main__":
