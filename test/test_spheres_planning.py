@@ -42,6 +42,7 @@ def _problem(panda):
 
 def test_coarse_plan_fails_verification_and_is_refined(panda):
     scene, request = _problem(panda)
+    request.seed = 2  # a seed whose coarse path crosses the plate (some seeds' paths miss it by luck)
     fast, exact = SphereCollisionChecker(panda, scene), CollisionChecker(panda, scene)
     # At resolution 2.5 an edge checks its end state only and steps over the plate; with no re-plan
     # allowed, the facade's exact re-check must turn that path into a failure.
