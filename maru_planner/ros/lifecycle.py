@@ -1,0 +1,277 @@
+"""Managed (lifecycle) nodes, as Nav2's servers: configure, activate, deactivate, cleanup, shutdown.
+
+:class:`ManagedNode` is an ``rclpy.lifecycle.LifecycleNode`` whose subclass writes four plain
+methods and no transition plumbing:
+
+- ``configure()`` reads the parameters and builds everything (robot, scene, workers, map
+  subscription, publishers, services, action servers). Whatever ROS entity it creates is
+  remembered and destroyed again by cleanup; its action servers get :meth:`ManagedNode.goal_when_active`
+  as their goal callback.
+- ``activate()`` / ``deactivate()`` start and stop what is more than answering requests (the
+  reactive node's scan subscription and watchdog, a zero ``cmd_vel``); both may be left out.
+- ``cleanup()`` releases what ``configure()`` built that is not a ROS entity (worker threads).
+
+While the node is not active its services, created with :meth:`ManagedNode.create_managed_service`,
+answer at once with the ``INACTIVE`` code of their response (``PlanningError.INACTIVE``,
+``PlanBasePath.INACTIVE``; an empty response where there is no error field), its action servers
+reject goals (:meth:`ManagedNode.goal_when_active`) and its lifecycle publishers publish nothing.
+Requests admitted before a deactivation finish; cleanup is refused while any is still running.
+
+A transition whose method raises fails (``FAILURE``: the node stays in its state, the reason is
+logged on one line). The read-only parameter ``autostart`` (default true) configures and
+activates the node at start-up, as a plain node, raising what ``configure()`` raised so ``main()``
+can print one line and exit; ``autostart:=false`` leaves it unconfigured for a lifecycle manager
+(``ros2 lifecycle set <node> configure``, ``nav2_lifecycle_manager``). ``destroy_node`` shuts the
+node down through the shutdown transition (a deactivation first, when active).
+"""
+
+from __future__ import annotations
+
+import inspect
+import threading
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from typing import Any
+
+from rclpy.action import ActionServer, GoalResponse
+from rclpy.client import Client
+from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
+from rclpy.lifecycle import Publisher as LifecyclePublisher
+from rclpy.publisher import Publisher
+from rclpy.service import Service
+from rclpy.subscription import Subscription
+from rclpy.timer import Timer
+
+from maru_planner.errors import one_line
+from maru_planner.params import ParamSpec
+from maru_planner.ros import parameters
+from maru_planner_interfaces.msg import PlanningError
+
+AUTOSTART = ParamSpec(
+    "autostart",
+    True,
+    "configure and activate at start-up; false = stay unconfigured until a lifecycle manager "
+    "(ros2 lifecycle set, nav2_lifecycle_manager) drives the node",
+    read_only=True,
+)
+SUCCESS = TransitionCallbackReturn.SUCCESS
+FAILURE = TransitionCallbackReturn.FAILURE
+INACTIVE_WARNING_PERIOD = 5.0  # s between repeats of the "not active" warning
+
+
+def inactive_response(response: Any, message: str) -> Any:
+    """``response`` refused because the node is not active, in its own error field when it has one."""
+    if isinstance(getattr(response, "error", None), PlanningError):
+        response.error = PlanningError(code=PlanningError.INACTIVE, message=message, source="lifecycle")
+    elif hasattr(response, "error_code") and hasattr(response, "INACTIVE"):
+        response.error_code, response.error_msg = response.INACTIVE, message
+    return response
+
+
+class ManagedNode(LifecycleNode):
+    """A lifecycle node whose subclass implements ``configure`` (and optionally the other steps)."""
+
+    def __init__(self, node_name: str, **kwargs: Any) -> None:
+        super().__init__(node_name, **kwargs)
+        self.autostart: bool = parameters.declare_parameters(self, {AUTOSTART.name: AUTOSTART})[AUTOSTART.name]
+        self.is_configured = False
+        self.is_active = False
+        self.transition_error: Exception | None = None  # what the last failed transition raised
+        self._log_failures = True
+        self._configured_entities: list[Any] = []
+        self._requests = 0
+        self._requests_lock = threading.Lock()
+
+    # ------------------------------------------------------------ what a subclass writes
+    def configure(self) -> None:
+        raise NotImplementedError(f"{type(self).__name__} must implement configure()")
+
+    def activate(self) -> None:
+        """Start what is more than answering requests (the default: nothing)."""
+
+    def deactivate(self) -> None:
+        """Stop what ``activate`` started, while the publishers still publish (the default: nothing)."""
+
+    def cleanup(self) -> None:
+        """Release what ``configure`` built besides ROS entities (the default: nothing)."""
+
+    def requests_in_progress(self) -> int:
+        """Service requests still being answered (a subclass adds its running action goals)."""
+        with self._requests_lock:
+            return self._requests
+
+    def when_configured(self, apply: Callable[[dict[str, Any]], None]) -> Callable[[dict[str, Any]], None]:
+        """An on-set ``apply`` that runs only while configured; before, ``configure()`` reads the stored values."""
+
+        def apply_when_configured(changes: dict[str, Any]) -> None:
+            if self.is_configured:
+                apply(changes)
+
+        return apply_when_configured
+
+    # ------------------------------------------------------------ start-up
+    def start(self) -> None:
+        """``autostart``: configure and activate now, raising what failed; else wait for a lifecycle manager."""
+        if not self.autostart:
+            self.get_logger().info(
+                f"unconfigured (autostart false): waiting for a lifecycle manager "
+                f"(ros2 lifecycle set {self.get_fully_qualified_name()} configure, then activate)"
+            )
+            return
+        self._log_failures = False  # main() reports the one line
+        try:
+            for trigger in (self.trigger_configure, self.trigger_activate):
+                if trigger() != SUCCESS:
+                    assert self.transition_error is not None
+                    raise self.transition_error
+        finally:
+            self._log_failures = True
+
+    @property
+    def state_label(self) -> str:
+        if self.is_active:
+            return "active"
+        return "inactive" if self.is_configured else "unconfigured"
+
+    # ------------------------------------------------------------ serving only while active
+    def create_managed_service(self, srv_type: Any, srv_name: str, callback: Callable, **kwargs: Any) -> Service:
+        """``create_service`` whose requests are answered only while active (else at once, INACTIVE)."""
+        return self.create_service(srv_type, srv_name, self._while_active(srv_name, callback), **kwargs)
+
+    def goal_when_active(self, _goal_request: Any) -> GoalResponse:
+        """An action server's ``goal_callback``: goals are accepted only while the node is active."""
+        if self.is_active:
+            return GoalResponse.ACCEPT
+        self._warn_inactive("goal rejected")
+        return GoalResponse.REJECT
+
+    def _while_active(self, name: str, callback: Callable) -> Callable:
+        if inspect.iscoroutinefunction(callback):
+
+            async def serve_async(request: Any, response: Any) -> Any:
+                if not self.is_active:
+                    return inactive_response(response, self._warn_inactive(name))
+                with self._counted():
+                    return await callback(request, response)
+
+            return serve_async
+
+        def serve(request: Any, response: Any) -> Any:
+            if not self.is_active:
+                return inactive_response(response, self._warn_inactive(name))
+            with self._counted():
+                return callback(request, response)
+
+        return serve
+
+    @contextmanager
+    def _counted(self) -> Iterator[None]:
+        with self._requests_lock:
+            self._requests += 1
+        try:
+            yield
+        finally:
+            with self._requests_lock:
+                self._requests -= 1
+
+    def _warn_inactive(self, what: str) -> str:
+        message = (
+            f"{what}: {self.get_fully_qualified_name()} is {self.state_label}; it serves only while active "
+            f"(ros2 lifecycle set {self.get_fully_qualified_name()} activate)"
+        )
+        self.get_logger().warning(message, throttle_duration_sec=INACTIVE_WARNING_PERIOD)
+        return message
+
+    # ------------------------------------------------------------ transitions
+    def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
+        before = self._entities()
+        result = self._run("configure", self.configure)
+        created = [entity for entity in self._entities() if entity not in before]
+        if result != SUCCESS:
+            self._destroy(created)
+            return result
+        for server in created:
+            if isinstance(server, ActionServer):
+                server.register_goal_callback(self.goal_when_active)
+        self._configured_entities = created
+        self.is_configured = True
+        self.get_logger().info("configured")
+        return SUCCESS
+
+    def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
+        super().on_activate(state)  # lifecycle publishers on
+        result = self._run("activate", self.activate)
+        if result != SUCCESS:
+            super().on_deactivate(state)
+            return result
+        self.is_active = True
+        self.get_logger().info("active")
+        return SUCCESS
+
+    def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
+        self.is_active = False
+        result = self._run("deactivate", self.deactivate)
+        super().on_deactivate(state)  # lifecycle publishers off
+        self.get_logger().info("inactive")
+        return result
+
+    def on_cleanup(self, state: LifecycleState) -> TransitionCallbackReturn:
+        running = self.requests_in_progress()
+        if running:
+            self.transition_error = RuntimeError(f"{running} requests are still being answered; cleanup refused")
+            self.get_logger().error(str(self.transition_error))
+            return FAILURE
+        result = self._run("cleanup", self.cleanup)
+        self._destroy(self._configured_entities)
+        self._configured_entities = []
+        self.is_configured = False
+        self.get_logger().info("unconfigured")
+        return result
+
+    def on_shutdown(self, state: LifecycleState) -> TransitionCallbackReturn:
+        """From any primary state: deactivate when active, clean up when configured."""
+        if self.is_active:
+            self.on_deactivate(state)
+        if self.is_configured:
+            self.on_cleanup(state)
+        return SUCCESS
+
+    def destroy_node(self) -> None:
+        """Shut down through the lifecycle (a reactive node stops its base) before the handles go."""
+        if self.is_configured and self.context.ok():
+            self.trigger_shutdown()
+        super().destroy_node()
+
+    def _run(self, transition: str, step: Callable[[], None]) -> TransitionCallbackReturn:
+        try:
+            step()
+        except Exception as exc:  # noqa: BLE001 - a failed transition is reported, the node keeps running
+            self.transition_error = exc
+            if self._log_failures:
+                self.get_logger().error(f"{transition} failed: {one_line(exc)}")
+            return FAILURE
+        return SUCCESS
+
+    # ------------------------------------------------------------ entities made by configure
+    def _entities(self) -> list[Any]:
+        return [
+            *self.publishers, *self.subscriptions, *self.services, *self.clients, *self.timers,
+            *(w for w in self.waitables if isinstance(w, ActionServer)),
+        ]  # fmt: skip
+
+    def _destroy(self, entities: list[Any]) -> None:
+        for entity in entities:
+            if isinstance(entity, ActionServer):
+                entity.destroy()
+            elif isinstance(entity, LifecyclePublisher):
+                self.destroy_lifecycle_publisher(entity)
+            elif isinstance(entity, Publisher):
+                self.destroy_publisher(entity)
+            elif isinstance(entity, Subscription):
+                self.destroy_subscription(entity)
+            elif isinstance(entity, Service):
+                self.destroy_service(entity)
+            elif isinstance(entity, Client):
+                self.destroy_client(entity)
+            elif isinstance(entity, Timer):
+                self.destroy_timer(entity)
