@@ -306,12 +306,22 @@ class PathCertifier:
         return cert
 
     def clearance(self, q: np.ndarray) -> float:
-        """Exact smallest distance over all checked pairs at ``q`` (m; <= 0 in collision, inf without pairs)."""
+        """Exact smallest distance over all checked pairs at ``q`` (m; <= 0 in collision, inf without pairs).
+
+        Every pair is measured on the convex hulls first; the exact geometry only for the pairs whose hull
+        distance is below the smallest exact distance found so far (nearest first: usually one or two).
+        """
         pairs = self._pair_table()
         if not len(pairs.first):
             return math.inf
-        pin.computeDistances(self._model, self._data, pairs.geom_model, pairs.geom_data, np.asarray(q, dtype=float))
-        return min(r.min_distance for r in pairs.geom_data.distanceResults) - DISTANCE_TOLERANCE
+        pin.computeDistances(self._model, self._data, pairs.hull_model, pairs.hull_data, np.asarray(q, dtype=float))
+        lower = np.array([r.min_distance for r in pairs.hull_data.distanceResults]) - DISTANCE_TOLERANCE
+        best, placed = math.inf, set()
+        for p in np.argsort(lower):
+            if lower[p] >= best:
+                break
+            best = min(best, self._distance(pairs.geom_model, pairs.geom_data, int(p), placed))
+        return best
 
     # ------------------------------------------------------------ internals --
     def _check_rows(self, run: _Run, cert: Certificate) -> None:
