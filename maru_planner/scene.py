@@ -169,7 +169,7 @@ class Obstacle:
 class AttachedObject:
     """An obstacle fixed to a robot link: ``obstacle.pose`` is in the link's frame."""
 
-    def __init__(self, obstacle: Obstacle, link: str, touch_links: Any = ()):
+    def __init__(self, obstacle: Obstacle, link: Any, touch_links: Any = ()):
         where = f"attached object '{obstacle.name}'"
         if not isinstance(link, str) or not link:
             raise InvalidScene(f"{where}: field 'link' must be a link name, got {link!r}")

@@ -22,6 +22,13 @@ from maru_planner.robot.model import RobotModel
 from maru_planner.scene import AttachedObject, Scene
 
 
+class CarryingRobot(RobotModel):
+    """A robot with attached objects as bodies: ``base_robot`` without them, ``attachment_key`` what they are."""
+
+    base_robot: RobotModel
+    attachment_key: tuple
+
+
 def attachment_key(scene_or_robot) -> tuple:
     """What the attached objects of a scene (or carried by a robot) look like; equal keys, same geometry."""
     attached = getattr(scene_or_robot, "attached", None)
@@ -58,7 +65,7 @@ def robot_with_attached(robot: RobotModel, scene: Scene | None) -> RobotModel:
     for item in scene.attached.values():
         _add_body(model, geometry, item)
         srdf.disabled_pairs.update(frozenset((item.name, link)) for link in (item.link, *item.touch_links))
-    carrying = RobotModel(
+    carrying = CarryingRobot(
         base.name, model, geometry, srdf,
         acceleration_limits=base.acceleration_limits, end_effectors=base.end_effectors,
         ik_strategies=base.ik_strategies,

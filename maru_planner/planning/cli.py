@@ -380,7 +380,7 @@ def main(argv: list[str] | None = None) -> int:
     return code
 
 
-def _write_json(args: argparse.Namespace, result: MotionResult, progress: _Progress) -> None:
+def _write_json(args: argparse.Namespace, result: MotionResult | CartesianResult, progress: _Progress) -> None:
     payload = json.dumps(result.to_json_dict(), indent=1, allow_nan=False, default=_json_default)
     if args.json:
         args.json.write_text(payload + "\n")

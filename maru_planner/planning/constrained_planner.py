@@ -20,6 +20,7 @@ import math
 import secrets
 import time
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -30,6 +31,9 @@ from maru_planner.planning.cartesian import time_dense_path
 from maru_planner.planning.constraints import PathConstraints
 from maru_planner.planning.space import edge_states
 from maru_planner.planning.types import MotionRequest, MotionResult, PlanStats, PlanStatus, status_of_error
+
+if TYPE_CHECKING:  # the facade imports this module to hand constrained requests over
+    from maru_planner.planning.motion_planner import MotionPlanner
 
 PLANNER_ID = "CBiRRT"
 STEP = ParamSpec("step", 0.1, "largest joint move (rad) of one projected extension step", lower=1e-3, upper=1.0)
@@ -43,7 +47,7 @@ CONNECT_DISTANCE = 1e-3  # rad: the trees meet when a state comes this close to 
 class _Problem:
     """One constrained search: the robot, constraints and checks on group configurations."""
 
-    planner: object
+    planner: MotionPlanner
     constraints: PathConstraints
     base: np.ndarray  # full configuration supplying the joints outside the group
     indices: np.ndarray

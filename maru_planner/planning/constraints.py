@@ -21,7 +21,6 @@ import numpy as np
 import pinocchio as pin
 
 from maru_planner import errors
-from maru_planner.scene import pose_matrix, rpy_matrix
 
 LOCAL = pin.ReferenceFrame.LOCAL
 PROJECTION_ITERATIONS = 30
@@ -163,71 +162,52 @@ class PathConstraints:
 
     def _residual(self, robot, q: np.ndarray, indices: np.ndarray, keep: float) -> tuple[np.ndarray, np.ndarray]:
         """Jacobian rows and signed excess of the components outside ``keep`` x their bound (aiming just inside)."""
-        rows, residual = [], []
+        rows: list[np.ndarray] = []
+        residual: list[float] = []
         if self.orientation is not None:
-            c = self.orientation
-            fid = robot.frame_id(c.link)
-            r = c.excess(robot.frame_pose(q, fid))[0]
-            bound = np.minimum(c.tolerance * keep, math.pi)
-            out = np.abs(r) - bound
-            J = c.target.T @ robot.frame_jacobian(q, fid)[3:, indices]  # angular rate in the target frame
-            J = pin.Jlog3(pin.exp3(r)) @ J
-            for i in np.flatnonzero(out > 0):
-                rows.append(J[i])
-                residual.append(r[i] - math.copysign(bound[i] - PROJECTION_TOLERANCE, r[i]))
+            _orientation_rows(self.orientation, robot, q, indices, keep, rows, residual)
         if self.position is not None:
-            c = self.position
-            fid = robot.frame_id(c.link)
-            local = c.excess(robot.frame_pose(q, fid))[0]
-            J = c.box_pose[:3, :3].T @ robot.frame_jacobian(q, fid)[:3, indices]
-            half = 0.5 * np.asarray(c.box_size) * keep
-            out = np.abs(local) - half
-            for i in np.flatnonzero(out > 0):
-                rows.append(J[i])
-                residual.append(local[i] - math.copysign(half[i] - PROJECTION_TOLERANCE, local[i]))
+            _position_rows(self.position, robot, q, indices, keep, rows, residual)
         if self.relative is not None:
-            self._relative_rows(robot, q, indices, keep, rows, residual)
+            _relative_rows(self.relative, robot, q, indices, keep, rows, residual)
         return np.array(rows).reshape(len(rows), len(indices)), np.array(residual)
-
-    def _relative_rows(self, robot, q, indices, keep: float, rows: list, residual: list) -> None:
-        """Rows of the relative-pose error: d e = Jlog6 (J_b - Ad(T_b^-1 T_a) J_a) dq, all in the local frames."""
-        c = self.relative
-        data = robot.model.createData()
-        pin.computeJointJacobians(robot.model, data, q)
-        fa, fb = robot.frame_id(c.link_a), robot.frame_id(c.link_b)
-        oMa, oMb = pin.updateFramePlacement(robot.model, data, fa), pin.updateFramePlacement(robot.model, data, fb)
-        J_a = pin.getFrameJacobian(robot.model, data, fa, LOCAL)[:, indices]
-        J_b = pin.getFrameJacobian(robot.model, data, fb, LOCAL)[:, indices]
-        error = pin.SE3(c.relative).actInv(oMa.actInv(oMb))
-        e = pin.log6(error).vector
-        J = pin.Jlog6(error) @ (J_b - oMb.actInv(oMa).action @ J_a)
-        bound = c.tolerance * keep
-        for i in np.flatnonzero(np.abs(e) > bound):
-            rows.append(J[i])
-            residual.append(e[i] - math.copysign(bound[i] - PROJECTION_TOLERANCE, e[i]))
-
-    @classmethod
-    def from_dict(cls, d: dict | None) -> PathConstraints:
-        """From ``{orientation: {link, rpy | matrix, tolerance}, position: {link, box: {xyz, rpy}, size}}``."""
-        d = d or {}
-        unknown = set(d) - {"orientation", "position"}
-        if unknown:
-            raise errors.InvalidRequest(f"path constraints: unknown field(s) {sorted(unknown)}")
-        orientation = position = None
-        if d.get("orientation"):
-            o = d["orientation"]
-            orientation = OrientationConstraint(
-                str(o["link"]), rpy_matrix(*o.get("rpy", (0.0, 0.0, 0.0))), np.asarray(o["tolerance"], dtype=float)
-            )
-        if d.get("position"):
-            p = d["position"]
-            position = PositionConstraint(
-                str(p["link"]), pose_matrix(p.get("box"), "position constraint box"), np.asarray(p["size"], float)
-            )
-        return cls(orientation, position)
 
 
 def _check_matrix(value: np.ndarray, shape: tuple[int, int], what: str) -> None:
     value = np.asarray(value, dtype=float)
     if value.shape != shape or not np.all(np.isfinite(value)):
         raise errors.InvalidRequest(f"{what} must be a finite {shape[0]}x{shape[1]} matrix")
+
+
+def _pull(J: np.ndarray, value: np.ndarray, bound: np.ndarray, rows: list, residual: list) -> None:
+    """Rows and residuals of the components of ``value`` beyond ``+-bound``, aimed just inside it."""
+    for i in np.flatnonzero(np.abs(value) > bound):
+        rows.append(J[i])
+        residual.append(value[i] - math.copysign(bound[i] - PROJECTION_TOLERANCE, value[i]))
+
+
+def _orientation_rows(c: OrientationConstraint, robot, q, indices, keep: float, rows: list, residual: list) -> None:
+    fid = robot.frame_id(c.link)
+    r = c.excess(robot.frame_pose(q, fid))[0]
+    J = c.target.T @ robot.frame_jacobian(q, fid)[3:, indices]  # angular rate in the target frame
+    _pull(pin.Jlog3(pin.exp3(r)) @ J, r, np.minimum(c.tolerance * keep, math.pi), rows, residual)
+
+
+def _position_rows(c: PositionConstraint, robot, q, indices, keep: float, rows: list, residual: list) -> None:
+    fid = robot.frame_id(c.link)
+    local = c.excess(robot.frame_pose(q, fid))[0]
+    J = c.box_pose[:3, :3].T @ robot.frame_jacobian(q, fid)[:3, indices]
+    _pull(J, local, 0.5 * np.asarray(c.box_size) * keep, rows, residual)
+
+
+def _relative_rows(c: RelativePoseConstraint, robot, q, indices, keep: float, rows: list, residual: list) -> None:
+    """Rows of the relative-pose error: d e = Jlog6 (J_b - Ad(T_b^-1 T_a) J_a) dq, all in the local frames."""
+    data = robot.model.createData()
+    pin.computeJointJacobians(robot.model, data, q)
+    fa, fb = robot.frame_id(c.link_a), robot.frame_id(c.link_b)
+    oMa, oMb = pin.updateFramePlacement(robot.model, data, fa), pin.updateFramePlacement(robot.model, data, fb)
+    J_a = pin.getFrameJacobian(robot.model, data, fa, LOCAL)[:, indices]
+    J_b = pin.getFrameJacobian(robot.model, data, fb, LOCAL)[:, indices]
+    error = pin.SE3(c.relative).actInv(oMa.actInv(oMb))
+    J = pin.Jlog6(error) @ (J_b - oMb.actInv(oMa).action @ J_a)
+    _pull(J, pin.log6(error).vector, c.tolerance * keep, rows, residual)

@@ -95,7 +95,7 @@ def main(argv: list[str] | None = None) -> int:
     robot = RobotModel.maru1()
     scene = DUAL_CARRY.scene()
     result = MotionPlanner.from_scene(robot, scene).plan(DUAL_CARRY.request(robot, seed=1))
-    if not result.success:
+    if not result.success or result.trajectory is None:
         print(f"{DUAL_CARRY.name}: {result.status.value}: {result.message}", file=sys.stderr)
         return 1
     translation, rotation = relative_pose_error(robot, DUAL_CARRY, result.trajectory.positions)

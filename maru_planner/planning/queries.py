@@ -85,7 +85,7 @@ class PlannerParameter:
         spec = self.spec
         return {
             "name": spec.name,
-            "type": spec.value_type.__name__,
+            "type": getattr(spec.value_type, "__name__", str(spec.value_type)),
             "default": spec.default,
             "current": self.current,
             "lower": -math.inf if spec.lower is None else spec.lower,

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 import rclpy
 from action_msgs.msg import GoalStatus
@@ -166,7 +166,7 @@ class PlanningClient:
         return self.call(self.scene_client, GetScene.Request(), timeout)
 
     def attach(
-        self, name: str, link: str, *, touch_links: list[str] = (), shape: str = "", dimensions=(), pose=None,
+        self, name: str, link: str, *, touch_links: Sequence[str] = (), shape: str = "", dimensions=(), pose=None,
         robot_state: dict[str, float] | None = None, frame_id: str = "base_link", **kwargs,
     ) -> ApplyScene.Response:  # fmt: skip
         """Attach scene obstacle ``name`` to ``link`` where it is, or (``shape`` given) a new shape at ``pose``
@@ -186,7 +186,7 @@ class PlanningClient:
         return self.apply_scene([msg], **kwargs)
 
     def compute_fk(
-        self, robot_state: dict[str, float] | None = None, links: list[str] = (), timeout: float = 30.0
+        self, robot_state: dict[str, float] | None = None, links: Sequence[str] = (), timeout: float = 30.0
     ) -> ComputeFK.Response:
         """Poses of ``links`` (empty: every link) at ``robot_state`` (None: the node's latest /joint_states)."""
         request = ComputeFK.Request(links=list(links))
