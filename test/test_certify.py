@@ -274,3 +274,11 @@ def test_planner_stats_message_carries_the_certification():
     assert msg.certified and msg.repairs == 2
     assert msg.certify_time == pytest.approx(0.02) and msg.min_clearance == pytest.approx(0.004)
     assert conversions.stats_msg(PlanStats()).min_clearance == 0.0  # not certified: inf is sent as 0
+
+
+def test_clearance_is_the_exact_checkers():
+    robot, checker = panda_shelf()
+    certifier = PathCertifier(robot, checker)
+    rng = np.random.default_rng(5)
+    for q in (robot.random_configuration(rng) for _ in range(10)):
+        assert certifier.clearance(q) == pytest.approx(checker.clearance(q), abs=1e-5)
