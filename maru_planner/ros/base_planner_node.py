@@ -31,7 +31,6 @@ from nav_msgs.msg import OccupancyGrid as OccupancyGridMsg
 from nav_msgs.msg import Path
 from nav_msgs.srv import GetPlan
 from rclpy.executors import ExternalShutdownException
-from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
 from maru_planner.base import registry
@@ -46,6 +45,7 @@ from maru_planner.params import dataclass_params, param
 from maru_planner.ros import base_conversions as conv
 from maru_planner.ros import parameters
 from maru_planner.ros.env import network_from_environment
+from maru_planner.ros.lifecycle import ManagedNode
 from maru_planner_interfaces.srv import PlanBasePath
 
 E = PlanBasePath.Response
@@ -83,31 +83,49 @@ def check_config(config: BaseNodeConfig) -> None:
         load_world(resolve_world_path(config.biped_world))
 
 
-class BasePlannerNode(Node):
+class BasePlannerNode(ManagedNode):
+    """A managed node (:mod:`maru_planner.ros.lifecycle`): the map is followed from configure on, plans
+    are served while active."""
+
     def __init__(self, **kwargs: Any):
+        """InvalidParameter (one line) for a bad parameter; with ``autostart`` what configuring raises."""
         super().__init__("base_planner_node", **kwargs)
         self.config = BaseNodeConfig(**parameters.declare_parameters(self, NODE_SPECS))
-        check_config(self.config)
-        registry.warm_up()
         self.grid: OccupancyGrid | None = None
         self.map_msg: OccupancyGridMsg | None = None
-        self.map_error = "no map received yet on " + self.config.map_topic
+        self.map_error = "not configured"
         self.planners: dict[tuple, BasePlanner] = {}
+        self.requests = 0
+        parameters.add_on_set_parameters_callback(self, NODE_SPECS, self.when_configured(self.apply_parameters))
+        self.start()
+
+    def configure(self) -> None:
+        """Check the parameters, warm the planners up, follow the map, offer the services."""
+        self.config = BaseNodeConfig(
+            **{name: parameters.read_parameter(self, name, spec) for name, spec in NODE_SPECS.items()}
+        )
+        check_config(self.config)
+        registry.warm_up()
+        self.map_error = "no map received yet on " + self.config.map_topic
         latched = QoSProfile(
             depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL, reliability=ReliabilityPolicy.RELIABLE
         )
         self.create_subscription(OccupancyGridMsg, self.config.map_topic, self._on_map, latched)
-        self.path_pub = self.create_publisher(Path, "plan", latched)
+        self.path_pub = self.create_lifecycle_publisher(Path, "plan", latched)
         self.layer_pubs = {
-            name: self.create_publisher(OccupancyGridMsg, f"~/{name}_map", latched) for name in ("eca", "baa", "grown")
+            name: self.create_lifecycle_publisher(OccupancyGridMsg, f"~/{name}_map", latched)
+            for name in ("eca", "baa", "grown")
         }
-        self.create_service(PlanBasePath, "plan_base_path", self._on_plan_base_path)
-        self.create_service(GetPlan, "make_plan", self._on_get_plan)
-        self.requests = 0
-        parameters.add_on_set_parameters_callback(self, NODE_SPECS, self.apply_parameters)
+        self.create_managed_service(PlanBasePath, "plan_base_path", self._on_plan_base_path)
+        self.create_managed_service(GetPlan, "make_plan", self._on_get_plan)
         self.get_logger().info(
             f"base planner ready (default planner {self.config.planner_id!r}, planners {registry.planner_ids()})"
         )
+
+    def cleanup(self) -> None:
+        self.grid, self.map_msg = None, None
+        self.map_error = "not configured"
+        self.planners.clear()
 
     # ------------------------------------------------------------- parameters
     def apply_parameters(self, changes: dict[str, Any]) -> None:

@@ -22,6 +22,11 @@ and a watchdog on the wall clock stops the base when no valid scan arrived
 for ``scan_timeout`` seconds, in both clock modes. An exception in a callback
 is logged on one line and stops the base; the node keeps serving.
 
+A managed node (:mod:`maru_planner.ros.lifecycle`): configure reads the parameters and creates the
+publishers; activate subscribes to the inputs and starts the watchdog, so the node commands the base
+only while active; deactivate publishes a zero ``cmd_vel``, unsubscribes and forgets the goal and
+path (a new goal is needed after the next activation).
+
 Parameters: ``config/reactive.yaml``. Every field of :class:`StripParams` and
 of :class:`NodeSettings` is declared with its description and range; what
 changes at run time applies from the next scan, ``scan_reliability`` is
@@ -47,8 +52,8 @@ from nav_msgs.msg import Odometry, Path
 from rclpy.clock import Clock, ClockType, JumpThreshold, TimeJump
 from rclpy.duration import Duration
 from rclpy.executors import ExternalShutdownException
-from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.subscription import Subscription
 from rclpy.timer import Timer
 from sensor_msgs.msg import LaserScan
 from trajectory_msgs.msg import JointTrajectory
@@ -61,6 +66,7 @@ from maru_planner.reactive.description import arm_joint_names
 from maru_planner.ros import parameters
 from maru_planner.ros import reactive_conversions as conv
 from maru_planner.ros.env import network_from_environment
+from maru_planner.ros.lifecycle import ManagedNode
 
 
 @dataclasses.dataclass(frozen=True)
@@ -142,14 +148,14 @@ def one_line(exc: BaseException, limit: int = 300) -> str:
     return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
-class ReactiveNode(Node):
+class ReactiveNode(ManagedNode):
     """Convert messages, call the elastic-strip controller, publish its commands."""
 
     def __init__(self, **kwargs: Any) -> None:
+        """InvalidParameter (one line) for a bad parameter; with ``autostart`` what configuring raises."""
         super().__init__("reactive_node", **kwargs)
         values = parameters.declare_parameters(self, {**STRIP_SPECS, **NODE_SPECS})
         self.settings = NodeSettings(**{name: values[name] for name in NODE_SPECS})
-        self.controller = ElasticStripController(StripParams(**{name: values[name] for name in STRIP_SPECS}))
         self.warnings = ThrottledWarnings(self.get_logger(), self.settings.warn_throttle_period)
 
         self.pose: conv.Pose2D | None = None
@@ -164,49 +170,85 @@ class ReactiveNode(Node):
         )
         self.update_ms: deque[float] = deque(maxlen=200)  # recent controller update times, for the status line
         self._goal_logged = False
-        self.arm_names = self._arm_names()
         self._watchdog: Timer | None = None
         self._status_timer: Timer | None = None
+        self._inputs: list[Subscription] = []
+        parameters.add_on_set_parameters_callback(
+            self, {**STRIP_SPECS, **NODE_SPECS}, self.when_configured(self.apply_parameters)
+        )
+        self.start()
 
-        self._setup_topics()
-        self._setup_timers()
+    # ------------------------------------------------------------ lifecycle
+    def configure(self) -> None:
+        """Read the parameters, build the controller, create the publishers, follow clock jumps."""
+        specs = {**STRIP_SPECS, **NODE_SPECS}
+        values = {name: parameters.read_parameter(self, name, spec) for name, spec in specs.items()}
+        self.settings = NodeSettings(**{name: values[name] for name in NODE_SPECS})
+        self.controller = ElasticStripController(StripParams(**{name: values[name] for name in STRIP_SPECS}))
+        self.warnings.period = self.settings.warn_throttle_period
+        self.arm_names = self._arm_names()
+        self.cmd_pub = self.create_lifecycle_publisher(Twist, "cmd_vel", 10)
+        self.cmd_stamped_pub = self.create_lifecycle_publisher(TwistStamped, "~/cmd_vel_stamped", 10)
+        self.strip_pub = self.create_lifecycle_publisher(Path, "~/strip", 10)
+        self.arm_pub = self.create_lifecycle_publisher(JointTrajectory, "~/arm_command", 10)
+        self.marker_pub = self.create_lifecycle_publisher(MarkerArray, "~/markers", 10)
         self._jump_handle = self.get_clock().create_jump_callback(
             JumpThreshold(min_forward=None, min_backward=Duration(nanoseconds=-1), on_clock_change=False),
             post_callback=self.on_time_jump,
         )
-        parameters.add_on_set_parameters_callback(self, {**STRIP_SPECS, **NODE_SPECS}, self.apply_parameters)
+
+    def activate(self) -> None:
+        """Inputs from now on: fresh odometry and scans, the watchdog armed."""
+        self.pose, self.odom_stamp, self.pending, self.last_arm_stamp = None, None, None, None
+        self.last_valid_scan = time.monotonic()
+        self.base_stopped = True
+        self._subscribe_inputs()
+        self._setup_timers()
+
+    def deactivate(self) -> None:
+        """A zero ``cmd_vel`` (the publishers still publish), then no inputs, no timers, no goal."""
+        self._stop_base()
+        for subscription in self._inputs:
+            self.destroy_subscription(subscription)
+        self._inputs = []
+        self._destroy_timers()
+        self.controller = ElasticStripController(self.controller.params)
+        self.path = None
+
+    def cleanup(self) -> None:
+        self._jump_handle.unregister()
 
     # ------------------------------------------------------------ set-up
     def _arm_names(self) -> list[str]:
         return arm_joint_names("left") + arm_joint_names("right") if self.settings.publish_arm else []
 
-    def _setup_topics(self) -> None:
+    def _subscribe_inputs(self) -> None:
         reliable = self.settings.scan_reliability == "reliable"
         scan_qos = QoSProfile(
             depth=5, reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT
         )
         # Creation order matters: when several messages are ready at once the executor takes them in
         # this order, so a goal or plan that arrived with a scan is applied before that scan.
-        self.odom_topic = self.create_subscription(Odometry, "odom", self._guarded("odom", self.on_odom), 10).topic_name
-        self.create_subscription(PoseStamped, "goal_pose", self._guarded("goal_pose", self.on_goal), 10)
-        self.create_subscription(Path, "plan", self._guarded("plan", self.on_plan), 10)
-        self.scan_topic = self.create_subscription(LaserScan, "scan", self._guarded("scan", self.on_scan),
-                                                   scan_qos).topic_name
-        self.cmd_pub = self.create_publisher(Twist, "cmd_vel", 10)
-        self.cmd_stamped_pub = self.create_publisher(TwistStamped, "~/cmd_vel_stamped", 10)
-        self.strip_pub = self.create_publisher(Path, "~/strip", 10)
-        self.arm_pub = self.create_publisher(JointTrajectory, "~/arm_command", 10)
-        self.marker_pub = self.create_publisher(MarkerArray, "~/markers", 10)
+        self._inputs = [
+            self.create_subscription(Odometry, "odom", self._guarded("odom", self.on_odom), 10),
+            self.create_subscription(PoseStamped, "goal_pose", self._guarded("goal_pose", self.on_goal), 10),
+            self.create_subscription(Path, "plan", self._guarded("plan", self.on_plan), 10),
+            self.create_subscription(LaserScan, "scan", self._guarded("scan", self.on_scan), scan_qos),
+        ]
+        self.odom_topic, self.scan_topic = self._inputs[0].topic_name, self._inputs[3].topic_name
 
-    def _setup_timers(self) -> None:
-        """The watchdog and the status line run on the wall clock, whatever clock the node uses."""
+    def _destroy_timers(self) -> None:
         for timer in (self._watchdog, self._status_timer):
             if timer is not None:
                 self.destroy_timer(timer)
+        self._watchdog = self._status_timer = None
+
+    def _setup_timers(self) -> None:
+        """The watchdog and the status line run on the wall clock, whatever clock the node uses."""
+        self._destroy_timers()
         wall = Clock(clock_type=ClockType.STEADY_TIME)
         period = max(self.settings.scan_timeout / 4.0, 0.01)
         self._watchdog = self.create_timer(period, self._guarded("watchdog", self.on_watchdog), clock=wall)
-        self._status_timer = None
         if self.settings.status_period > 0.0:
             self._status_timer = self.create_timer(self.settings.status_period, self.log_status, clock=wall)
 
@@ -223,7 +265,8 @@ class ReactiveNode(Node):
             self.controller.set_params(strip_params)
         self.warnings.period = self.settings.warn_throttle_period
         self.arm_names = self._arm_names()
-        if (previous.scan_timeout, previous.status_period) != (self.settings.scan_timeout, self.settings.status_period):
+        timing = (self.settings.scan_timeout, self.settings.status_period)
+        if self.is_active and (previous.scan_timeout, previous.status_period) != timing:
             self._setup_timers()
         self.get_logger().info("parameters set: " + ", ".join(f"{k}={v!r}" for k, v in changes.items()))
 
