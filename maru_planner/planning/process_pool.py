@@ -36,7 +36,6 @@ from collections import deque
 from concurrent.futures import Future
 from dataclasses import dataclass, field
 from multiprocessing.connection import Connection
-from typing import Any
 
 from maru_planner import errors
 from maru_planner.monitor import PlanMonitor
@@ -134,19 +133,19 @@ class _Inbox:
 def _worker_main(conn: Connection, robot: RobotSource, scene: dict, config: PlannerConfig) -> None:
     """A worker process: build the planner once, then plan until told to stop."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C reaches the whole group; the pool stops us
-    try:
-        model = robot.load()
-        planner = MotionPlanner.from_scene(model, Scene.from_dict(scene), config)
-    except Exception as exc:  # noqa: BLE001 - reported to the pool, which refuses to start
-        conn.send(("broken", errors.one_line(f"{type(exc).__name__}: {exc}")))
-        return
     send_lock = threading.Lock()
 
     def send(message: tuple) -> None:
         with send_lock:
             conn.send(message)
 
-    inbox = _Inbox(conn, send)
+    inbox = _Inbox(conn, send)  # reading already: the pool never blocks on a pipe a building worker leaves full
+    try:
+        model = robot.load()
+        planner = MotionPlanner.from_scene(model, Scene.from_dict(scene), config)
+    except Exception as exc:  # noqa: BLE001 - reported to the pool, which refuses to start
+        send(("broken", errors.one_line(f"{type(exc).__name__}: {exc}")))
+        return
     send(("ready",))
     while (message := inbox.next()) is not None:
         kind = message[0]
@@ -193,6 +192,7 @@ class _Worker:
         self.ready = threading.Event()
         self.failure = ""  # why it could not start
         self.retiring = False
+        self.reader: threading.Thread | None = None
         self._send_lock = threading.Lock()
 
     def send(self, message: tuple) -> bool:
@@ -226,6 +226,7 @@ class ProcessPool:
         config: PlannerConfig | None = None,
         workers: int = 2,
         start_method: str = START_METHOD,
+        scene_version: int = 0,
     ):
         if workers < 1:
             raise errors.InvalidParameter(f"workers must be >= 1, got {workers}")
@@ -233,7 +234,7 @@ class ProcessPool:
         if start_method == "forkserver":
             self._mp.set_forkserver_preload([__name__])  # the fork server imports the planning stack once
         self._robot = robot
-        self._scene = scene
+        self._scene, self._scene_version = scene, scene_version
         self._config = config or PlannerConfig()
         self._lock = threading.Lock()
         self._workers: list[_Worker] = []
@@ -250,6 +251,15 @@ class ProcessPool:
         """Worker processes planning or waiting for a request (not counting retiring ones)."""
         with self._lock:
             return sum(not w.retiring for w in self._workers)
+
+    @property
+    def scene_version(self) -> int:
+        """The version of the scene the workers plan on (:meth:`set_scene`)."""
+        return self._scene_version
+
+    @property
+    def closed(self) -> bool:
+        return self._closed
 
     @property
     def pids(self) -> list[int]:
@@ -298,7 +308,8 @@ class ProcessPool:
             worker.send(("stop",))
         for worker in workers:
             _reap(worker.process)
-            worker.conn.close()
+            if worker.reader is not None:  # it delivers the cancelled results still in the pipe
+                worker.reader.join(STOP_TIMEOUT)
 
     def __enter__(self) -> ProcessPool:
         return self
@@ -326,27 +337,31 @@ class ProcessPool:
         """``submit(request, monitor).result()``: like :meth:`MotionPlanner.plan`, in a worker."""
         return self.submit(request, monitor).result()
 
-    def set_scene(self, scene: dict) -> None:
+    def set_scene(self, scene: dict, version: int) -> None:
         """Every worker plans on ``scene`` (a :meth:`Scene.to_dict`) from its next request on.
 
-        InvalidScene (raised here, no worker touched) if ``scene`` is malformed.
+        ``version`` numbers the scenes: one not newer than :attr:`scene_version` is ignored (several
+        threads may pass on the same change). InvalidScene (no worker touched) if ``scene`` is malformed.
         """
+        if version <= self._scene_version:
+            return
         Scene.from_dict(scene)
-        self._broadcast("scene", scene)
+        with self._lock:
+            if version <= self._scene_version:
+                return
+            self._scene, self._scene_version = scene, version
+            self._broadcast(("scene", scene))
 
     def set_config(self, config: PlannerConfig) -> None:
         """Every worker plans with ``config`` from its next request on."""
-        self._broadcast("config", config)
+        with self._lock:
+            self._config = config
+            self._broadcast(("config", config))
 
-    def _broadcast(self, kind: str, value: Any) -> None:
-        with self._lock:  # under the lock: a worker started meanwhile gets the new value at start-up
-            if kind == "scene":
-                self._scene = value
-            else:
-                self._config = value
-            workers = list(self._workers)
-        for worker in workers:
-            worker.send((kind, value))
+    def _broadcast(self, message: tuple) -> None:
+        """Send ``message`` to every worker (under the pool's lock: one started meanwhile gets the new value)."""
+        for worker in self._workers:
+            worker.send(message)
 
     # --- dispatch (callers' threads and the readers) ----------------------------------------
     def _start_workers(self, count: int) -> None:
@@ -363,16 +378,17 @@ class ProcessPool:
                 worker = _Worker(process, parent_end)
                 self._workers.append(worker)
             child_end.close()
-            threading.Thread(target=self._read, args=(worker,), name=f"{process.name}-reader", daemon=True).start()
+            worker.reader = threading.Thread(target=self._read, args=(worker,), name=process.name, daemon=True)
+            worker.reader.start()
 
     def _start(self, worker: _Worker, job: _Job) -> None:
         """Send ``job`` to ``worker`` (its monitor's cancel now reaches the worker)."""
         if not job.future.set_running_or_notify_cancel():  # the caller cancelled the Future meanwhile
             self._next_job(worker)
             return
-        if job.monitor is not None:
-            job.attached.enter_context(job.monitor.attach(_CancelInWorker(worker, job.job_id)))
         worker.send(("plan", job.job_id, job.request, job.monitor is not None))
+        if job.monitor is not None:  # after the plan: a monitor cancelled already sends its cancel at once
+            job.attached.enter_context(job.monitor.attach(_CancelInWorker(worker, job.job_id)))
 
     def _next_job(self, worker: _Worker) -> None:
         """Give ``worker`` the next waiting job, else mark it idle (a retiring one stops instead)."""
@@ -432,6 +448,7 @@ class ProcessPool:
                 self._idle.remove(worker)
             job, worker.job = worker.job, None
             replace = not (self._closed or worker.retiring or worker.failure)
+        worker.conn.close()
         _reap(worker.process)
         if job is not None:
             job.attached.close()
