@@ -176,8 +176,9 @@ def _norm(dx, dy, dz):
 
 
 @njit(cache=True)
-def _group_vs_scene(g, robot, scene, rot, pos):
-    """0: group ``g``'s outer spheres clear every obstacle; 1: some touch one; 2: an inner ball hits an exact one."""
+def _group_vs_scene(g, robot, scene, rot, pos, stop_at_touch):
+    """0: group ``g``'s outer spheres clear every obstacle; 1: some touch one; 2: an inner ball hits an exact one
+    (or, with ``stop_at_touch``, an outer sphere touches one: the answer is then decided)."""
     c_start, c_joint, c_center, c_radius, g_clusters = robot[16], robot[17], robot[18], robot[19], robot[20]
     s_joint, s_center, s_radius, s_inner, g_joint, g_center, g_radius, padding = (
         robot[6], robot[7], robot[8], robot[9], robot[11], robot[12], robot[13], robot[15])  # fmt: skip
@@ -194,7 +195,7 @@ def _group_vs_scene(g, robot, scene, rot, pos):
             for s in range(c_start[c], c_start[c + 1]):
                 sx, sy, sz = _world(rot, pos, s_joint, s_center, s)
                 d = _obstacle_distance(sx, sy, sz, k, scene)
-                if exact[k] and d < s_inner[s] + padding:
+                if (exact[k] and d < s_inner[s] + padding) or (stop_at_touch and d < s_radius[s] + padding):
                     return 2
                 if d < s_radius[s] + padding:
                     touched = 1
@@ -202,8 +203,9 @@ def _group_vs_scene(g, robot, scene, rot, pos):
 
 
 @njit(cache=True)
-def _pair_vs_pair(ga, gb, robot, rot, pos):
-    """Self-collision pair (ga, gb) as _group_vs_scene answers: 0 clear, 1 outer spheres touch, 2 inner balls hit."""
+def _pair_vs_pair(ga, gb, robot, rot, pos, stop_at_touch):
+    """Self-collision pair (ga, gb) as _group_vs_scene answers: 0 clear, 1 outer spheres touch, 2 inner balls hit
+    (or outer spheres touch, with ``stop_at_touch``)."""
     c_start, c_joint, c_center, c_radius, g_clusters = robot[16], robot[17], robot[18], robot[19], robot[20]
     s_joint, s_center, s_radius, s_inner, g_joint, g_center, g_radius, padding = (
         robot[6], robot[7], robot[8], robot[9], robot[11], robot[12], robot[13], robot[15])  # fmt: skip
@@ -227,7 +229,9 @@ def _pair_vs_pair(ga, gb, robot, rot, pos):
                 for sb in range(c_start[cb], c_start[cb + 1]):
                     sbx, sby, sbz = _world(rot, pos, s_joint, s_center, sb)
                     d = _norm(sax - sbx, say - sby, saz - sbz)
-                    if d < s_inner[sa] + s_inner[sb] + padding:
+                    if d < s_inner[sa] + s_inner[sb] + padding or (
+                        stop_at_touch and d < s_radius[sa] + s_radius[sb] + padding
+                    ):
                         return 2
                     if d < s_radius[sa] + s_radius[sb] + padding:
                         touched = 1
@@ -235,10 +239,12 @@ def _pair_vs_pair(ga, gb, robot, rot, pos):
 
 
 @njit(cache=True)
-def classify(q, robot, scene, rot, pos):
+def classify(q, robot, scene, rot, pos, stop_at_touch):
     """VALID, COLLIDING or AMBIGUOUS for one full configuration: the answer of the sphere checker's
     classify_state without a grid, computed in a tight loop that places a sphere only when its
     cluster's bound reaches an obstacle or the other side of a self-collision pair.
+    ``stop_at_touch``: AMBIGUOUS counts as COLLIDING (the pure sphere model), so the first outer sphere
+    that touches ends the test.
 
     ``robot``/``scene``: unpack_robot/unpack_scene tuples; ``rot``/``pos``: joint pose work arrays.
     """
@@ -248,12 +254,12 @@ def classify(q, robot, scene, rot, pos):
     for g in range(g_joint.shape[0]):
         if g_joint[g] == 0:  # fixed to the world: like the exact checker, never tested against the scene
             continue
-        hit = _group_vs_scene(g, robot, scene, rot, pos)
+        hit = _group_vs_scene(g, robot, scene, rot, pos, stop_at_touch)
         if hit == 2:
             return COLLIDING
         touched |= hit
     for p in range(self_pairs.shape[0]):
-        hit = _pair_vs_pair(self_pairs[p, 0], self_pairs[p, 1], robot, rot, pos)
+        hit = _pair_vs_pair(self_pairs[p, 0], self_pairs[p, 1], robot, rot, pos, stop_at_touch)
         if hit == 2:
             return COLLIDING
         touched |= hit
@@ -306,7 +312,8 @@ def check_edge(
         if grid_i[0] > 0:
             hit, status, _ = scan_nb(states, row, ri, rf, sf, grid_i, grid_f, amb, mark, True)
         else:
-            hit, status = row, classify(states[row], robot, scene, rot, pos)
+            exact = confirm and _near_roots(states[row], indices, roots, exact_near)
+            hit, status = row, classify(states[row], robot, scene, rot, pos, not exact)
         if hit < 0:
             st[CHECKS] += n - row
             break
