@@ -134,3 +134,25 @@ def test_dual_arm_carry_keeps_the_hands_relative_pose():
     assert translation.max() <= math.sqrt(3) * 1e-3 and rotation.max() <= math.sqrt(3) * 1e-2
     straight = np.linspace(DUAL_CARRY.start, DUAL_CARRY.goal, 21)
     assert relative_pose_error(robot, DUAL_CARRY, straight)[0].max() > 2e-3  # planning was needed
+
+
+def test_goal_region_lands_inside_the_pose_tolerances(panda):
+    robot, q0, idx = panda
+    target = robot.frame_pose(q0, LINK).copy()
+    target[:3, 3] += (0.1, 0.15, -0.1)
+    region = PathConstraints(
+        OrientationConstraint(LINK, target[:3, :3], np.array([0.05, 0.05, math.pi])),
+        PositionConstraint(LINK, target, np.array([0.02, 0.02, 0.02])),
+    )
+    start = dict(zip(robot.joint_names, q0.tolist(), strict=True))
+    planner = MotionPlanner.from_scene(robot, Scene())
+    result = planner.plan(MotionRequest("arm", start=start, goal_region=region, seed=4, planner_id="RRTConnect"))
+    assert result.success, result.message
+    q = q0.copy()
+    q[idx] = result.trajectory.positions[-1]
+    assert region.satisfied(robot, q)
+    away = np.eye(4)
+    away[:3, 3] = (3.0, 0.0, 0.5)  # out of the arm's reach
+    far = PathConstraints(position=PositionConstraint(LINK, away, np.full(3, 0.01)))
+    unreachable = planner.plan(MotionRequest("arm", start=start, goal_region=far, time_budget=1.0))
+    assert unreachable.status is PlanStatus.NO_IK_SOLUTION

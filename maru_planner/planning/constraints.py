@@ -15,6 +15,7 @@ violated components (the projection step of constrained sampling planners).
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -211,3 +212,28 @@ def _relative_rows(c: RelativePoseConstraint, robot, q, indices, keep: float, ro
     error = pin.SE3(c.relative).actInv(oMa.actInv(oMb))
     J = pin.Jlog6(error) @ (J_b - oMb.actInv(oMa).action @ J_a)
     _pull(J, pin.log6(error).vector, c.tolerance * keep, rows, residual)
+
+
+GOAL_REGION_ATTEMPTS = 50  # random restarts of the projection before a goal region is declared unreachable
+
+
+def goal_in_region(
+    robot, region: PathConstraints, start: np.ndarray, indices: np.ndarray, is_valid, rng: np.random.Generator,
+    deadline: float,
+) -> np.ndarray:  # fmt: skip
+    """A collision-free full configuration inside the pose ``region`` (its constraints hold at the goal only).
+
+    First the start projected onto the region (the nearest goal in effect), then projections of random
+    configurations of the group; NoIKSolution when none lands free before ``deadline`` or the attempts run out.
+    """
+    region.check_links(robot)
+    candidate = start.copy()
+    for _ in range(GOAL_REGION_ATTEMPTS):
+        goal = region.project(robot, candidate, indices, inset=0.1)
+        if goal is not None and is_valid(goal):
+            return goal
+        if time.monotonic() > deadline:
+            break
+        candidate = start.copy()
+        candidate[indices] = rng.uniform(robot.lower_limits[indices], robot.upper_limits[indices])
+    raise errors.NoIKSolution(f"no collision-free state found in the goal region of {', '.join(region.links())}")

@@ -41,9 +41,11 @@ from maru_planner.planning.checkers import (
     default_exact_checker,
     is_sphere_checker,
     make_checkers,
+    padded_checker,
 )
 from maru_planner.planning.config import PlannerConfig
 from maru_planner.planning.constrained_planner import plan_constrained
+from maru_planner.planning.constraints import goal_in_region
 from maru_planner.planning.pose_goal import solve_pose_goal
 from maru_planner.planning.registry import (
     ArmPlannerSpec,
@@ -125,7 +127,9 @@ class MotionPlanner:
         self._lock = threading.RLock()
         self._scene_epoch = 0
         self._roadmaps: dict[tuple, Roadmap] = {}
-        self._setups: dict[tuple[int, ...], GroupSetup] = {}  # per group's joint indices, reused across requests
+        self._setups: dict[tuple, GroupSetup] = {}  # per (group's joint indices, checker), reused across requests
+        self._padded = None  # (padding, checker padded by it): the search's checker when certifying with a margin
+        self._search_checker = checker  # the checker the running search plans on (_search_checker_for)
         self._monitor = PlanMonitor()  # the running plan's (plan() sets it under the lock); never cancelled idle
         self.last_revalidation = None
         self.scene = None
@@ -156,6 +160,8 @@ class MotionPlanner:
                 self.checker.set_scene(scene)
                 if self.exact_checker is not None:
                     self.exact_checker.set_scene(scene)
+                if self._padded is not None:
+                    self._padded[1].set_scene(scene)
             self.scene = scene
             self._scene_epoch += 1
 
@@ -165,6 +171,7 @@ class MotionPlanner:
         self.robot, self.checker, self.exact_checker = robot, checkers.checker, checkers.exact
         self.certifier = self._make_certifier()
         self._roadmaps, self._setups = {}, {}
+        self._padded, self._search_checker = None, self.checker
 
     def _follow_attachments(self) -> None:
         """Pick up objects attached or detached by editing the scene in place since the last call."""
@@ -405,9 +412,10 @@ class MotionPlanner:
         self._check_free(goal_full, errors.GoalInCollision, "goal")
         stats.validation_time = time.monotonic() - t_val
 
+        self._search_checker = self._search_checker_for(req, start_full, goal_full)
         gs = self._group_setup(names, indices, start_full, resolution).gs
         start, goal = start_full[indices], goal_full[indices]
-        checks0 = self.checker.check_count
+        checks0 = self._search_checker.check_count
         try:
             monitor.report("search")
             raw = self._search(spec, gs, start, goal, seed, attempts, deadline, stats, resolution)
@@ -416,7 +424,7 @@ class MotionPlanner:
             monitor.report("simplify", best_cost=stats.raw_path_length)
             path = self._simplify(req, gs, raw, seed, deadline, stats, resolution)
         finally:
-            stats.collision_checks = int(self.checker.check_count - checks0)
+            stats.collision_checks = int(self._search_checker.check_count - checks0)
 
         monitor.report("parameterize", best_cost=postprocess.path_length(path))
         t_par = time.monotonic()
@@ -552,6 +560,14 @@ class MotionPlanner:
         self._check_free(q, error_cls, what)
 
     def _goal_state(self, req: MotionRequest, start_full: np.ndarray, indices) -> np.ndarray:
+        region = getattr(req, "goal_region", None)
+        if region is not None and not region.empty:
+            if req.goal_joints:
+                raise errors.InvalidRequest("give either goal_joints or goal_region, not both")
+            rng = np.random.default_rng(req.seed)
+            deadline = time.monotonic() + float(req.time_budget) / 2
+            return goal_in_region(self.robot, region, start_full, np.asarray(indices), self.checker.is_valid, rng,
+                                  deadline)  # fmt: skip
         if req.goal_joints is None:
             raise errors.InvalidRequest("no goal: give goal_joints or goal_poses")
         values = self._check_values(req.goal_joints, "goal")
@@ -612,13 +628,30 @@ class MotionPlanner:
             )
         raise errors.PlanningFailed(failure, source="planner")
 
+    def _search_checker_for(self, req: MotionRequest, start_full: np.ndarray, goal_full: np.ndarray):
+        """The checker ``req``'s search and shortcutting plan on (docs/certification.md, "Why the search is padded").
+
+        When its path will be certified with a safety margin: ``self.checker`` padded by that margin, so the
+        search's paths rarely pass closer than certification accepts. A start or goal closer than the margin
+        (certification then lowers it below their clearance) is searched unpadded, as without a margin.
+        """
+        margin = _safety_margin(req, self.config) if self.certifier is not None else 0.0
+        if margin <= 0.0:
+            return self.checker
+        if self._padded is None or self._padded[0] != margin:
+            self._padded = (margin, padded_checker(self.robot, self.checker, margin))
+            self._setups = {key: setup for key, setup in self._setups.items() if key[1] == id(self.checker)}
+        padded = self._padded[1]
+        return padded if padded.is_valid(start_full) and padded.is_valid(goal_full) else self.checker
+
     def _group_setup(self, names, indices, base: np.ndarray, resolution: float) -> GroupSetup:
         """The group's space and OMPL setup (built once per group), prepared for ``base`` and ``resolution``."""
-        setup = self._setups.get(tuple(indices))
+        key = (tuple(indices), id(self._search_checker))
+        setup = self._setups.get(key)
         if setup is None:
             lower, upper = self.robot.lower_limits[indices], self.robot.upper_limits[indices]
-            setup = GroupSetup(GroupSpace(names, indices, lower, upper, base), self.checker, resolution)
-            self._setups[tuple(indices)] = setup
+            setup = GroupSetup(GroupSpace(names, indices, lower, upper, base), self._search_checker, resolution)
+            self._setups[key] = setup
         setup.prepare(base, resolution)
         return setup
 
@@ -646,10 +679,11 @@ class MotionPlanner:
 
     def _roadmap_for(self, spec: ArmPlannerSpec, gs: GroupSpace, params, resolution: float) -> Roadmap:
         outside = np.setdiff1d(np.arange(len(gs.base)), gs.indices)
-        key = (spec.id, tuple(gs.indices), tuple(np.round(gs.base[outside], 9)), resolution, tuple(params.items()))
+        key = (spec.id, tuple(gs.indices), tuple(np.round(gs.base[outside], 9)), resolution, tuple(params.items()),
+               id(self._search_checker))  # fmt: skip
         roadmap = self._roadmaps.get(key)
         if roadmap is None:
-            roadmap = Roadmap(gs, self.checker, resolution, spec.id, params)
+            roadmap = Roadmap(gs, self._search_checker, resolution, spec.id, params)
             roadmap.scene_epoch = self._scene_key()
             self._roadmaps = {key: roadmap}  # one roadmap at a time: bounded memory
         return roadmap
@@ -702,7 +736,7 @@ class MotionPlanner:
         if not getattr(req, "simplify", True) or len(raw) <= 2:
             return raw
         t_simp = time.monotonic()
-        edges = EdgeChecker(gs, self.checker, resolution)
+        edges = EdgeChecker(gs, self._search_checker, resolution)
         rng = np.random.default_rng(seed)
         monitor = self._monitor
 

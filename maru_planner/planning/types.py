@@ -82,7 +82,8 @@ class MotionRequest:
     ("ruckig" only). ``safety_margin`` (m): the clearance the certified path keeps from every
     obstacle and link pair (``docs/certification.md``); None = ``PlannerConfig.safety_margin``.
     ``path_constraints``: kept along the whole motion, planned by CBiRRT
-    (:mod:`~maru_planner.planning.constrained_planner`, ``docs/manipulation.md``).
+    (:mod:`~maru_planner.planning.constrained_planner`, ``docs/manipulation.md``). ``goal_region``: instead of
+    a joint goal, a pose region (orientation tolerances and/or a position box of links) the goal must lie in.
     """
 
     group: str
@@ -100,6 +101,7 @@ class MotionRequest:
     jerk_scaling: float = 1.0
     safety_margin: float | None = None
     path_constraints: PathConstraints | None = None
+    goal_region: PathConstraints | None = None
 
 
 @dataclass
