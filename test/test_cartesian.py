@@ -13,7 +13,8 @@ from maru_planner.planning.cartesian import CartesianRequest, default_link
 from maru_planner.robot import RobotModel
 from maru_planner.scene import Obstacle, Scene
 
-MARU_START = (-0.9, 0.25, 1.75, 1.66, 1.9, 0.0, -2.55, -0.8, 1.57, 2.0, 0.7, -1.9, -1.25)  # right arm well conditioned
+# both arms well conditioned (hand Jacobians' smallest singular value ~0.15)
+MARU_START = (-0.9, 0.25, 1.75, 1.66, 1.9, 0.0, -2.55, 0.15, 1.35, 0.83, 1.87, -3.17, -1.41)
 
 
 @pytest.fixture(scope="module")
@@ -52,7 +53,10 @@ def _distance_to_segment(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np
     return np.linalg.norm(points - (a + t[:, None] * (b - a)), axis=1)
 
 
-@pytest.mark.parametrize("robot_fixture, group", [("maru1", "right_arm"), ("panda", "arm")])
+@pytest.mark.parametrize(
+    "robot_fixture, group",
+    [("maru1", "right_arm"), ("maru1", "left_arm"), ("maru1", "torso_right_arm"), ("panda", "arm")],
+)
 def test_straight_line_is_followed_to_the_end_and_certified(request, robot_fixture, group):
     robot, start = request.getfixturevalue(robot_fixture)
     link = default_link(robot, group)
