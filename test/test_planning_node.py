@@ -203,17 +203,6 @@ def test_empty_start_without_joint_states_is_no_start_state(client):
     assert "joint_states" in response.error.message
 
 
-def test_robot_description_is_latched(client, tester):
-    from rclpy.qos import DurabilityPolicy, QoSProfile
-    from std_msgs.msg import String
-
-    received = []
-    qos = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
-    tester.node.create_subscription(String, "/robot_description", received.append, qos)
-    assert tester.wait_for(lambda: received, timeout=60.0)
-    assert "maru1_upper_body" in received[0].data and "<robot" in received[0].data
-
-
 # ---------------------------------------------------------------- the paper problem
 
 

@@ -347,7 +347,7 @@ class PlanningNode(ManagedNode):
         self.get_logger().info(
             f"ready: robot {len(self._robot.joint_names)} joints, groups {sorted(self._robot.groups)}, "
             f"scene {len(self._scene.snapshot()[0].get('obstacles', []))} obstacles, "
-            f"{self.settings.workers} workers, queue_size {self.settings.queue_size}"
+            f"{self.settings.workers} workers, queue_size {self.settings.queue_size}; {self._description_origin}"
         )
 
     # ------------------------------------------------------------ set-up
@@ -383,13 +383,19 @@ class PlanningNode(ManagedNode):
                 "publish_robot_description would echo the robot_description topic it reads "
                 "(robot_description_source topic); set one of them"
             )
-        urdf_xml = settings.robot_description
+        urdf_xml, urdf_from = settings.robot_description, "the robot_description parameter"
         if settings.robot_description_source == "topic":
             urdf_xml = wait_for_robot_description(self, settings.robot_description_timeout)
+            urdf_from = "topic " + self.resolve_topic_name("robot_description")
         urdf = self._written("robot_description.urdf", urdf_xml) if urdf_xml else settings.robot_urdf
         srdf_xml = settings.robot_description_semantic
         srdf = self._written("robot_description_semantic.srdf", srdf_xml) if srdf_xml else settings.robot_srdf
-        return urdf or str(urdf_path(DEFAULT_URDF)), srdf or str(urdf_path(DEFAULT_SRDF))
+        urdf, srdf = urdf or str(urdf_path(DEFAULT_URDF)), srdf or str(urdf_path(DEFAULT_SRDF))
+        self._description_origin = (
+            f"URDF from {urdf_from if urdf_xml else urdf}, "
+            f"SRDF from {'the robot_description_semantic parameter' if srdf_xml else srdf}"
+        )
+        return urdf, srdf
 
     def _written(self, name: str, text: str) -> str:
         if self._description_dir is None:
