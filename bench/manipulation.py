@@ -23,6 +23,7 @@ Writes bench/results/manipulation.{json,md,png}; progress on stderr.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import sys
@@ -41,6 +42,8 @@ from maru_planner.planning import MotionPlanner, MotionRequest  # noqa: E402
 from maru_planner.planning.cartesian import CartesianRequest  # noqa: E402
 from maru_planner.planning.constraints import OrientationConstraint, PathConstraints  # noqa: E402
 from maru_planner.planning.dual_arm import DUAL_CARRY, relative_pose_error  # noqa: E402
+from maru_planner.planning.postprocess import path_length  # noqa: E402
+from maru_planner.planning.types import MotionResult, PlanStats, PlanStatus  # noqa: E402
 from maru_planner.robot import RobotModel  # noqa: E402
 from maru_planner.scene import Scene  # noqa: E402
 
@@ -126,23 +129,13 @@ def constrained_suite(count: int, budget: float, progress: Progress) -> list[dic
     planner = MotionPlanner.from_scene(robot, Scene())
     checker = CollisionChecker(robot, Scene())
     rng = np.random.default_rng(150)
-    runs = []
+    runs: list[dict] = []
     while len(runs) < count:
-        start = well_conditioned_start(robot, "arm", link, checker, rng)
-        upright = robot.frame_pose(start, link)[:3, :3].copy()
-        constraints = PathConstraints(OrientationConstraint(link, upright, np.array([TOLERANCE, TOLERANCE, math.pi])))
-        moved = start.copy()
-        moved[indices] += rng.uniform(-1.2, 1.2, len(indices))
-        goal = constraints.project(robot, np.clip(moved, robot.lower_limits, robot.upper_limits), indices)
-        if goal is None or not checker.is_valid(goal):
-            continue
-        start_values = dict(zip(robot.joint_names, start.tolist(), strict=True))
-        goal_joints = {robot.joint_names[i]: float(goal[i]) for i in indices}
-        run = {"task": len(runs)}
-        for mode, constraint in (("constrained", constraints), ("unconstrained", None)):
-            request = MotionRequest("arm", start=start_values, goal_joints=goal_joints, seed=len(runs),
-                                    time_budget=budget, path_constraints=constraint,
-                                    planner_id="" if constraint else "RRTConnect")  # fmt: skip
+        request, start, upright = constrained_suite_task(robot, checker, rng, seed=len(runs), budget=budget)
+        run: dict = {"task": len(runs)}
+        for mode in ("constrained", "unconstrained"):
+            if mode == "unconstrained":
+                request = dataclasses.replace(request, path_constraints=None, planner_id="RRTConnect")
             result = planner.plan(request)
             run[mode] = {"success": result.success, "status": result.status.value,
                          "seconds": result.stats.total_time,
@@ -152,6 +145,25 @@ def constrained_suite(count: int, budget: float, progress: Progress) -> list[dic
                       f"{run['constrained']['seconds']:.2f} s, violation {run['constrained']['violation']}; "
                       f"RRTConnect violation {run['unconstrained']['violation']}")  # fmt: skip
     return runs
+
+
+def constrained_suite_task(robot, checker, rng, seed: int = 0, budget: float = 10.0):
+    """(request keeping the hand upright from a random start to a goal on the constraint, start, upright)."""
+    link, indices = "panda_hand_tcp", robot.group_joint_indices("arm")
+    while True:
+        start = well_conditioned_start(robot, "arm", link, checker, rng)
+        upright = robot.frame_pose(start, link)[:3, :3].copy()
+        constraints = PathConstraints(OrientationConstraint(link, upright, np.array([TOLERANCE, TOLERANCE, math.pi])))
+        moved = start.copy()
+        moved[indices] += rng.uniform(-1.2, 1.2, len(indices))
+        goal = constraints.project(robot, np.clip(moved, robot.lower_limits, robot.upper_limits), indices)
+        if goal is not None and checker.is_valid(goal):
+            request = MotionRequest(
+                "arm", start=dict(zip(robot.joint_names, start.tolist(), strict=True)),
+                goal_joints={robot.joint_names[i]: float(goal[i]) for i in indices}, seed=seed, time_budget=budget,
+                path_constraints=constraints,
+            )  # fmt: skip
+            return request, start, upright
 
 
 def tilt_violation(robot, start, indices, link, upright, result) -> float | None:
@@ -282,6 +294,47 @@ def plot(results: dict, path: Path) -> None:
     plt.close(fig)
 
 
+# -------------------------------------------------------------------------------- pictures --
+SQUARE_START = (-0.9, 0.25, 1.75, 1.66, 1.9, 0.0, -2.55, 0.15, 1.35, 0.83, 1.87, -3.17, -1.41)
+
+
+def pictures(out: Path) -> list[Path]:
+    """A vertical Cartesian square (8 cm) of Maru-1's right hand, and the Panda hand kept upright (CBiRRT)."""
+    from maru_planner.viz.plans import plot_plan  # noqa: PLC0415 - lazy: matplotlib only for the pictures
+
+    written = []
+    robot = RobotModel.maru1()
+    scene = Scene.from_yaml(config_path("scenes", "maru13_desk_box.yaml"))
+    q = np.array(SQUARE_START)
+    corner = robot.frame_pose(q, "r_hand")
+    square = []
+    for offset in ((0.08, 0, 0), (0.08, 0, 0.08), (0, 0, 0.08), (0, 0, 0)):
+        pose = corner.copy()
+        pose[:3, 3] += offset
+        square.append(pose)
+    start = dict(zip(robot.joint_names, q.tolist(), strict=True))
+    line = MotionPlanner.from_scene(robot, scene).cartesian_path(CartesianRequest("right_arm", start, square))
+    if line.success:
+        shown = MotionResult(PlanStatus.SUCCESS, joint_names=line.joint_names, path=line.path,
+                             trajectory=line.trajectory,
+                             stats=PlanStats(solve_time=line.seconds, path_length=path_length(line.path)))  # fmt: skip
+        path = out.with_name(out.name + "_cartesian.png")
+        plot_plan(robot, scene, shown, path, title=f"Cartesian square, r_hand: fraction {line.fraction:.2f}",
+                  base_q=q)  # fmt: skip
+        written.append(path)
+    panda = RobotModel.from_profile("panda")
+    checker = CollisionChecker(panda, Scene())
+    task = constrained_suite_task(panda, checker, np.random.default_rng(150))
+    result = MotionPlanner.from_scene(panda, Scene()).plan(task[0])
+    if result.success:
+        tilt = tilt_violation(panda, task[1], panda.group_joint_indices("arm"), "panda_hand_tcp", task[2], result)
+        path = out.with_name(out.name + "_constrained.png")
+        plot_plan(panda, Scene(), result, path, title=f"Panda hand upright (0.1 rad): violation {tilt:.4f} rad",
+                  base_q=task[1])  # fmt: skip
+        written.append(path)
+    return written
+
+
 # ------------------------------------------------------------------------------------ main --
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -307,6 +360,8 @@ def main(argv: list[str] | None = None) -> int:
     md = markdown(results["summary"], args)
     args.out.with_suffix(".md").write_text(md)
     plot(results, args.out.with_suffix(".png"))
+    for picture in pictures(args.out):
+        log(f"picture {picture}")
     print(md)
     return 0
 
