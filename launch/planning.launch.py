@@ -2,9 +2,12 @@
 
 Arguments: ``params_file`` (default: the installed config/planner.yaml), ``namespace`` (services and
 topics are relative, so a namespace moves them; the yaml is keyed ``/**/planning_node``, so it still
-applies), ``scene_file`` (overrides the yaml's scene). Networking comes from the environment the launch
-runs in (RMW_IMPLEMENTATION, ROS_AUTOMATIC_DISCOVERY_RANGE, ...); with none of it set the node stays on
-loopback (see docs/planning_node.md).
+applies), ``scene_file`` (overrides the yaml's scene), ``use_sim_time`` (time from ``/clock``),
+``autostart`` (``false``: the node waits unconfigured for a lifecycle manager) and ``rviz`` (``true``:
+rviz2 with config/rviz/planning.rviz, which shows ``/robot_description`` as robot_state_publisher
+publishes it). Networking comes from the environment the launch runs in (RMW_IMPLEMENTATION,
+ROS_AUTOMATIC_DISCOVERY_RANGE, ...); with none of it set the node stays on loopback (see
+docs/planning_node.md).
 """
 
 import os
@@ -23,6 +26,8 @@ def generate_launch_description():
     params_file = LaunchConfiguration("params_file")
     namespace = LaunchConfiguration("namespace")
     scene_file = LaunchConfiguration("scene_file")
+    use_sim_time = LaunchConfiguration("use_sim_time")
+    overrides = {"use_sim_time": use_sim_time, "autostart": LaunchConfiguration("autostart")}
     common = {
         "package": "maru_planner",
         "executable": "planning_node",
@@ -41,7 +46,26 @@ def generate_launch_description():
             ),
             DeclareLaunchArgument("namespace", default_value="", description="namespace of the node"),
             DeclareLaunchArgument("scene_file", default_value="", description="scene YAML (empty: from params)"),
-            Node(**common, parameters=[params_file], condition=IfCondition(no_scene)),
-            Node(**common, parameters=[params_file, {"scene_file": scene_file}], condition=IfCondition(has_scene)),
+            DeclareLaunchArgument("use_sim_time", default_value="false", description="time from /clock"),
+            DeclareLaunchArgument(
+                "autostart", default_value="true", description="configure and activate at once (false: lifecycle)"
+            ),
+            DeclareLaunchArgument("rviz", default_value="false", description="start rviz2 with planning.rviz"),
+            Node(**common, parameters=[params_file, overrides], condition=IfCondition(no_scene)),
+            Node(
+                **common,
+                parameters=[params_file, {**overrides, "scene_file": scene_file}],
+                condition=IfCondition(has_scene),
+            ),
+            Node(
+                package="rviz2",
+                executable="rviz2",
+                name="rviz2",
+                namespace=namespace,
+                arguments=["-d", os.path.join(share, "config", "rviz", "planning.rviz")],
+                parameters=[{"use_sim_time": use_sim_time}],
+                condition=IfCondition(LaunchConfiguration("rviz")),
+                output="screen",
+            ),
         ]
     )

@@ -532,6 +532,7 @@ def test_launch_file_starts_the_node_with_the_shipped_config(monkeypatch):
     fakes = {
         "launch": types.SimpleNamespace(LaunchDescription=Recorder),
         "launch.actions": types.SimpleNamespace(DeclareLaunchArgument=Recorder),
+        "launch.conditions": types.SimpleNamespace(IfCondition=Recorder),
         "launch.substitutions": types.SimpleNamespace(LaunchConfiguration=lambda name: f"<{name}>"),
         "launch_ros.actions": types.SimpleNamespace(Node=Recorder),
         "ament_index_python.packages": types.SimpleNamespace(get_package_share_directory=lambda _: str(REPO_ROOT)),
@@ -542,12 +543,14 @@ def test_launch_file_starts_the_node_with_the_shipped_config(monkeypatch):
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     description = module.generate_launch_description()
-    *arguments, node = description.args[0]
+    *arguments, rviz, node = description.args[0]
+    assert rviz.kwargs["executable"] == "rviz2"  # test_launch_files.py checks it with the other launch files
     defaults = {a.args[0]: a.kwargs["default_value"] for a in arguments}
     assert Path(defaults["params_file"]) == config_path("reactive.yaml")
     assert node.kwargs["executable"] == "reactive_node" and node.kwargs["name"] == "reactive_node"
     file, overrides = node.kwargs["parameters"]
-    assert file == "<params_file>" and overrides == {"strip": "<strip>", "use_sim_time": "<use_sim_time>"}
+    assert file == "<params_file>"
+    assert overrides == {"strip": "<strip>", "use_sim_time": "<use_sim_time>", "autostart": "<autostart>"}
     assert defaults["use_sim_time"] == "false"
     setup_py = REPO_ROOT / "packaging" / "maru_planner" / "setup.py"
     assert "reactive_node = maru_planner.ros.reactive_node:main" in setup_py.read_text()

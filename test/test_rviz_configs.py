@@ -42,7 +42,9 @@ def test_rviz_config_is_valid_yaml_with_a_fixed_frame(name):
 
 @pytest.mark.parametrize("name", sorted(NODES))
 def test_every_rviz_topic_exists_on_the_running_node(name, node_process, spinning_node):
-    process = node_process(NODES[name])
+    # /robot_description comes from robot_state_publisher; without one, planning_node publishes it on request
+    args = ["--ros-args", "-p", "publish_robot_description:=true"] if name == "planning" else []
+    process = node_process(NODES[name], args)
     wanted = _topics(yaml.safe_load((RVIZ / f"{name}.rviz").read_text())) - {"/goal_pose"} | (
         {"/goal_pose"} if name == "reactive" else set()
     )
