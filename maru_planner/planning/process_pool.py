@@ -195,14 +195,10 @@ class _Worker:
         self.reader: threading.Thread | None = None
         self._send_lock = threading.Lock()
 
-    def send(self, message: tuple) -> bool:
-        """Send ``message``; False if the worker is gone (its reader thread handles that)."""
-        try:
-            with self._send_lock:
-                self.conn.send(message)
-        except (OSError, ValueError):
-            return False
-        return True
+    def send(self, message: tuple) -> None:
+        """Send ``message``; nothing if the worker is gone (its reader thread handles that)."""
+        with contextlib.suppress(OSError, ValueError), self._send_lock:
+            self.conn.send(message)
 
 
 class _CancelInWorker:
@@ -447,6 +443,9 @@ class ProcessPool:
             if worker in self._idle:
                 self._idle.remove(worker)
             job, worker.job = worker.job, None
+            if not worker.ready.is_set():  # died while building its planner: wait_ready reports it, no restart loop
+                worker.failure = worker.failure or f"{worker.process.name} exited before it was ready"
+                worker.ready.set()
             replace = not (self._closed or worker.retiring or worker.failure)
         worker.conn.close()
         _reap(worker.process)

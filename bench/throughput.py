@@ -1,0 +1,263 @@
+"""Throughput of planning_node under concurrent clients: one worker against several, processes against threads.
+
+For each configuration a planning_node process starts (config/planner.yaml, ``-p workers:=K -p
+worker_processes:=B``, a queue deep enough that nothing is BUSY), then ``--clients`` client threads
+(each its own plan_motion client, one rclpy node spun in this process) send the same list of requests:
+the 13-DOF desk-and-box problem with RRTConnect, each request its own seed from seeds that certify
+without repairs (the same work in every configuration). Requests/s = answered requests / wall time
+from the first send to the last answer. Start-up = node process start until its first answer.
+
+Target (issue 16): N process workers >= 1.8x one worker's requests/s with 8 clients on this 2-core machine.
+
+    .venv/bin/python bench/throughput.py [--requests 96] [--clients 8] [--workers 2] [--quick]
+
+Writes bench/results/throughput.{json,md,png}.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+
+from maru_planner.paths import config_path
+from maru_planner.ros.env import configure_loopback_dds
+
+RESULTS = Path(__file__).resolve().parent / "results"
+NAME = "throughput"
+TARGET_RATIO = 1.8
+JOINTS = ["waist_yaw"] + [f"r_arm_j{i}" for i in range(1, 7)] + [f"l_arm_j{i}" for i in range(1, 7)]
+START = dict(zip(JOINTS, (-0.9, -0.7, 1.57, 0.7, 0.7, -0.9, -0.9, -0.8, 1.57, 2.0, 0.7, -1.9, -1.25), strict=True))
+GOAL = dict(zip(JOINTS, (0.9, -0.8, 1.57, 1.14, 0.7, -1.24, -1.9, -0.7, 1.57, 2.44, 0.7, -2.24, -1.25), strict=True))
+# RRTConnect seeds of this problem whose paths certify without repairs (a repair's timing is bounded by
+# certify_timeout, which a loaded machine can miss): 0.1-0.2 s of planning each on a quiet core.
+SEEDS = (1, 2, 4, 6, 7, 8, 12, 13, 18, 24, 25, 26, 27, 28)
+BUDGET = 20.0  # s per request: far above what a request needs, so none times out
+CALL_TIMEOUT = 600.0
+
+
+def log(message: str) -> None:
+    print(message, file=sys.stderr, flush=True)
+
+
+def configurations(workers: int, quick: bool) -> list[dict]:
+    """(label, workers, worker_processes): one process worker is the reference."""
+    configs = [
+        {"label": "1 worker (process)", "workers": 1, "processes": True},
+        {"label": f"{workers} workers (processes)", "workers": workers, "processes": True},
+    ]
+    if not quick:
+        configs += [
+            {"label": "1 worker (thread)", "workers": 1, "processes": False},
+            {"label": f"{workers} workers (threads)", "workers": workers, "processes": False},
+        ]
+    return configs
+
+
+def start_node(config: dict, requests: int, log_file) -> subprocess.Popen:
+    args = [
+        "-m", "maru_planner.ros.planning_node", "--ros-args", "--params-file", str(config_path("planner.yaml")),
+        "-p", f"workers:={config['workers']}", "-p", f"worker_processes:={str(config['processes']).lower()}",
+        "-p", f"queue_size:={requests}",
+    ]  # fmt: skip
+    return subprocess.Popen(
+        [sys.executable, *args],
+        stdout=log_file,
+        stderr=subprocess.STDOUT,
+        stdin=subprocess.DEVNULL,
+        env=dict(os.environ),
+    )
+
+
+def stop_node(node: subprocess.Popen) -> None:
+    node.terminate()
+    try:
+        node.wait(timeout=20)
+    except subprocess.TimeoutExpired:
+        node.kill()
+        node.wait()
+
+
+def make_request(seed: int):
+    from maru_planner.ros.planning_client import plan_request
+
+    return plan_request(GOAL, start=START, group="upper_body", planner_id="RRTConnect", time_budget=BUDGET, seed=seed)
+
+
+def drive(clients: list, seeds: list[int]) -> dict:
+    """Send ``seeds`` (one request each) from every client thread, taking the next seed when free."""
+    from maru_planner.ros.planning_client import call_service
+    from maru_planner_interfaces.msg import PlanningError
+
+    todo = iter(seeds)
+    lock = threading.Lock()
+    latencies: list[float] = []
+    core: list[float] = []
+    failures: list[str] = []
+
+    def client_loop(client) -> None:
+        while True:
+            with lock:
+                seed = next(todo, None)
+            if seed is None:
+                return
+            t0 = time.perf_counter()
+            response = call_service(client, make_request(seed), CALL_TIMEOUT)
+            with lock:
+                latencies.append(time.perf_counter() - t0)
+                core.append(response.planning_time)
+                if response.error.code != PlanningError.SUCCESS:
+                    failures.append(response.error.message)
+
+    threads = [threading.Thread(target=client_loop, args=(c,)) for c in clients]
+    t0 = time.perf_counter()
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    wall = time.perf_counter() - t0
+    return {
+        "requests": len(latencies),
+        "failures": len(failures),
+        "failure_example": failures[0] if failures else "",
+        "wall_s": wall,
+        "requests_per_s": len(latencies) / wall,
+        "latency_median_ms": float(np.median(latencies) * 1e3),
+        "latency_p90_ms": float(np.percentile(latencies, 90) * 1e3),
+        "core_median_ms": float(np.median(core) * 1e3),
+        "raw_latency_ms": [x * 1e3 for x in latencies],
+    }
+
+
+def measure(config: dict, clients_count: int, requests: int, client_node, logs: Path) -> dict:
+    from maru_planner.ros.planning_client import call_until_answered
+    from maru_planner_interfaces.srv import PlanMotion
+
+    label = config["label"]
+    log_path = logs / f"node_{config['workers']}_{int(config['processes'])}.log"
+    with open(log_path, "w") as node_log:
+        t_start = time.perf_counter()
+        node = start_node(config, requests, node_log)
+        clients = [client_node.create_client(PlanMotion, "plan_motion") for _ in range(clients_count)]
+        try:
+            for client in clients:
+                if not client.wait_for_service(timeout_sec=300.0):
+                    raise RuntimeError(f"{label}: plan_motion never appeared; node log:\n{log_path.read_text()}")
+            call_until_answered(clients[0], make_request(SEEDS[0]), CALL_TIMEOUT)
+            startup = time.perf_counter() - t_start
+            for client in clients[1:]:  # both directions matched for every client: no answer gets lost
+                call_until_answered(client, make_request(SEEDS[0]), CALL_TIMEOUT)
+            log(f"{label}: ready after {startup:.1f} s; {requests} requests from {clients_count} clients ...")
+            seeds = [SEEDS[i % len(SEEDS)] for i in range(requests)]
+            result = drive(clients, seeds)
+        finally:
+            for client in clients:
+                client_node.destroy_client(client)
+            stop_node(node)
+    log(f"{label}: {result['requests_per_s']:.2f} requests/s, {result['failures']} failed")
+    return {**config, "startup_s": startup, **result}
+
+
+def run(configs: list[dict], clients: int, requests: int) -> dict:
+    import rclpy
+    from rclpy.executors import MultiThreadedExecutor
+
+    rclpy.init()
+    client_node = rclpy.create_node("throughput_clients")
+    executor = MultiThreadedExecutor(num_threads=2)
+    executor.add_node(client_node)
+    threading.Thread(target=executor.spin, daemon=True).start()
+    try:
+        with tempfile.TemporaryDirectory(prefix="throughput_") as logs:
+            rows = [measure(config, clients, requests, client_node, Path(logs)) for config in configs]
+    finally:
+        executor.shutdown(timeout_sec=2.0)
+        client_node.destroy_node()
+        rclpy.shutdown()
+    reference = rows[0]["requests_per_s"]
+    for row in rows:
+        row["speedup_vs_1_process_worker"] = row["requests_per_s"] / reference
+    return {
+        "clients": clients,
+        "requests": requests,
+        "cpus": os.cpu_count(),
+        "target_ratio": TARGET_RATIO,
+        "rows": rows,
+    }
+
+
+def table(results: dict) -> str:
+    lines = [
+        f"# planning_node throughput ({results['clients']} concurrent clients, {results['requests']} requests, "
+        f"{results['cpus']} CPUs)",
+        "",
+        "Each request: the 13-DOF desk-and-box problem, RRTConnect, its own seed (the same requests in every",
+        "configuration). Start-up: node process start until its first answer.",
+        "",
+        "| configuration | requests/s | x 1 process worker | latency median ms | p90 ms | core median ms "
+        "| failed | start-up s |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for row in results["rows"]:
+        lines.append(
+            f"| {row['label']} | {row['requests_per_s']:.2f} | {row['speedup_vs_1_process_worker']:.2f} | "
+            f"{row['latency_median_ms']:.0f} | {row['latency_p90_ms']:.0f} | {row['core_median_ms']:.0f} | "
+            f"{row['failures']} | {row['startup_s']:.1f} |"
+        )
+    best = max(row["speedup_vs_1_process_worker"] for row in results["rows"] if row["processes"])
+    verdict = "met" if best >= results["target_ratio"] else "missed"
+    lines += ["", f"Target: process workers >= {results['target_ratio']}x one worker: **{verdict}** ({best:.2f}x)."]
+    return "\n".join(lines) + "\n"
+
+
+def plot(results: dict, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = results["rows"]
+    fig, ax = plt.subplots(figsize=(8, 4))
+    colors = ["tab:blue" if row["processes"] else "tab:gray" for row in rows]
+    ax.bar([row["label"] for row in rows], [row["requests_per_s"] for row in rows], color=colors)
+    reference = rows[0]["requests_per_s"]
+    ax.axhline(TARGET_RATIO * reference, color="tab:red", linestyle="--", label=f"target {TARGET_RATIO}x one worker")
+    ax.set_ylabel("requests / s")
+    ax.set_title(f"planning_node throughput, {results['clients']} concurrent clients ({results['cpus']} CPUs)")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--requests", type=int, default=96, help="requests per configuration")
+    parser.add_argument("--clients", type=int, default=8, help="concurrent client threads")
+    parser.add_argument("--workers", type=int, default=2, help="workers of the parallel configurations")
+    parser.add_argument("--quick", action="store_true", help="16 requests, process workers only (a smoke run)")
+    args = parser.parse_args(argv)
+    if min(args.requests, args.clients, args.workers) < 1:
+        print("throughput: --requests, --clients and --workers must be >= 1", file=sys.stderr)
+        return 2
+    configure_loopback_dds(random_domain=True)
+    results = run(configurations(args.workers, args.quick), args.clients, 16 if args.quick else args.requests)
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    (RESULTS / f"{NAME}.json").write_text(json.dumps(results, indent=2))
+    markdown = table(results)
+    (RESULTS / f"{NAME}.md").write_text(markdown)
+    plot(results, RESULTS / f"{NAME}.png")
+    print(markdown)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
