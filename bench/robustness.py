@@ -45,13 +45,6 @@ NAME = "robustness"
 JUNK_MESSAGES = 10_000
 BURST_CLIENTS = 64
 BURST_BUDGET = 5.0
-# Examples per batch at scale 1 (the test suite's numbers).
-EXAMPLES = {
-    "plan_motion": 260, "compute_ik": 120, "apply_scene": 120, "scene_topic": 80, "joint_states": 80,
-    "plan_base_path": 300, "make_plan": 60, "map": 150, "reactive": 360,
-    "scene_files": 150, "map_files": 150, "biped_files": 100, "sim_files": 150,
-    "maru-plan": 80, "maru-base-plan": 80, "maru-reactive-sim": 60,
-}  # fmt: skip
 TARGETS = ["planning_node", "base_planner_node", "reactive_node", "maru-plan", "maru-base-plan", "maru-reactive-sim"]
 
 
@@ -69,7 +62,7 @@ class Bench:
         self.batches = 0
 
     def examples(self, batch: str) -> int:
-        return max(1, round(EXAMPLES[batch] * self.scale))
+        return max(1, round(hostile.SUITE_EXAMPLES[batch] * self.scale))
 
     def batch(self, target: str, batch: str, strategy, send: Callable, good: Callable[[], bool] | None = None) -> None:
         total = self.examples(batch)
@@ -184,7 +177,8 @@ def run_reactive_node(bench: Bench) -> None:
             target.send_good_goal()
             return target.good_step() and spinning.wait_for(lambda: target.callback_errors() == 0, timeout=30)
 
-        bench.batch("reactive_node", "reactive", hostile.reactive_messages(), target.send, good)
+        for _ in range(hostile.REACTIVE_BATCHES):
+            bench.batch("reactive_node", "reactive", hostile.reactive_messages(), target.send, good)
         bench.measure_rss("reactive_node", process.proc.pid, lambda: target.junk_scans(JUNK_MESSAGES), good)
     finally:
         spinning.destroy()

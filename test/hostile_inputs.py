@@ -40,6 +40,14 @@ from maru_planner.ros.planning_conversions import joint_state_msg, trajectory_po
 from maru_planner_interfaces.msg import PlanningError, SceneObstacle
 from maru_planner_interfaces.srv import ApplyScene, ComputeIK, PlanBasePath, PlanMotion
 
+# Examples per batch in the test suite (about 1,700 in all, ~3 min on 2 cores); bench/robustness.py scales them.
+SUITE_EXAMPLES = {
+    "plan_motion": 200, "compute_ik": 90, "apply_scene": 90, "scene_topic": 60, "joint_states": 60,
+    "plan_base_path": 220, "make_plan": 40, "map": 100, "reactive": 100,
+    "scene_files": 100, "map_files": 100, "biped_files": 70, "sim_files": 100,
+    "maru-plan": 60, "maru-base-plan": 60, "maru-reactive-sim": 40,
+}  # fmt: skip
+REACTIVE_BATCHES = 3
 LATE_MARGIN = 0.5  # s an answer may take beyond its budget
 LOST_AFTER = 30.0  # s beyond the budget after which a request counts as lost
 MAX_MESSAGE = 400  # characters of an error message (a short excerpt of a bad value, not the value)

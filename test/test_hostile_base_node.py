@@ -10,12 +10,21 @@ a known-good request on the good map still succeeds. RSS grows by at most 50 MB 
 from __future__ import annotations
 
 import pytest
-from hostile_inputs import BASE_LIMITS, BaseNodeTarget, occupancy_grids, report_counts, rss_mb, run_batch, tally
+from hostile_inputs import (
+    BASE_LIMITS,
+    SUITE_EXAMPLES,
+    BaseNodeTarget,
+    occupancy_grids,
+    report_counts,
+    rss_mb,
+    run_batch,
+    tally,
+)
 
 pytestmark = pytest.mark.ros
 
 TARGET = "base_planner_node"
-EXAMPLES = {"plan": 300, "get_plan": 60, "map": 150}
+EXAMPLES = {name: SUITE_EXAMPLES[name] for name in ("plan_base_path", "make_plan", "map")}
 JUNK_MAPS = 10_000
 RSS_GROWTH_MB = 50.0
 MEASURED: list[str] = []  # lines printed with the counts
@@ -46,12 +55,12 @@ def _still_serving(node) -> None:
 
 
 def test_hostile_plan_base_path_requests(node):
-    run_batch(TARGET, node.requests(), node.send, EXAMPLES["plan"])
+    run_batch(TARGET, node.requests(), node.send, EXAMPLES["plan_base_path"])
     _still_serving(node)
 
 
 def test_hostile_make_plan_requests(node):
-    run_batch(TARGET, node.get_plan_requests(), node.send_get_plan, EXAMPLES["get_plan"])
+    run_batch(TARGET, node.get_plan_requests(), node.send_get_plan, EXAMPLES["make_plan"])
     _still_serving(node)
 
 

@@ -13,8 +13,8 @@ import subprocess
 import sys
 
 import pytest
-from hostile_inputs import cli_outcome as outcome_of
 from hostile_inputs import (
+    SUITE_EXAMPLES,
     maru_base_plan_argv,
     maru_plan_argv,
     maru_reactive_sim_argv,
@@ -23,12 +23,12 @@ from hostile_inputs import (
     report_counts,
     run_batch,
 )
+from hostile_inputs import cli_outcome as outcome_of
 
 from maru_planner.base import cli as base_cli
 from maru_planner.planning import cli as plan_cli
 from maru_planner.sim import cli as sim_cli
 
-EXAMPLES = {"maru-plan": 80, "maru-base-plan": 80, "maru-reactive-sim": 60}
 AS_PROCESSES = 2  # per CLI: 1-5 s of start-up each
 CLIS = {  # prog: (main, module, argv strategy, exit codes, bad-input code, internal code, budget option)
     "maru-plan": (plan_cli.main, "maru_planner.planning.cli", maru_plan_argv, {0, 1, 2, 3, 130}, 2, 3, "--time"),
@@ -55,7 +55,7 @@ def test_hostile_command_lines_in_process(prog, tmp_path, monkeypatch, report):
         budget = number_or_zero(option_value(args, budget_option, "0"))
         return outcome_of(main, args, prog, codes, bad_input, internal, budget)
 
-    run_batch(prog, argv(tmp_path), run, EXAMPLES[prog])
+    run_batch(prog, argv(tmp_path), run, SUITE_EXAMPLES[prog])
 
 
 @pytest.mark.parametrize("prog", list(CLIS))

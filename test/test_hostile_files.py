@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import pytest
 from hostile_inputs import (
+    SUITE_EXAMPLES,
     Files,
     biped_worlds,
     loader_outcome,
@@ -23,7 +24,6 @@ from hostile_inputs import (
 
 from maru_planner.errors import MaruError
 
-EXAMPLES = {"scene": 150, "map": 150, "biped": 100, "sim": 150}
 TYPED = (MaruError, OSError)
 
 
@@ -40,7 +40,7 @@ def test_scene_files(files):
         path = files.document(document)
         return loader_outcome(lambda: load_scene(path), f"scene {document!r:.200}", TYPED)
 
-    run_batch("maru-plan", scene_documents(), load, EXAMPLES["scene"])
+    run_batch("maru-plan", scene_documents(), load, SUITE_EXAMPLES["scene_files"])
 
 
 def test_map_files(files):
@@ -50,7 +50,7 @@ def test_map_files(files):
         path = files.map_file(generated)
         return loader_outcome(lambda: OccupancyGrid.from_yaml(path), f"map {generated!r:.200}", TYPED)
 
-    run_batch("maru-base-plan", map_files(), load, EXAMPLES["map"])
+    run_batch("maru-base-plan", map_files(), load, SUITE_EXAMPLES["map_files"])
 
 
 def test_biped_world_files(files):
@@ -60,7 +60,7 @@ def test_biped_world_files(files):
         path = files.document(document)
         return loader_outcome(lambda: load_world(path), f"biped world {document!r:.200}", TYPED)
 
-    run_batch("maru-base-plan", biped_worlds(), load, EXAMPLES["biped"])
+    run_batch("maru-base-plan", biped_worlds(), load, SUITE_EXAMPLES["biped_files"])
 
 
 def test_simulator_world_files(files):
@@ -70,4 +70,4 @@ def test_simulator_world_files(files):
         path = files.document(document)
         return loader_outcome(lambda: World.from_yaml(path), f"sim world {document!r:.200}", TYPED)
 
-    run_batch("maru-reactive-sim", sim_worlds(), load, EXAMPLES["sim"])
+    run_batch("maru-reactive-sim", sim_worlds(), load, SUITE_EXAMPLES["sim_files"])

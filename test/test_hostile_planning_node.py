@@ -13,6 +13,7 @@ from __future__ import annotations
 import pytest
 from hostile_inputs import (
     PLANNING_LIMITS,
+    SUITE_EXAMPLES,
     PlanningNodeTarget,
     apply_scene_requests,
     report_counts,
@@ -25,7 +26,8 @@ from hostile_inputs import (
 pytestmark = pytest.mark.ros
 
 TARGET = "planning_node"
-EXAMPLES = {"plan": 260, "ik": 120, "scene": 120, "scene_topic": 80, "joint_states": 80}
+EXAMPLES = {name: SUITE_EXAMPLES[name] for name in ("plan_motion", "compute_ik", "apply_scene", "scene_topic",
+                                                   "joint_states")}  # fmt: skip
 JUNK_MESSAGES = 10_000
 RSS_GROWTH_MB = 50.0
 MEASURED: list[str] = []  # lines printed with the counts
@@ -57,18 +59,18 @@ def _still_serving(node) -> None:
 
 
 def test_hostile_plan_requests(node):
-    run_batch(TARGET, node.plan_requests(), node.send_plan, EXAMPLES["plan"])
+    run_batch(TARGET, node.plan_requests(), node.send_plan, EXAMPLES["plan_motion"])
     _still_serving(node)
 
 
 def test_hostile_ik_requests(node):
-    run_batch(TARGET, node.ik_requests(), node.send_ik, EXAMPLES["ik"])
+    run_batch(TARGET, node.ik_requests(), node.send_ik, EXAMPLES["compute_ik"])
     _still_serving(node)
 
 
 def test_hostile_scene_requests(node):
     try:
-        run_batch(TARGET, apply_scene_requests(), node.send_scene, EXAMPLES["scene"])
+        run_batch(TARGET, apply_scene_requests(), node.send_scene, EXAMPLES["apply_scene"])
     finally:
         node.restore_scene()
     _still_serving(node)

@@ -9,12 +9,21 @@ a good goal and scan still move the base. RSS grows by at most 50 MB over 10,000
 from __future__ import annotations
 
 import pytest
-from hostile_inputs import ReactiveNodeTarget, reactive_messages, report_counts, rss_mb, run_batch, tally
+from hostile_inputs import (
+    REACTIVE_BATCHES,
+    SUITE_EXAMPLES,
+    ReactiveNodeTarget,
+    reactive_messages,
+    report_counts,
+    rss_mb,
+    run_batch,
+    tally,
+)
 
 pytestmark = pytest.mark.ros
 
 TARGET = "reactive_node"
-BATCHES, EXAMPLES = 3, 120
+BATCHES, EXAMPLES = REACTIVE_BATCHES, SUITE_EXAMPLES["reactive"]
 JUNK_SCANS = 10_000
 RSS_GROWTH_MB = 50.0
 MEASURED: list[str] = []  # lines printed with the counts
