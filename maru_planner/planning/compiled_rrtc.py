@@ -4,18 +4,17 @@ The search (:mod:`maru_planner.planning.rrtc_kernel`) plans on the sphere model 
 :class:`~maru_planner.collision.SphereCollisionChecker`: trees, nearest neighbours, extend/connect
 and edge checks at the facade's motion resolution never leave compiled code, except
 
-* every few hundred edges, to evaluate OMPL's termination condition;
-* for an edge whose states the spheres leave ambiguous (outer spheres touch, no inner ball does)
-  within ``exact_near`` (L∞, rad) of the start or the goal: when the checker confirms on the exact
-  model (``confirm=True``, its default), those states go to ``checker.first_invalid``.
+* about every 2 ms, to evaluate OMPL's termination condition;
+* for an edge whose states the spheres leave ambiguous (outer spheres touch, no inner ball does):
+  when the checker confirms on the exact model (``confirm=True``, its default), those states go to
+  ``checker.first_invalid``.
 
-So a state's answer is always the sphere checker's: its exact-confirmed answer near the start and
-goal, its pure, conservative sphere model elsewhere (and everywhere when ``confirm=False``). Keeping
-the search off near contacts away from the endpoints is what lets the facade certify the path with
-its safety margin (a path grazing an obstacle is proven free but not ``safety_margin`` away); the
-start and goal themselves are often near contacts (a grasp), so their neighbourhood is decided
-exactly. Measured on MotionBenchMaker problems, ``exact_near`` 0.1 rad certified more paths, sooner,
-than deciding every ambiguous state exactly (a large value, the checker's own answers everywhere).
+So a state's answer is always the sphere checker's own. ``exact_near`` (L∞, rad; unset by default)
+restricts the exact decisions to states near the start or goal: farther away an ambiguous state
+counts as colliding (the pure, conservative sphere model, as everywhere when ``confirm=False``),
+which keeps the search off near contacts that certification with a safety margin rejects, but
+makes narrow passages harder. On 28 MotionBenchMaker problems (3 s budget, this loaded machine)
+unset solved 23, 0.3 rad 21 and 0.1 rad 20, mostly losing to time-outs in narrow passages.
 
 The path goes into the ProblemDefinition like any OMPL planner's, so ``SimpleSetup`` and the
 facade's exact verification apply unchanged. Samples come from a generator seeded by ``seed`` or,
@@ -50,10 +49,11 @@ COMPILED_RRTC_PARAMS: dict[str, ParamSpec] = {
         ParamSpec("range", 0.0, "max extension (rad, L2); 0 = OMPL's automatic 20 % of the space extent", lower=0.0),
         ParamSpec(
             "exact_near",
-            0.1,
+            None,
             "L-inf distance (rad) from the start or goal within which states the spheres leave ambiguous are "
-            "decided on the exact model; farther away they count as colliding (module doc)",
+            "decided on the exact model, farther away they count as colliding; unset: everywhere (module doc)",
             lower=0.0,
+            optional=True,
         ),
         ParamSpec(
             "seed",
@@ -174,7 +174,7 @@ class CompiledRRTConnect(ob.Planner):
         self._trees = (nodes, parent, st)
         amb_states = np.empty((int(np.ceil((gs.upper - gs.lower).max() / self._edges.resolution)) + 2, len(start)))
         fixed = (st, np.empty(len(start)), amb_states, *self._search_args(kernel), *sphere_kernel_inputs(checker),
-                 checker.confirm, float(self._values["exact_near"]))  # fmt: skip
+                 checker.confirm, self._exact_near())  # fmt: skip
         verdict, batch = False, _FIRST_EDGES
         while True:
             t_call = time.perf_counter()
@@ -198,6 +198,10 @@ class CompiledRRTConnect(ob.Planner):
         rng = kernel.seed_rng(int(seed if seed is not None else self._seed_rng.uniformInt(0, 2**31 - 2)))
         max_range = float(self._values["range"]) or 0.2 * self._si.getMaximumExtent()
         return gs.lower, gs.upper, rng, max_range, self._edges.resolution, gs.base, gs.indices.astype(np.int64)
+
+    def _exact_near(self) -> float:
+        exact_near = self._values["exact_near"]
+        return np.inf if exact_near is None else float(exact_near)
 
     def _node_count(self) -> int:
         st = self._trees[2]
