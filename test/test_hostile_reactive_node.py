@@ -47,7 +47,9 @@ def node(node_process, rclpy_session, tmp_path_factory, request):
 @pytest.mark.filterwarnings("ignore::RuntimeWarning")  # building hostile messages from inf values
 @pytest.mark.parametrize("batch", range(BATCHES))
 def test_hostile_messages_on_every_topic(node, batch):
+    before = rss_mb(node.process.proc.pid)
     run_batch(TARGET, reactive_messages(), node.send, EXAMPLES, seed_value=1800 + batch)
+    MEASURED.append(f"reactive_node RSS {before:.1f} MB -> {rss_mb(node.process.proc.pid):.1f} MB over batch {batch}")
     node.send_good_goal()
     assert node.good_step(), node.process.log()[-2000:]
     assert node.spinning.wait_for(lambda: node.callback_errors() == 0, timeout=30), node.process.log()[-2000:]
