@@ -221,19 +221,14 @@ class ManagedNode(LifecycleNode):
             self.transition_error = RuntimeError(f"{running} requests are still being answered; cleanup refused")
             self.get_logger().error(str(self.transition_error))
             return FAILURE
-        result = self._run("cleanup", self.cleanup)
-        self._destroy(self._configured_entities)
-        self._configured_entities = []
-        self.is_configured = False
-        self.get_logger().info("unconfigured")
-        return result
+        return self._release()
 
     def on_shutdown(self, state: LifecycleState) -> TransitionCallbackReturn:
-        """From any primary state: deactivate when active, clean up when configured."""
+        """From any primary state: deactivate when active, release when configured (running requests or not)."""
         if self.is_active:
             self.on_deactivate(state)
         if self.is_configured:
-            self.on_cleanup(state)
+            self._release()
         return SUCCESS
 
     def destroy_node(self) -> None:
@@ -241,6 +236,14 @@ class ManagedNode(LifecycleNode):
         if self.is_configured and self.context.ok():
             self.trigger_shutdown()
         super().destroy_node()
+
+    def _release(self) -> TransitionCallbackReturn:
+        result = self._run("cleanup", self.cleanup)
+        self._destroy(self._configured_entities)
+        self._configured_entities = []
+        self.is_configured = False
+        self.get_logger().info("unconfigured")
+        return result
 
     def _run(self, transition: str, step: Callable[[], None]) -> TransitionCallbackReturn:
         try:
