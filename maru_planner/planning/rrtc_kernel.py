@@ -4,10 +4,12 @@ The whole search loop runs compiled: two trees in preallocated arrays, brute-for
 neighbours over each tree's contiguous node array, extend/connect steps of at most ``range``
 (L2, like OMPL's RRTConnect), and every edge checked at the motion resolution (L∞ step, the states
 of :func:`maru_planner.planning.space.edge_states`, computed the same way) in coarse-to-fine
-bisection order with an early exit on the first colliding state. The states go through the sphere
-checker's own compiled scan (:func:`maru_planner.collision.sphere_kernels.scan_nb`: forward
-kinematics, robot spheres against the scene primitives through its grid broad phase, the SRDF's
-self-collision pairs), so the answers are the sphere model's.
+bisection order with an early exit on the first colliding state. Each state is classified by
+:func:`classify`: forward kinematics once, then robot spheres against the scene primitives and the
+SRDF's self-collision pairs in a tight loop down the sphere checker's bounding hierarchy (group,
+cluster, sphere), a sphere placed only where its cluster's bound reaches something; it answers
+exactly as the checker's ``classify_state`` does. Scenes large enough for the checker's grid broad
+phase go through its own scan (:func:`maru_planner.collision.sphere_kernels.scan_nb`).
 
 The search is a resumable state machine (``st``, :data:`STATE_FIELDS`): :func:`run` proposes one
 edge at a time and applies its verdict, and returns to the caller
@@ -179,9 +181,8 @@ def _norm(dx, dy, dz):
 def _group_vs_scene(g, robot, scene, rot, pos, stop_at_touch):
     """0: group ``g``'s outer spheres clear every obstacle; 1: some touch one; 2: an inner ball hits an exact one
     (or, with ``stop_at_touch``, an outer sphere touches one: the answer is then decided)."""
-    c_start, c_joint, c_center, c_radius, g_clusters = robot[16], robot[17], robot[18], robot[19], robot[20]
-    s_joint, s_center, s_radius, s_inner, g_joint, g_center, g_radius, padding = (
-        robot[6], robot[7], robot[8], robot[9], robot[11], robot[12], robot[13], robot[15])  # fmt: skip
+    (_, _, _, _, _, _, s_joint, s_center, s_radius, s_inner, _, g_joint, g_center, g_radius, _, padding,
+     c_start, c_joint, c_center, c_radius, g_clusters) = robot  # fmt: skip
     exact = scene[9]
     gx, gy, gz = _world(rot, pos, g_joint, g_center, g)
     touched = 0
@@ -206,9 +207,8 @@ def _group_vs_scene(g, robot, scene, rot, pos, stop_at_touch):
 def _pair_vs_pair(ga, gb, robot, rot, pos, stop_at_touch):
     """Self-collision pair (ga, gb) as _group_vs_scene answers: 0 clear, 1 outer spheres touch, 2 inner balls hit
     (or outer spheres touch, with ``stop_at_touch``)."""
-    c_start, c_joint, c_center, c_radius, g_clusters = robot[16], robot[17], robot[18], robot[19], robot[20]
-    s_joint, s_center, s_radius, s_inner, g_joint, g_center, g_radius, padding = (
-        robot[6], robot[7], robot[8], robot[9], robot[11], robot[12], robot[13], robot[15])  # fmt: skip
+    (_, _, _, _, _, _, s_joint, s_center, s_radius, s_inner, _, g_joint, g_center, g_radius, _, padding,
+     c_start, c_joint, c_center, c_radius, g_clusters) = robot  # fmt: skip
     ax, ay, az = _world(rot, pos, g_joint, g_center, ga)
     bx, by, bz = _world(rot, pos, g_joint, g_center, gb)
     if _norm(ax - bx, ay - by, az - bz) >= g_radius[ga] + g_radius[gb] + padding:
@@ -248,8 +248,9 @@ def classify(q, robot, scene, rot, pos, stop_at_touch):
 
     ``robot``/``scene``: unpack_robot/unpack_scene tuples; ``rot``/``pos``: joint pose work arrays.
     """
-    joint_poses_nb(q, robot[0], robot[1], robot[2], robot[3], robot[4], robot[5], rot, pos)
-    g_joint, self_pairs = robot[11], robot[14]
+    parent, kind, axis, prot, ppos, idx_q = robot[:6]
+    joint_poses_nb(q, parent, kind, axis, prot, ppos, idx_q, rot, pos)
+    g_joint, self_pairs = robot[11], robot[14]  # unpack_robot's order
     touched = 0
     for g in range(g_joint.shape[0]):
         if g_joint[g] == 0:  # fixed to the world: like the exact checker, never tested against the scene
