@@ -1,8 +1,9 @@
 """Planning as a ROS 2 action: one :class:`~maru_planner.monitor.PlanMonitor` per goal (both planner nodes).
 
-:class:`PlanActionServer` accepts every goal, gives it a monitor and runs the node's plan coroutine
-with it. While the goal runs, a timer publishes the monitor's snapshot as feedback; a cancel request
-cancels the monitor, which stops the planner at once. The goal ends SUCCEEDED (the node's
+:class:`PlanActionServer` accepts every goal (a managed node, :mod:`maru_planner.ros.lifecycle`,
+accepts them only while active), gives it a monitor and runs the node's plan coroutine with it.
+While the goal runs, a timer publishes the monitor's snapshot as feedback; a cancel request cancels
+the monitor, which stops the planner at once. The goal ends SUCCEEDED (the node's
 ``succeeded(result)``), CANCELED (cancelled and not successful) or ABORTED, always with the result
 the plan coroutine returned (the node's service response, as an action result).
 """
@@ -64,6 +65,11 @@ class PlanActionServer:
             goal_service_qos_profile=requests_qos,
             result_service_qos_profile=requests_qos,
         )
+
+    @property
+    def running_goals(self) -> int:
+        """Goals accepted and not finished (waiting for a worker or planning)."""
+        return len(self._monitors)
 
     def _on_accepted(self, goal_handle: ServerGoalHandle) -> None:
         """Every goal is accepted (its result says what was wrong); its monitor exists before a cancel can come."""
