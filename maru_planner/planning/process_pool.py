@@ -12,9 +12,10 @@ hands it, one at a time; the same seed gives the same path as planning in the ca
   worker (its own :class:`PlanMonitor` is cancelled, which ends the OMPL search at once).
 * ``set_scene`` / ``set_config`` reach every worker before its next request.
 * Workers start from a fork server that has imported the planning modules once (fork would copy the
-  caller's threads, e.g. rclpy's, in an undefined state), all at the same time. A worker exits when the
-  pool closes or its pipe to the caller breaks (the caller died); one that dies while the pool runs
-  fails its request with :class:`~maru_planner.errors.PlanningFailed` and is replaced.
+  caller's threads, e.g. rclpy's, in an undefined state), all at the same time and in the background:
+  the constructor returns at once, :meth:`wait_ready` waits for them (requests submitted meanwhile wait too).
+  A worker exits when the pool closes or its pipe to the caller breaks (the caller died); one that dies
+  while the pool runs fails its request with :class:`~maru_planner.errors.PlanningFailed` and is replaced.
 
 Messages on a worker's pipe: to the worker ``("plan", job, request, forward_progress)``,
 ``("cancel", job)``, ``("scene", scene_dict)``, ``("config", config)``, ``("stop",)``; from it
@@ -239,7 +240,10 @@ class ProcessPool:
         self._job_ids = itertools.count()
         self._worker_ids = itertools.count()
         self._closed = False
-        self._start_workers(workers)
+        self._start_failure = ""
+        # the constructor returns at once: the caller builds what it needs while the fork server imports
+        self._starting = threading.Thread(target=self._start_first, args=(workers,), name="maru-planner-start")
+        self._starting.start()
 
     # --- life cycle ----------------------------------------------------------------------
     @property
@@ -265,6 +269,10 @@ class ProcessPool:
     def wait_ready(self, timeout: float = 300.0) -> None:
         """Block until every worker has built its planner; a worker that could not is a MaruError."""
         deadline = time.monotonic() + timeout
+        self._starting.join(timeout)
+        if self._start_failure:
+            self.close()
+            raise errors.MaruError(f"planning workers failed to start: {self._start_failure}", source="workers")
         with self._lock:
             workers = list(self._workers)
         for worker in workers:
@@ -280,6 +288,7 @@ class ProcessPool:
         """Start or retire workers until ``workers`` plan (a retiring one finishes its request first)."""
         if workers < 1:
             raise errors.InvalidParameter(f"workers must be >= 1, got {workers}")
+        self._starting.join()
         with self._lock:
             active = [w for w in self._workers if not w.retiring]
             retire = active[workers:]
@@ -293,6 +302,7 @@ class ProcessPool:
 
     def close(self) -> None:
         """Stop every worker: waiting requests fail with PlanningCancelled, running ones are cancelled."""
+        self._starting.join()
         with self._lock:
             self._closed = True
             pending, self._pending = list(self._pending), deque()
@@ -360,6 +370,12 @@ class ProcessPool:
             worker.send(message)
 
     # --- dispatch (callers' threads and the readers) ----------------------------------------
+    def _start_first(self, count: int) -> None:
+        try:
+            self._start_workers(count)
+        except Exception as exc:  # noqa: BLE001 - wait_ready reports it (e.g. no fork server: OSError)
+            self._start_failure = errors.one_line(f"{type(exc).__name__}: {exc}")
+
     def _start_workers(self, count: int) -> None:
         for _ in range(max(0, count)):
             parent_end, child_end = self._mp.Pipe()
