@@ -261,6 +261,25 @@ def test_motion_planner_returns_only_certified_paths(arm):
     assert result.to_json_dict()["stats"]["certified"]
 
 
+def test_motion_planner_searches_with_the_margin(arm):
+    # The tip sweeps past the plate 5 mm away: free, but closer than the 10 mm margin.
+    plate = Obstacle("plate", "box", size=(0.04, 0.002, 0.05), pose=[REACH + TIP_RADIUS + 0.005 + 0.02, 0.0, 0.0])
+    scene = Scene([plate])
+    request = MotionRequest("all", start={"j1": -0.3, "j2": 0.0}, goal_joints={"j1": 0.3, "j2": 0.0},
+                            planner_id="RRTConnect", time_budget=10.0, seed=1)  # fmt: skip
+    config = PlannerConfig(safety_margin=0.01)
+    uncertified = MotionPlanner.from_scene(arm, scene, dataclasses.replace(config, certify=False)).plan(request)
+    assert uncertified.success and len(uncertified.path) == 2  # the search alone takes the straight sweep
+    result = MotionPlanner.from_scene(arm, scene, config).plan(request)
+    assert result.success and result.stats.certified and result.stats.repairs == 0, result.message
+    assert verify_path(CollisionChecker(arm, scene, padding=0.01), np.asarray(result.path), 1e-3).valid
+    # A start closer than the margin is searched unpadded, and certified with the lowered margin.
+    near = dataclasses.replace(request, start={"j1": 0.0, "j2": 0.0}, goal_joints={"j1": 0.3, "j2": 0.0})
+    near_plate = Obstacle("plate", "box", size=(0.1, 0.002, 0.05), pose=[REACH - 0.05 - TIP_RADIUS - 0.004, 0.0, 0.0])
+    result = MotionPlanner.from_scene(arm, Scene([near_plate]), config).plan(near)
+    assert result.success and result.stats.certified, result.message
+
+
 def test_motion_planner_rejects_a_negative_safety_margin(arm):
     request = MotionRequest("all", start={"j1": 0.0, "j2": 0.0}, goal_joints={"j1": 0.1, "j2": 0.0},
                             safety_margin=-0.01)  # fmt: skip

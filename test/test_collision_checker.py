@@ -118,7 +118,13 @@ def test_broadphase_agrees_with_pair_loop(robot, mode):
     Q = np.array([robot.random_configuration(rng) for _ in range(300)])
     clear = np.array([abs(loop.clearance(q)) > 1e-4 for q in Q])  # skip GJK-borderline contacts
     np.testing.assert_array_equal(fast.are_valid(Q)[clear], loop.are_valid(Q)[clear])
-    assert CollisionChecker(robot, scene, padding=0.01).broadphase == "none"
+    # padded: the broad phase's boxes grow with the security margin, so it still agrees with the pair loop
+    padded_fast = CollisionChecker(robot, scene, padding=0.01, broadphase=mode)
+    padded_loop = CollisionChecker(robot, scene, padding=0.01, broadphase="none")
+    clear = np.array([abs(padded_loop.clearance(q)) > 1e-4 for q in Q])
+    padded = padded_loop.are_valid(Q)
+    np.testing.assert_array_equal(padded_fast.are_valid(Q)[clear], padded[clear])
+    assert padded_fast.broadphase == mode and (padded[clear] != loop.are_valid(Q)[clear]).any()
     with pytest.raises(ValueError, match="broadphase"):
         CollisionChecker(robot, scene, broadphase="octree")
 

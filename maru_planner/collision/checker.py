@@ -18,8 +18,8 @@ of every pair whose bounding boxes do not overlap -- most pairs, most of the
 time (bench/collision.py: 3-6x faster than ``pinocchio.computeCollisions``
 over the same pairs). ``broadphase="auto"`` picks the naive manager (AABB test
 per pair) for primitive-only robots and a dynamic AABB tree when the robot
-has meshes; with ``padding`` > 0 the plain pair loop is used (the broad
-phase's boxes are not inflated by the security margin).
+has meshes. With ``padding`` > 0 the broad phase stays: Pinocchio's manager
+inflates each box by half the largest security margin of its pairs.
 """
 
 from __future__ import annotations
@@ -128,7 +128,7 @@ class CollisionChecker:
         if broadphase == "auto":
             has_mesh = any(isinstance(g.geometry, coal.BVHModelBase) for g in robot.collision_model.geometryObjects)
             broadphase = "aabb_tree" if has_mesh else "naive"
-        self.broadphase = "none" if self.padding > 0 else broadphase
+        self.broadphase = broadphase
         self.check_count = 0
         self.build_budget = build_budget
         self.pair_list_limit = int(pair_list_limit)

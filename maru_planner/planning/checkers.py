@@ -42,6 +42,25 @@ def default_exact_checker(robot, checker) -> CollisionChecker | None:
     return CollisionChecker(robot, checker.scene) if is_sphere_checker(checker) else None
 
 
+def padded_checker(robot, checker, padding: float):
+    """A checker of ``checker``'s kind on its scene that reports states closer than ``padding`` (m) as colliding.
+
+    The sphere checker's twin shares its sphere model (no refit) and inflates its spheres and its exact
+    confirmation by ``padding``; the exact checker's adds ``padding`` to every pair's security margin.
+    """
+    if is_sphere_checker(checker):
+        spheres = sys.modules["maru_planner.collision.spheres"]
+        return spheres.SphereCollisionChecker(
+            robot, checker.scene, padding=checker.padding + padding, confirm=checker.confirm, spheres=checker.spheres,
+            use_numba=checker.use_numba, build_budget=checker.build_budget,
+            grid_min_obstacles=checker.grid_min_obstacles,
+        )  # fmt: skip
+    return CollisionChecker(
+        robot, checker.scene, padding=checker.padding + padding, broadphase=checker.broadphase,
+        build_budget=checker.build_budget, pair_list_limit=checker.pair_list_limit,
+    )  # fmt: skip
+
+
 def is_sphere_checker(checker) -> bool:
     """True for a :class:`SphereCollisionChecker` (whose paths need verification on the exact model)."""
     # A sphere checker can only exist once its module is imported: exact-only users skip numba's import.
