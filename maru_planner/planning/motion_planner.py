@@ -288,19 +288,19 @@ class MotionPlanner:
         """
         from maru_planner.collision import CollisionChecker  # lazy like make_checkers: exact model only
 
-        config = dataclasses.replace(
-            self.config,
-            resolution=min(self.config.resolution, REPAIR_RESOLUTION),
-            simplify_max_tries=min(self.config.simplify_max_tries, REPAIR_SHORTCUT_TRIES),
-            certify=False,
-            time_parameterization="trapezoid",
-        )
         names = self.robot.joint_names
         group = [names[i] for i in self.robot.group_joint_indices(request.group)]
         attempt = itertools.count(1)
         monitor = self._monitor
 
         def plan_between(qa: np.ndarray, qb: np.ndarray, margin: float, deadline: float) -> np.ndarray | None:
+            config = dataclasses.replace(  # built per repair: checking a config costs more than most requests need
+                self.config,
+                resolution=min(self.config.resolution, REPAIR_RESOLUTION),
+                simplify_max_tries=min(self.config.simplify_max_tries, REPAIR_SHORTCUT_TRIES),
+                certify=False,
+                time_parameterization="trapezoid",
+            )
             checker = CollisionChecker(self.robot, self.certifier.checker.scene, padding=margin)
             local = MotionPlanner(self.robot, checker, config)
             sub = MotionRequest(
