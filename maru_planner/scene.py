@@ -110,7 +110,7 @@ class Obstacle:
             raise InvalidScene(f"obstacle {name!r:.60}: field 'name' must be a non-empty string")
         if len(name) > MAX_NAME_LENGTH:
             raise InvalidScene(f"obstacle name {name!r:.60} has {len(name)} characters, more than {MAX_NAME_LENGTH}")
-        where = f"obstacle {name!r}"  # repr: a name with a newline stays on one line
+        where = f"obstacle {name[:60]!r}"  # repr of an excerpt: one line, a bounded message
         self.name = name
         self.type: str = type
         self.pose = pose_matrix(pose, where)

@@ -92,11 +92,11 @@ class ShapeSpec:
         try:
             values = [float(v) for v in values]
         except (TypeError, ValueError):
-            raise InvalidScene(f"{where}: {self.name} dimensions must be numbers, got {values!r}") from None
+            raise InvalidScene(f"{where}: {self.name} dimensions must be numbers, got {values!r:.60}") from None
         if len(values) != sum(counts):
             raise InvalidScene(f"{where}: a {self.name} needs {sum(counts)} dimensions, got {len(values)}")
         if not all(math.isfinite(v) and v > 0 for v in values):
-            raise InvalidScene(f"{where}: {self.name} dimensions must be finite and > 0, got {values}")
+            raise InvalidScene(f"{where}: {self.name} dimensions must be finite and > 0, got {str(values):.60}")
         out, start = {}, 0
         for name, count in zip(self.primitive_dimensions, counts):
             out[name] = values[start] if count == 1 else tuple(values[start : start + count])
@@ -123,7 +123,7 @@ def shape(name: Any, where: str) -> ShapeSpec:
     """The spec of obstacle type ``name``; InvalidScene naming ``where`` and the known types."""
     spec = SHAPES.get(name) if isinstance(name, str) else None
     if spec is None:
-        raise InvalidScene(f"{where}: field 'type' must be one of {tuple(SHAPES)}, got {name!r}")
+        raise InvalidScene(f"{where}: field 'type' must be one of {tuple(SHAPES)}, got {name!r:.60}")
     return spec
 
 
@@ -148,7 +148,7 @@ def numbers(where: str, field_name: str, value: Any, count: int) -> np.ndarray:
     try:
         arr = np.asarray(value, dtype=float).reshape(-1)
     except (TypeError, ValueError):
-        raise InvalidScene(f"{where}: field '{field_name}' must be {count} numbers, got {value!r}") from None
+        raise InvalidScene(f"{where}: field '{field_name}' must be {count} numbers, got {value!r:.60}") from None
     if arr.size != count:
         raise InvalidScene(f"{where}: field '{field_name}' must have {count} numbers, got {arr.size}")
     if not np.isfinite(arr).all():
@@ -182,7 +182,7 @@ def _positive(where: str, dim: Dimension, value: Any) -> float | tuple[float, ..
 
 def _path(where: str, field_name: str, value: Any) -> str:
     if not isinstance(value, str) or not value:
-        raise InvalidScene(f"{where}: field '{field_name}' must be a file name, got {value!r}")
+        raise InvalidScene(f"{where}: field '{field_name}' must be a file name, got {value!r:.60}")
     return value
 
 
