@@ -31,7 +31,7 @@ from maru_planner import errors
 from maru_planner.planning.cartesian import CartesianRequest, CartesianResult, default_link
 from maru_planner.planning.config import COLLISION_MODELS, TIME_PARAMETERIZATIONS, PlannerConfig
 from maru_planner.planning.links import check_link
-from maru_planner.planning.motion_planner import MotionPlanner
+from maru_planner.planning.motion_planner import MIN_SCALING, MotionPlanner
 from maru_planner.planning.problems import PROBLEMS
 from maru_planner.planning.registry import PLANNERS, get_spec, merged_params
 from maru_planner.planning.types import MotionRequest, MotionResult, PlanStatus, status_of_error
@@ -77,8 +77,8 @@ def _margin(text: str) -> float:
 
 def _scaling(text: str) -> float:
     value = float(text)
-    if not (math.isfinite(value) and 0.0 < value <= 1.0):
-        raise argparse.ArgumentTypeError(f"must be in (0, 1], got {text!r}")
+    if not (math.isfinite(value) and MIN_SCALING <= value <= 1.0):
+        raise argparse.ArgumentTypeError(f"must be in [{MIN_SCALING:g}, 1], got {text[:40]!r}")
     return value
 
 
