@@ -96,7 +96,7 @@ class ManagedNode(LifecycleNode):
         """Release what ``configure`` built besides ROS entities (the default: nothing)."""
 
     def requests_in_progress(self) -> int:
-        """Service requests still being answered (a subclass adds its running action goals)."""
+        """Service requests still being answered (cleanup waits for none: it is refused while any runs)."""
         with self._requests_lock:
             return self._requests
 
