@@ -241,3 +241,10 @@ def test_workers_exit_when_the_pool_process_is_killed(tmp_path):
     pids = [int(p) for p in run.stdout.split()]
     assert len(pids) == 2, run.stderr
     assert _wait_until_gone(pids) == []
+
+
+def test_fork_and_zero_workers_are_refused():
+    with pytest.raises(errors.InvalidParameter, match="start_method"):
+        ProcessPool(SOURCE, _scene(), CONFIG, 1, start_method="fork")
+    with pytest.raises(errors.InvalidParameter, match="workers"):
+        ProcessPool(SOURCE, _scene(), CONFIG, 0)

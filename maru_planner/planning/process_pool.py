@@ -34,12 +34,13 @@ import signal
 import threading
 import time
 from collections import deque
+from collections.abc import Callable
 from concurrent.futures import Future
 from dataclasses import dataclass, field
 from multiprocessing.connection import Connection
 
 from maru_planner import errors
-from maru_planner.monitor import PlanMonitor
+from maru_planner.monitor import PlanMonitor, Progress
 from maru_planner.planning.config import PlannerConfig
 from maru_planner.planning.motion_planner import MotionPlanner
 from maru_planner.planning.types import MotionRequest, MotionResult
@@ -47,6 +48,7 @@ from maru_planner.robot import RobotModel
 from maru_planner.scene import Scene
 
 START_METHOD = "forkserver"  # not "fork": the caller may run rclpy/DDS threads a fork would copy half-way
+START_METHODS = ("forkserver", "spawn")
 STOP_TIMEOUT = 5.0  # s a stopping worker may take to finish (a cancelled plan ends within milliseconds)
 
 
@@ -75,7 +77,7 @@ class _Inbox:
     reaches it. EOF before a stop means the pool's process is gone: the worker exits at once.
     """
 
-    def __init__(self, conn: Connection, send):
+    def __init__(self, conn: Connection, send: Callable[[tuple], None]):
         self._conn = conn
         self._send = send
         self._messages: queue.SimpleQueue[tuple | None] = queue.SimpleQueue()
@@ -109,13 +111,16 @@ class _Inbox:
                 self._messages.put(message)
 
     def _queue_plan(self, job: int, request: MotionRequest, forward_progress: bool) -> None:
-        on_progress = (lambda progress: self._send(("progress", job, progress.stage, progress.info))) if (
-            forward_progress
-        ) else None  # fmt: skip
-        monitor = PlanMonitor(on_progress)
+        monitor = PlanMonitor(self._progress_sender(job) if forward_progress else None)
         with self._lock:
             self._monitors[job] = monitor
         self._messages.put(("plan", job, request, monitor))
+
+    def _progress_sender(self, job: int) -> Callable[[Progress], None]:
+        def forward(progress: Progress) -> None:
+            self._send(("progress", job, progress.stage, progress.info))
+
+        return forward
 
     def _cancel(self, job: int) -> None:
         with self._lock:
@@ -225,8 +230,14 @@ class ProcessPool:
         start_method: str = START_METHOD,
         scene_version: int = 0,
     ):
+        """``workers`` processes planning on ``scene`` (version ``scene_version``) with ``config``.
+
+        ``start_method`` "forkserver" or "spawn" (never "fork"); InvalidParameter for anything else.
+        """
         if workers < 1:
             raise errors.InvalidParameter(f"workers must be >= 1, got {workers}")
+        if start_method not in START_METHODS:
+            raise errors.InvalidParameter(f"start_method must be one of {START_METHODS}, got {start_method!r}")
         self._mp = multiprocessing.get_context(start_method)
         if start_method == "forkserver":
             self._mp.set_forkserver_preload([__name__])  # the fork server imports the planning stack once
