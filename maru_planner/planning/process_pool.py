@@ -38,6 +38,8 @@ from collections.abc import Callable
 from concurrent.futures import Future
 from dataclasses import dataclass, field
 from multiprocessing.connection import Connection
+from multiprocessing.context import ForkServerContext, SpawnContext
+from typing import cast
 
 from maru_planner import errors
 from maru_planner.monitor import PlanMonitor, Progress
@@ -49,6 +51,7 @@ from maru_planner.scene import Scene
 
 START_METHOD = "forkserver"  # not "fork": the caller may run rclpy/DDS threads a fork would copy half-way
 START_METHODS = ("forkserver", "spawn")
+_ProcessContext = ForkServerContext | SpawnContext
 STOP_TIMEOUT = 5.0  # s a stopping worker may take to finish (a cancelled plan ends within milliseconds)
 
 
@@ -238,7 +241,7 @@ class ProcessPool:
             raise errors.InvalidParameter(f"workers must be >= 1, got {workers}")
         if start_method not in START_METHODS:
             raise errors.InvalidParameter(f"start_method must be one of {START_METHODS}, got {start_method!r}")
-        self._mp = multiprocessing.get_context(start_method)
+        self._mp = cast(_ProcessContext, multiprocessing.get_context(start_method))
         if start_method == "forkserver":
             self._mp.set_forkserver_preload([__name__])  # the fork server imports the planning stack once
         self._robot = robot
