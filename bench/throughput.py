@@ -87,14 +87,14 @@ def stop_node(node: subprocess.Popen) -> None:
 
 
 def make_request(seed: int):
-    from maru_planner.ros.planning_client import plan_request
+    from maru_planner.ros.planning_client import plan_request  # ROS loads after main's configure_loopback_dds
 
     return plan_request(GOAL, start=START, group="upper_body", planner_id="RRTConnect", time_budget=BUDGET, seed=seed)
 
 
 def drive(clients: list, seeds: list[int]) -> dict:
     """Send ``seeds`` (one request each) from every client thread, taking the next seed when free."""
-    from maru_planner.ros.planning_client import call_service
+    from maru_planner.ros.planning_client import call_service  # ROS loads after main's configure_loopback_dds
     from maru_planner_interfaces.msg import PlanningError
 
     todo = iter(seeds)
@@ -138,7 +138,7 @@ def drive(clients: list, seeds: list[int]) -> dict:
 
 
 def measure(config: dict, clients_count: int, requests: int, client_node, logs: Path) -> dict:
-    from maru_planner.ros.planning_client import call_until_answered
+    from maru_planner.ros.planning_client import call_until_answered  # ROS loads after configure_loopback_dds
     from maru_planner_interfaces.srv import PlanMotion
 
     label = config["label"]
@@ -167,7 +167,7 @@ def measure(config: dict, clients_count: int, requests: int, client_node, logs: 
 
 
 def run(configs: list[dict], clients: int, requests: int) -> dict:
-    import rclpy
+    import rclpy  # ROS loads after main's configure_loopback_dds
     from rclpy.executors import MultiThreadedExecutor
 
     rclpy.init()
@@ -219,7 +219,7 @@ def table(results: dict) -> str:
 
 
 def plot(results: dict, path: Path) -> None:
-    import matplotlib
+    import matplotlib  # only for the picture
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
