@@ -10,6 +10,9 @@ The 64-client burst is test_planning_node's.
 
 from __future__ import annotations
 
+import math
+
+import numpy as np
 import pytest
 from hostile_inputs import (
     PLANNING_LIMITS,
@@ -22,6 +25,8 @@ from hostile_inputs import (
     scene_obstacles,
     tally,
 )
+
+from maru_planner_interfaces.msg import PlanningError
 
 pytestmark = pytest.mark.ros
 
@@ -66,6 +71,12 @@ def test_hostile_plan_requests(node):
 def test_hostile_ik_requests(node):
     run_batch(TARGET, node.ik_requests(), node.send_ik, EXAMPLES["compute_ik"])
     _still_serving(node)
+
+
+@pytest.mark.parametrize("timeout", [math.nan, math.inf, 1e9])
+def test_an_ik_timeout_that_is_no_budget_is_refused_at_once(node, timeout):
+    response = node.client.compute_ik({"r_hand": np.eye(4)}, group="right_arm", ik_timeout=timeout)
+    assert response.error.code == PlanningError.INVALID_REQUEST and "timeout" in response.error.message
 
 
 def test_hostile_scene_requests(node):

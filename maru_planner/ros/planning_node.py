@@ -710,7 +710,7 @@ class PlanningNode(ManagedNode):
             if not targets:
                 raise errors.InvalidRequest("no poses: give poses + links")
             seed, strict = self._ik_seed(request.seed_state)
-            timeout = request.timeout if request.timeout > 0 else self.settings.ik_timeout
+            timeout = _ik_timeout(request.timeout, self.settings)
             group = request.group or self.settings.default_group
             deadline = time.monotonic() + timeout
             q = await self._in_worker(_ik_in_context, group, targets, seed, strict, deadline, request.avoid_collisions)
@@ -800,6 +800,18 @@ def _scaling(value: float, field: str) -> float:
         return 1.0
     if not (math.isfinite(value) and 0.0 < value <= 1.0):
         raise errors.InvalidRequest(f"{field} must be in (0, 1] (0 = 1.0), got {value}")
+    return float(value)
+
+
+def _ik_timeout(value: float, settings: NodeSettings) -> float:
+    """A ComputeIK request's budget: <= 0 is the node's ik_timeout; NaN, inf or past max_planning_time is refused."""
+    if value <= 0.0:
+        return settings.ik_timeout
+    if not (math.isfinite(value) and value <= settings.max_planning_time):
+        raise errors.InvalidRequest(
+            f"timeout must be finite and <= max_planning_time {settings.max_planning_time} s (<= 0: ik_timeout), "
+            f"got {value:.3g}"
+        )
     return float(value)
 
 
