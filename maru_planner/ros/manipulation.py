@@ -20,6 +20,7 @@ from maru_planner.planning.constraints import OrientationConstraint, PathConstra
 from maru_planner.planning.queries import PlannerDescription, StateValidity, check_state_validity, compute_fk
 from maru_planner.ros import planning_conversions as conv
 from maru_planner.scene import Obstacle, Scene
+from maru_planner.scene_attached import check_attachments
 from maru_planner_interfaces.msg import PathConstraints as PathConstraintsMsg
 from maru_planner_interfaces.msg import PlannerDescription as PlannerDescriptionMsg
 from maru_planner_interfaces.msg import PlannerParameter, SceneObstacle
@@ -139,6 +140,28 @@ def fill_cartesian(response: ComputeCartesianPath.Response, result: CartesianRes
 
 
 # ---------------------------------------------------------------- attach / detach
+
+class Attachments:
+    """What ATTACH/DETACH need from the node: link poses of its robot, and a check of the attached links.
+
+    ``latest`` returns the latest /joint_states values (used when an operation's robot_state is empty).
+    Thread-safe: every pose comes from its own Pinocchio data.
+    """
+
+    def __init__(self, robot, latest: Callable[[], dict[str, float]]):
+        self.robot, self.latest = robot, latest
+
+    def link_pose(self, link: str, values: dict[str, float]) -> np.ndarray:
+        if not values:
+            values = self.latest()
+            if not values:
+                raise errors.NoStartState("robot_state is empty and no /joint_states message has been received")
+        return compute_fk(self.robot, conv.configuration(self.robot, values), [link])[link]
+
+    def check(self, scene: Scene) -> None:
+        """InvalidLink / ObjectAlreadyAttached for attached objects the robot cannot carry."""
+        check_attachments(self.robot, scene)
+
 
 def apply_attachment(scene: Scene, msg: SceneObstacle, frame: str, link_pose: LinkPose) -> None:
     """ATTACH (a scene obstacle where it is, or a new shape at ``msg.pose``) or DETACH ``msg.name``.
