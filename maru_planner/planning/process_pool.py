@@ -189,6 +189,11 @@ class _Job:
     monitor: PlanMonitor | None
     future: Future
     attached: contextlib.ExitStack = field(default_factory=contextlib.ExitStack)
+    lock: threading.Lock = field(default_factory=threading.Lock)  # the monitor is attached before it is detached
+
+    def detach(self) -> None:
+        with self.lock:
+            self.attached.close()
 
 
 class _Worker:
@@ -412,9 +417,10 @@ class ProcessPool:
         if not job.future.set_running_or_notify_cancel():  # the caller cancelled the Future meanwhile
             self._next_job(worker)
             return
-        worker.send(("plan", job.job_id, job.request, job.monitor is not None))
-        if job.monitor is not None:  # after the plan: a monitor cancelled already sends its cancel at once
-            job.attached.enter_context(job.monitor.attach(_CancelInWorker(worker, job.job_id)))
+        with job.lock:
+            worker.send(("plan", job.job_id, job.request, job.monitor is not None))
+            if job.monitor is not None:  # after the plan: a monitor cancelled already sends its cancel at once
+                job.attached.enter_context(job.monitor.attach(_CancelInWorker(worker, job.job_id)))
 
     def _next_job(self, worker: _Worker) -> None:
         """Give ``worker`` the next waiting job, else mark it idle (a retiring one stops instead)."""
@@ -461,7 +467,7 @@ class ProcessPool:
         job = worker.job
         if job is None or job.job_id != job_id:
             return
-        job.attached.close()
+        job.detach()
         job.future.set_result(result)
         self._next_job(worker)
 
@@ -480,7 +486,7 @@ class ProcessPool:
         worker.conn.close()
         _reap(worker.process)
         if job is not None:
-            job.attached.close()
+            job.detach()
             job.future.set_exception(
                 errors.PlanningFailed(
                     f"planning worker {worker.process.name} exited (code {worker.process.exitcode}) while planning",
