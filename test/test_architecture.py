@@ -52,16 +52,17 @@ def module_files(root: Path, package: str) -> dict[str, Path]:
     return modules
 
 
-def _lazy_reason_lines(source: str) -> set[int]:
-    """Lines whose import carries a ``# lazy: <reason>`` comment on the line or on a comment line above."""
-    lines = set()
+def _lazy_reason_lines(source: str) -> tuple[set[int], set[int]]:
+    """Lines ending in a ``# lazy: <reason>`` comment, and lines right below such a comment-only line."""
+    trailing, below = set(), set()
     for token in tokenize.generate_tokens(io.StringIO(source).readline):
         if token.type == tokenize.COMMENT and LAZY_REASON.match(token.string):
             row = token.start[0]
-            lines.add(row)
-            if not token.line[: token.start[1]].strip():
-                lines.add(row + 1)
-    return lines
+            if token.line[: token.start[1]].strip():
+                trailing.add(row)
+            else:
+                below.add(row + 1)
+    return trailing, below
 
 
 def _is_type_checking(test: ast.expr) -> bool:
@@ -86,18 +87,23 @@ def _targets(node: ast.Import | ast.ImportFrom, importer: str, is_package: bool,
 
 
 def imports_of(importer: str, path: Path, known: set[str]) -> list[Import]:
-    """The imports written in one module, each flagged function-level / type-only / justified."""
+    """The imports written in one module, each flagged function-level / type-only / justified.
+
+    A ``# lazy: <reason>`` comment justifies the import on its line or, on a line of its own, the run
+    of import statements right below it.
+    """
     source = path.read_text()
-    justified_lines = _lazy_reason_lines(source)
+    trailing, below = _lazy_reason_lines(source)
     is_package = path.name == "__init__.py"
     found: list[Import] = []
 
     def visit(node: ast.AST, in_function: bool, type_only: bool) -> None:
         if isinstance(node, ast.Import | ast.ImportFrom):
+            justified = node.lineno in trailing or node.lineno in below
+            if node.lineno in below and node.end_lineno is not None:
+                below.add(node.end_lineno + 1)
             for target in dict.fromkeys(_targets(node, importer, is_package, known)):
-                found.append(
-                    Import(importer, target, path, node.lineno, in_function, type_only, node.lineno in justified_lines)
-                )
+                found.append(Import(importer, target, path, node.lineno, in_function, type_only, justified))
             return
         if isinstance(node, ast.If) and _is_type_checking(node.test):
             for child in node.body:
@@ -249,8 +255,8 @@ def test_function_level_imports_give_a_reason(imports):
     offenders = unjustified_lazy_imports(imports, PACKAGE)
     if offenders:
         pytest.fail(
-            "function-level imports of maru_planner modules need a '# lazy: <reason>' comment "
-            "on the line or the line above (or move them to the top of the module):\n" + _listing(offenders),
+            "function-level imports of maru_planner modules need a '# lazy: <reason>' comment on the line, "
+            "or on its own line above them (or move them to the top of the module):\n" + _listing(offenders),
             pytrace=False,
         )
 
@@ -279,8 +285,12 @@ FIXTURE_PACKAGE = {
         "def f():\n"
         "    # lazy: matplotlib is optional\n"
         "    from pkg import a\n"
-        "    from pkg import b  # lazy: optional too\n"
+        "    from pkg import b\n"
+        "\n"
         "    from pkg import typed  # lazy:\n"
+        "def g():\n"
+        "    from pkg import a  # lazy: optional too\n"
+        "    from pkg import b\n"
     ),
     "pkg/core.py": "import rclpy\nfrom geometry_msgs.msg import Pose\nimport rosbags\nfrom pkg.ros import node\n",
     "pkg/ros/__init__.py": "",
@@ -310,4 +320,4 @@ def test_detects_ros_imports_in_the_core(fixture_imports):
 
 def test_detects_function_level_imports_without_a_reason(fixture_imports):
     offenders = [(i.importer, i.target, i.line) for i in unjustified_lazy_imports(fixture_imports, "pkg")]
-    assert offenders == [("pkg.b", "pkg.c", 2), ("pkg.lazy", "pkg.typed", 5)]
+    assert offenders == [("pkg.b", "pkg.c", 2), ("pkg.lazy", "pkg.typed", 6), ("pkg.lazy", "pkg.b", 9)]
