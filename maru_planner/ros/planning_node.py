@@ -69,10 +69,11 @@ from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig
 from maru_planner.planning.config import PLANNER_CONFIG_PARAMS
 from maru_planner.planning.motion_planner import MIN_SCALING
 from maru_planner.planning.process_pool import ProcessPool, RobotSource
+from maru_planner.planning.queries import query_planners
 from maru_planner.planning.registry import PLANNERS
 from maru_planner.robot import RobotModel
 from maru_planner.robot.ik import solve_ik
-from maru_planner.ros import parameters
+from maru_planner.ros import manipulation, parameters
 from maru_planner.ros import planning_conversions as conv
 from maru_planner.ros.env import network_from_environment
 from maru_planner.ros.lifecycle import ManagedNode
@@ -81,7 +82,16 @@ from maru_planner.ros.plan_actions import PlanActionServer
 from maru_planner.scene import Obstacle, Scene
 from maru_planner_interfaces.action import PlanMotion as PlanMotionAction
 from maru_planner_interfaces.msg import PlanningError, SceneObstacle
-from maru_planner_interfaces.srv import ApplyScene, ComputeIK, GetScene, PlanMotion
+from maru_planner_interfaces.srv import (
+    ApplyScene,
+    CheckStateValidity,
+    ComputeCartesianPath,
+    ComputeFK,
+    ComputeIK,
+    GetScene,
+    PlanMotion,
+    QueryPlanners,
+)
 
 NODE_NAME = "planning_node"
 DEFAULT_URDF = "maru1_upper_body.urdf"
@@ -274,7 +284,9 @@ class SceneStore:
         scene_dict, _ = self.snapshot()
         return Scene.from_dict(scene_dict)
 
-    def apply(self, obstacles: list[SceneObstacle], clear: bool, frame: str) -> list[str]:
+    def apply(
+        self, obstacles: list[SceneObstacle], clear: bool, frame: str, attachments: manipulation.Attachments
+    ) -> list[str]:
         """Apply ADD/MOVE/REMOVE operations (after an optional clear) all-or-nothing; return the names.
 
         Obstacle poses must be in ``frame`` (the planning frame) or have an empty frame_id.
@@ -284,14 +296,15 @@ class SceneStore:
             if clear:
                 scene.clear()
             for msg in obstacles:
-                _apply_obstacle(scene, msg, frame)
+                _apply_obstacle(scene, msg, frame, attachments)
+            attachments.check(scene)
             self._scene = scene
             self.version += 1
             return [o["name"] for o in scene.to_dict().get("obstacles", [])]
 
 
-def _apply_obstacle(scene, msg: SceneObstacle, frame: str) -> None:
-    """One ADD/MOVE/REMOVE on ``scene`` (raises InvalidScene naming the obstacle)."""
+def _apply_obstacle(scene, msg: SceneObstacle, frame: str, attachments: manipulation.Attachments) -> None:
+    """One ADD/MOVE/REMOVE/ATTACH/DETACH on ``scene`` (raises InvalidScene naming the obstacle)."""
     if not msg.name:
         raise errors.InvalidScene("obstacle has an empty name")
     if msg.operation != SceneObstacle.REMOVE and msg.header.frame_id not in ("", frame):
@@ -304,8 +317,12 @@ def _apply_obstacle(scene, msg: SceneObstacle, frame: str) -> None:
         scene.move(msg.name, conv.obstacle_pose(msg.pose, msg.name))
     elif msg.operation == SceneObstacle.ADD:
         scene.add(Obstacle.from_dict(conv.primitive_to_obstacle(msg.name, msg.shape, msg.pose)))
+    elif msg.operation in (SceneObstacle.ATTACH, SceneObstacle.DETACH):
+        manipulation.apply_attachment(scene, msg, frame, attachments.link_pose)
     else:
-        raise errors.InvalidScene(f"obstacle '{msg.name}': operation {msg.operation} is not ADD, MOVE or REMOVE")
+        raise errors.InvalidScene(
+            f"obstacle '{msg.name}': operation {msg.operation} is not ADD, MOVE, REMOVE, ATTACH or DETACH"
+        )
 
 
 class PlanningNode(ManagedNode):
@@ -341,6 +358,7 @@ class PlanningNode(ManagedNode):
         self._description_files = self._robot_description_files()
         self._robot = self._make_robot()  # read-only use in the executor threads (names, markers)
         self._joint_names = frozenset(self._robot.joint_names)
+        self._attachments = manipulation.Attachments(self._robot, self.latest_joint_state)
         _check_group(self._robot, self.settings.default_group)
         self._scene = SceneStore(self._load_scene_dict())
         self._pool = self._make_pool(self.config, self.settings)
@@ -459,6 +477,10 @@ class PlanningNode(ManagedNode):
             (ComputeIK, "compute_ik", self._on_compute_ik),
             (ApplyScene, "apply_scene", self._on_apply_scene),
             (GetScene, "get_scene", self._on_get_scene),
+            (ComputeFK, "compute_fk", self._on_compute_fk),
+            (CheckStateValidity, "check_state_validity", self._on_check_state_validity),
+            (QueryPlanners, "query_planners", self._on_query_planners),
+            (ComputeCartesianPath, "compute_cartesian_path", self._on_compute_cartesian_path),
         ):
             self.create_managed_service(srv_type, name, callback, qos_profile=requests, callback_group=services)
         self.create_subscription(
@@ -594,7 +616,7 @@ class PlanningNode(ManagedNode):
 
     def _on_scene_obstacle(self, msg: SceneObstacle) -> None:
         try:
-            self._scene.apply([msg], clear=False, frame=self.settings.planning_frame)
+            self._scene.apply([msg], clear=False, frame=self.settings.planning_frame, attachments=self._attachments)
         except errors.MaruError as exc:
             self.get_logger().warning(f"ignoring /planning_scene_obstacles update: {exc}")
             return
@@ -682,12 +704,14 @@ class PlanningNode(ManagedNode):
             raise errors.InvalidRequest("no goal: give goal_joint_names + goal_positions or goal_poses + goal_links")
         if goal_joints is not None and goal_poses is not None:
             raise errors.InvalidRequest("give either a joint goal or pose goals, not both")
+        # kept along the motion; planned by CBiRRT, which an empty planner id then means
+        constraints = manipulation.path_constraints(request.path_constraints, settings.planning_frame)
         return MotionRequest(
             group=request.group or settings.default_group,
             start=start,
             goal_joints=goal_joints,
             goal_poses=goal_poses,
-            planner_id=request.planner_id or self.config.default_planner,
+            planner_id=request.planner_id or ("" if not constraints.empty else self.config.default_planner),
             time_budget=budget,
             seed=None if request.seed < 0 else int(request.seed),
             attempts=int(request.num_attempts) if request.num_attempts > 0 else settings.default_attempts,
@@ -695,6 +719,7 @@ class PlanningNode(ManagedNode):
             acceleration_scaling=_scaling(request.max_acceleration_scaling_factor, "max_acceleration_scaling_factor"),
             time_parameterization=request.time_parameterization,
             jerk_scaling=_scaling(request.max_jerk_scaling_factor, "max_jerk_scaling_factor"),
+            path_constraints=constraints,
         )
 
     def _start_state(self, msg: JointState) -> dict[str, float]:
@@ -732,8 +757,9 @@ class PlanningNode(ManagedNode):
     def _on_apply_scene(self, request: ApplyScene.Request, response: ApplyScene.Response):
         try:
             response.obstacle_names = self._scene.apply(
-                list(request.obstacles), clear=request.clear, frame=self.settings.planning_frame
-            )
+                list(request.obstacles), clear=request.clear, frame=self.settings.planning_frame,
+                attachments=self._attachments,
+            )  # fmt: skip
         except Exception as exc:  # noqa: BLE001
             response.error = conv.error_msg(exc, source="scene")
             response.obstacle_names = [o["name"] for o in self._scene.snapshot()[0].get("obstacles", [])]
@@ -741,6 +767,54 @@ class PlanningNode(ManagedNode):
             return response
         response.error = conv.error_msg(None)
         self._publish_markers()
+        return response
+
+    # ------------------------------------------------------------ manipulation services (docs/manipulation.md)
+
+    async def _on_compute_fk(self, request: ComputeFK.Request, response: ComputeFK.Response):
+        try:
+            values = self._start_state(request.robot_state)
+            poses = await self._in_worker(manipulation.fk_in_context, values, list(request.links))
+        except Exception as exc:  # noqa: BLE001 - every failure becomes an error code
+            return self._failed("compute_fk", response, exc)
+        response.error = conv.error_msg(None)
+        manipulation.fill_fk(response, poses, self.settings.planning_frame, self.get_clock().now().to_msg())
+        return response
+
+    async def _on_check_state_validity(self, request: CheckStateValidity.Request, response):
+        try:
+            values = self._start_state(request.robot_state)
+            constraints = manipulation.path_constraints(request.constraints, self.settings.planning_frame)
+            answer = await self._in_worker(manipulation.validity_in_context, values, constraints)
+        except Exception as exc:  # noqa: BLE001
+            return self._failed("check_state_validity", response, exc)
+        response.error = conv.error_msg(None)
+        manipulation.fill_validity(response, answer)
+        return response
+
+    def _on_query_planners(self, _request: QueryPlanners.Request, response: QueryPlanners.Response):
+        config = self.config
+        manipulation.fill_planners(response, query_planners(config.planner_params), config.default_planner)
+        return response
+
+    async def _on_compute_cartesian_path(self, request: ComputeCartesianPath.Request, response):
+        settings = self.settings
+        try:
+            start = self._start_state(request.start_state)
+            cartesian = manipulation.cartesian_request(
+                request, start, settings.default_group, settings.planning_frame, settings.max_planning_time
+            )
+            result = await self._in_worker(manipulation.cartesian_in_context, cartesian)
+        except Exception as exc:  # noqa: BLE001
+            return self._failed("compute_cartesian_path", response, exc)
+        manipulation.fill_cartesian(response, result, settings.planning_frame, self.get_clock().now().to_msg())
+        if not result.success:
+            self._log_failure("compute_cartesian_path", response.error)
+        return response
+
+    def _failed(self, service: str, response, exc: BaseException):
+        response.error = conv.error_msg(exc, source="node")
+        self._log_failure(service, response.error)
         return response
 
     def _on_get_scene(self, _request: GetScene.Request, response: GetScene.Response):
@@ -843,9 +917,9 @@ def _feedback_msg(progress: Progress) -> PlanMotionAction.Feedback:
 
 def _ik_in_context(context: PlanningContext, group, targets, seed, strict, deadline, avoid_collisions) -> np.ndarray:
     _time_left(deadline, "IK timeout")
-    robot = context.robot
+    robot = context.planner.robot  # with the attached objects (their checker checks them)
     q_seed = conv.configuration(robot, seed, strict=strict)
-    is_valid = context.checker.is_valid if avoid_collisions else None
+    is_valid = context.planner.checker.is_valid if avoid_collisions else None
     return solve_ik(robot, targets, q_seed, group, deadline=deadline, is_valid=is_valid)
 
 
