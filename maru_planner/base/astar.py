@@ -86,7 +86,7 @@ def _astar_kernel(blocked, sr, sc, gr, gc, cell_cost, use_cost, g_best, parent, 
         expansions += 1
         if node == goal:
             return parent, g, expansions, keys, gs, ids
-        if (expansions & 4095) == 0 and now() > deadline_at:
+        if (expansions & 4095) == 0 and now() > deadline_at[0]:
             return parent, -2.0, expansions, keys, gs, ids
         r = node // width
         c = node - r * width
@@ -184,7 +184,7 @@ def _jps_kernel(blocked, sr, sc, gr, gc, g_best, parent, seen, closed, keys, gs,
         expansions += 1
         if node == goal:
             return parent, g, expansions, keys, gs, ids
-        if (expansions & 4095) == 0 and now() > deadline_at:
+        if (expansions & 4095) == 0 and now() > deadline_at[0]:
             return parent, -2.0, expansions, keys, gs, ids
         r = node // width
         c = node - r * width
@@ -365,11 +365,11 @@ def astar_2d(
         extra = np.pad(np.asarray(cell_cost, dtype=float), 1)
         if extra.shape != padded.shape:
             raise ValueError(f"cell_cost has shape {np.shape(cell_cost)}, occupied has {blocked.shape}")
-        out = _astar_kernel(*args, extra, True, *ws.arrays(), deadline.at)
+        out = _astar_kernel(*args, extra, True, *ws.arrays(), deadline.kernel_at)
     elif method == "astar":
-        out = _astar_kernel(*args, np.zeros((1, 1)), False, *ws.arrays(), deadline.at)
+        out = _astar_kernel(*args, np.zeros((1, 1)), False, *ws.arrays(), deadline.kernel_at)
     else:
-        out = _jps_kernel(*args, *ws.arrays(), deadline.at)
+        out = _jps_kernel(*args, *ws.arrays(), deadline.kernel_at)
     parent, cost, expansions = out[:3]
     ws.keep_heap(*out[3:])
     if cost == _TIMED_OUT:

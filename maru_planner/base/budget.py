@@ -1,8 +1,11 @@
 """Hard budgets of base planning: the request's deadline and the size limits checked before allocating.
 
-Every loop that can run long checks a :class:`Deadline` (the numba kernels get ``Deadline.at``);
-what cannot fit the limits below is refused up front with :class:`~maru_planner.errors.TooLarge`
-naming the size and the limit.
+Every loop that can run long checks a :class:`Deadline` (the numba kernels get ``Deadline.kernel_at``
+and compare their clock with its one element); what cannot fit the limits below is refused up front
+with :class:`~maru_planner.errors.TooLarge` naming the size and the limit. Cancelling is folded into
+the deadline: :meth:`Deadline.terminate` (a :class:`~maru_planner.monitor.PlanMonitor` calls it on
+cancel) makes it pass at once, for Python loops and running kernels alike, and the timeout it then
+raises is :class:`~maru_planner.errors.PlanningCancelled`.
 """
 
 from __future__ import annotations
@@ -10,7 +13,9 @@ from __future__ import annotations
 import math
 import time
 
-from maru_planner.errors import InvalidRequest, PlanningTimedOut, TooLarge
+import numpy as np
+
+from maru_planner.errors import InvalidRequest, PlanningCancelled, PlanningTimedOut, TooLarge
 
 DEFAULT_TIME_LIMIT = 60.0  # s, when the caller gives none
 # 16.8 M cells: a 4096 x 4096 map (205 m square at 5 cm). Bigger maps are refused when loaded.
@@ -32,8 +37,16 @@ class Deadline:
         self.seconds = float(seconds)
         self.start = time.perf_counter()
         self.at = self.start + seconds if math.isfinite(seconds) else NEVER
+        self.kernel_at = np.array([self.at])  # a kernel reads [0] at each clock check: terminate() reaches it
+        self.cancelled = False
         self.every = every
         self._calls = 0
+
+    def terminate(self) -> None:
+        """Cancel (from any thread): the deadline passes now; what raises for it raises PlanningCancelled."""
+        self.cancelled = True
+        self.at = -math.inf
+        self.kernel_at[0] = -math.inf
 
     def remaining(self) -> float:
         return self.at - time.perf_counter()
@@ -54,6 +67,8 @@ class Deadline:
 
     def raise_timeout(self, what: str) -> None:
         elapsed = time.perf_counter() - self.start
+        if self.cancelled:
+            raise PlanningCancelled(f"{what} cancelled after {elapsed:.3f} s")
         raise PlanningTimedOut(f"{what} timed out after {elapsed:.3f} s (budget {self.seconds:g} s)")
 
 

@@ -115,6 +115,7 @@ class MultiStagePlanner(SE2AStarPlanner):
     def _eca(self, grid: OccupancyGrid, start: Endpoint, goal: Endpoint, run: PlanRun) -> None:
         t = time.perf_counter()
         stage = run.stats.add(StageStats("ECA", radius=self.r_in))
+        run.monitor.report(stage.name)
         eca = grid.inflate(max(self.r_in - RADIUS_GUARD, 0.0), run.deadline).occupied
         labels, _ = ndimage.label(~eca, structure=np.ones((3, 3), dtype=int))
         ls, lg = labels[start.cell], labels[goal.cell]
@@ -131,6 +132,7 @@ class MultiStagePlanner(SE2AStarPlanner):
     def _baa(self, grid: OccupancyGrid, start: Endpoint, goal: Endpoint, run: PlanRun) -> np.ndarray | None:
         t = time.perf_counter()
         stage = run.stats.add(StageStats("BAA", radius=self.r_out))
+        run.monitor.report(stage.name)
         baa = grid.inflate(self.r_out + RADIUS_GUARD, run.deadline).occupied
         run.layers["baa"] = baa
         path = None
@@ -148,6 +150,7 @@ class MultiStagePlanner(SE2AStarPlanner):
     def _full(self, grid: OccupancyGrid, start: Endpoint, goal: Endpoint, run: PlanRun) -> np.ndarray:
         t = time.perf_counter()
         stage = run.stats.add(StageStats("full", decided=True))
+        run.monitor.report(stage.name)
         run.stats.deciding_stage = "full"
         try:
             full = self.full_search(grid, start, goal, run.deadline)
@@ -186,6 +189,7 @@ class LocalMultiStagePlanner(MultiStagePlanner):
         t = time.perf_counter()
         eca, baa = run.layers["eca"], run.layers["baa"]
         stage = run.stats.add(StageStats("local", windows=[]))
+        run.monitor.report(stage.name)
         guide, _, guide_exp = astar_2d(eca, start.cell, goal.cell, cell_cost=baa * self.narrow_penalty,
                                        deadline=run.deadline)
         stage.guide_expansions = guide_exp

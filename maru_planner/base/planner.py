@@ -5,6 +5,11 @@
 ``search`` under the request's :class:`~maru_planner.base.budget.Deadline` and turns whatever
 ``MaruError`` a step raises into a failed :class:`BasePlanResult` (status from
 :func:`~maru_planner.base.result.status_of`, the stats and layers gathered so far kept).
+
+An optional :class:`~maru_planner.monitor.PlanMonitor` watches and cancels a plan. It gets the stages
+("validation", "search" and what a planner reports through ``run.monitor``: MSPP's ECA, BAA, full,
+local) and, when the search ends, the expansions. Its ``cancel()`` terminates the request's deadline,
+so the next deadline check (Python loops and numba kernels alike) stops the plan, as CANCELLED.
 """
 
 from __future__ import annotations
@@ -26,16 +31,22 @@ from maru_planner.errors import (
     GoalOutsideMap,
     InvalidRequest,
     MaruError,
+    PlanningCancelled,
+    PlanningTimedOut,
     StartOccupied,
     StartOutsideMap,
 )
+from maru_planner.monitor import PlanMonitor
 
 Pose = tuple[float, float, float]
 Cell = tuple[int, int]
 
 
 class BasePlanner(Protocol):
-    """What the registry's factories build: ``plan`` a path for one request within ``time_limit`` seconds."""
+    """What the registry's factories build: ``plan`` a path for one request within ``time_limit`` seconds.
+
+    ``monitor`` (optional) receives progress and can cancel the plan from another thread.
+    """
 
     def plan(
         self,
@@ -44,6 +55,7 @@ class BasePlanner(Protocol):
         goal: Sequence[float],
         *,
         time_limit: float = DEFAULT_TIME_LIMIT,
+        monitor: PlanMonitor | None = None,
     ) -> BasePlanResult: ...
 
 
@@ -69,12 +81,16 @@ class Endpoint:
 
 @dataclass
 class PlanRun:
-    """What one ``plan`` call accumulates: its deadline, stats and drawable layers (kept on failure)."""
+    """What one ``plan`` call accumulates: its deadline, stats and drawable layers (kept on failure).
+
+    ``monitor`` takes a planner's own stages (``run.monitor.report("BAA")``); cancelling it ends the deadline.
+    """
 
     deadline: Deadline
     stats: PlanStats
     layers: dict[str, Any] = field(default_factory=dict)
     message: str = ""
+    monitor: PlanMonitor = field(default_factory=PlanMonitor)
 
 
 def as_pose(pose: Sequence[float], name: str) -> Pose:
@@ -114,22 +130,34 @@ class GridPlanner(ABC, Generic[MapT]):
         goal: Sequence[float],
         *,
         time_limit: float = DEFAULT_TIME_LIMIT,
+        monitor: PlanMonitor | None = None,
     ) -> BasePlanResult:
         t0 = time.perf_counter()
         stats: PlanStats = self.new_stats()
         layers: dict[str, Any] = {}
         path = empty_path()
+        monitor = monitor or PlanMonitor()
         try:
-            run = PlanRun(Deadline(time_limit), stats, layers)
-            poses = as_pose(start, "start"), as_pose(goal, "goal")
-            space = self.prepare(grid, run)
-            ends = [self._endpoint(space, pose, name) for pose, name in zip(poses, ("start", "goal"), strict=True)]
-            path = self.search(space, ends[0], ends[1], run)
+            run = PlanRun(Deadline(time_limit), stats, layers, monitor=monitor)
+            with monitor.attach(run.deadline):
+                path = self._plan(run, grid, start, goal)
             status, message = PlanStatus.SOLVED, run.message
         except MaruError as error:
+            if monitor.cancelled and isinstance(error, PlanningTimedOut):  # a step that raised for the deadline
+                error = PlanningCancelled(f"cancelled: {error}")
             status, message = status_of(error), str(error)
         stats.planning_time = time.perf_counter() - t0
         return BasePlanResult(status, message, path, stats, layers)
+
+    def _plan(self, run: PlanRun, grid: Any, start: Sequence[float], goal: Sequence[float]) -> np.ndarray:
+        run.monitor.report("validation")
+        poses = as_pose(start, "start"), as_pose(goal, "goal")
+        space = self.prepare(grid, run)
+        ends = [self._endpoint(space, pose, name) for pose, name in zip(poses, ("start", "goal"), strict=True)]
+        run.monitor.report("search")
+        path = self.search(space, ends[0], ends[1], run)
+        run.monitor.report(run.monitor.stage, expansions=run.stats.expansions)
+        return path
 
     def _endpoint(self, space: MapT, pose: Pose, name: str) -> Endpoint:
         cell = space.world_to_cell(pose[0], pose[1])

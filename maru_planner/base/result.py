@@ -17,6 +17,7 @@ from maru_planner.errors import (
     MaruError,
     NoPath,
     NoPathProven,
+    PlanningCancelled,
     PlanningTimedOut,
     StartOccupied,
     StartOutsideMap,
@@ -34,6 +35,7 @@ class PlanStatus(enum.StrEnum):
     START_OUTSIDE_MAP = "start_outside_map"
     GOAL_OUTSIDE_MAP = "goal_outside_map"
     TIMED_OUT = "timed_out"
+    CANCELLED = "cancelled"  # the caller cancelled the plan (a PlanMonitor), e.g. an action goal's cancel
     INVALID_REQUEST = "invalid_request"
 
 
@@ -42,6 +44,7 @@ _ERROR_STATUS: tuple[tuple[type[MaruError], PlanStatus], ...] = (
     (NoPathProven, PlanStatus.NO_PATH_PROVEN),
     (NoPath, PlanStatus.NO_PATH),
     (PlanningTimedOut, PlanStatus.TIMED_OUT),
+    (PlanningCancelled, PlanStatus.CANCELLED),
     (StartOccupied, PlanStatus.START_OCCUPIED),
     (GoalOccupied, PlanStatus.GOAL_OCCUPIED),
     (StartOutsideMap, PlanStatus.START_OUTSIDE_MAP),

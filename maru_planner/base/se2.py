@@ -71,7 +71,7 @@ def cspace_layers(
     starts = np.cumsum([0] + [len(o) for o in offsets]).astype(np.int64)
     flat_offsets = np.concatenate([np.asarray(o, dtype=np.int64).reshape(-1, 2) for o in offsets])
     out = np.zeros((len(offsets),) + occupied.shape, dtype=np.bool_)
-    if not _stamp_kernel(np.argwhere(occupied).astype(np.int64), flat_offsets, starts, out, deadline.at):
+    if not _stamp_kernel(np.argwhere(occupied).astype(np.int64), flat_offsets, starts, out, deadline.kernel_at):
         deadline.raise_timeout(f"footprint C-space ({len(flat_offsets)} footprint cells over {headings} headings)")
     return out
 
@@ -86,7 +86,7 @@ def _stamp_kernel(cells, offsets, starts, out, deadline_at):
     for k in range(num_k):
         layer = out[k]
         for j in range(starts[k], starts[k + 1]):
-            if (j & 63) == 0 and now() > deadline_at:
+            if (j & 63) == 0 and now() > deadline_at[0]:
                 return False
             dr = offsets[j, 0]
             dc = offsets[j, 1]
@@ -144,7 +144,7 @@ def _se2_kernel(blocked, starts, gr, gc, gk, rot_cost, deadline_at, initial_capa
             continue
         closed[node] = True
         expansions += 1
-        if (expansions & 1023) == 0 and now() > deadline_at:
+        if (expansions & 1023) == 0 and now() > deadline_at[0]:
             return parent, -1, g, expansions, checks, 2
         k = node // layer
         rem = node - k * layer
@@ -236,7 +236,7 @@ def search_layers(
     starts = np.array([[k, r + 1, c + 1] for k, r, c in starts], dtype=np.int64).reshape(-1, 3)
     parent, goal, cost, expansions, checks, status = _se2_kernel(
         padded, starts, int(goal_cell[0]) + 1, int(goal_cell[1]) + 1, int(goal_k), float(rot_cost_cells),
-        float(deadline.at),
+        deadline.kernel_at,
         int(initial_capacity if initial_capacity is not None else min(10 * padded.size, 1 << 20)),
     )
     if status == _TIMED_OUT:

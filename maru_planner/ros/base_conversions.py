@@ -26,6 +26,7 @@ STATUS_TO_ERROR = {
     PlanStatus.START_OUTSIDE_MAP: E.START_OUTSIDE_MAP,
     PlanStatus.GOAL_OUTSIDE_MAP: E.GOAL_OUTSIDE_MAP,
     PlanStatus.TIMED_OUT: E.TIMEOUT,
+    PlanStatus.CANCELLED: E.UNKNOWN,  # PlanBasePath has no cancel code: the action goal ends CANCELED
     PlanStatus.INVALID_REQUEST: E.INVALID_REQUEST,
 }
 

@@ -94,7 +94,7 @@ def cost_to_go(passable: np.ndarray, goal_cell, cell_cost: np.ndarray | None = N
     passable = np.ascontiguousarray(passable, dtype=np.bool_)
     costs = np.ones(passable.shape) if cell_cost is None else np.ascontiguousarray(cell_cost, dtype=float)
     deadline = deadline or unlimited()
-    dist, finished = _wavefront_kernel(passable, costs, int(goal_cell[0]), int(goal_cell[1]), deadline.at)
+    dist, finished = _wavefront_kernel(passable, costs, int(goal_cell[0]), int(goal_cell[1]), deadline.kernel_at)
     if not finished:
         deadline.raise_timeout(f"the cost-to-go wavefront over {passable.shape[1]} x {passable.shape[0]} cells")
     return dist
@@ -117,7 +117,7 @@ def _wavefront_kernel(passable, costs, gr, gc, deadline_at):
             continue
         closed[r, c] = True
         pops += 1
-        if (pops & 4095) == 0 and now() > deadline_at:
+        if (pops & 4095) == 0 and now() > deadline_at[0]:
             return dist, False
         for dr in range(-1, 2):
             for dc in range(-1, 2):
