@@ -213,3 +213,167 @@ def test_a_goal_beyond_the_admission_queue_is_aborted_busy(node_process, tester)
     assert status == _status().STATUS_ABORTED, _describe(status, result)
     assert result.error.code == _codes().BUSY
     assert first_status == _status().STATUS_CANCELED
+
+
+# ---------------------------------------------------------------- base_planner_node: plan_base_path action
+
+BASE_START, BASE_GOAL = (1.0, 2.0, 0.0), (5.0, 2.0, 0.0)
+
+
+@pytest.fixture(scope="module")
+def base_node(node_process, rclpy_session):
+    from maru_planner.paths import config_path
+
+    proc = node_process(
+        "maru_planner.ros.base_planner_node", ["--ros-args", "--params-file", str(config_path("base_planner.yaml"))]
+    )
+    yield proc
+    assert proc.alive(), "base_planner_node died:\n" + proc.log()
+
+
+class BaseClient:
+    """The base node's service and action clients and a latched /map publisher (on the module's tester)."""
+
+    def __init__(self, tester, proc):
+        from nav_msgs.msg import OccupancyGrid
+        from rclpy.action import ActionClient
+        from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+
+        from maru_planner_interfaces.action import PlanBasePath as PlanBasePathAction
+        from maru_planner_interfaces.srv import PlanBasePath
+
+        self.tester, self.proc = tester, proc
+        latched = QoSProfile(
+            depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL, reliability=ReliabilityPolicy.RELIABLE
+        )
+        self.map_pub = tester.node.create_publisher(OccupancyGrid, "/map", latched)
+        self.service = tester.node.create_client(PlanBasePath, "/plan_base_path")
+        self.action = ActionClient(tester.node, PlanBasePathAction, "/plan_base_path")
+
+    def publish_map(self, grid, expect_log: str) -> None:
+        from builtin_interfaces.msg import Time
+
+        from maru_planner.ros.base_conversions import grid_to_msg
+
+        before = self.proc.log().count(expect_log)
+        self.map_pub.publish(grid_to_msg(grid, grid.occupied, Time(), "map"))
+        assert self.tester.wait_for(lambda: self.proc.log().count(expect_log) > before, timeout=60), self.proc.log()
+
+    def request(self, start=BASE_START, goal=BASE_GOAL, planner_id="", time_limit=0.0):
+        from maru_planner_interfaces.srv import PlanBasePath
+
+        request = PlanBasePath.Request(planner_id=planner_id, allowed_planning_time=float(time_limit))
+        request.start, request.goal = _pose_msg(start), _pose_msg(goal)
+        return request
+
+    def call(self, request):
+        return self.tester.call(self.service, request, timeout=60.0)
+
+    def send(self, request, feedback_callback=None):
+        """Send ``request`` as a goal; (goal handle, result future) once accepted."""
+        from maru_planner.ros.planning_client import wait_for_future
+        from maru_planner_interfaces.action import PlanBasePath as PlanBasePathAction
+
+        goal = PlanBasePathAction.Goal(
+            **{name: getattr(request, name) for name in PlanBasePathAction.Goal.get_fields_and_field_types()}
+        )
+        assert self.action.wait_for_server(timeout_sec=60.0)
+        on_feedback = None if feedback_callback is None else (lambda message: feedback_callback(message.feedback))
+        handle = wait_for_future(
+            self.action.send_goal_async(goal, feedback_callback=on_feedback), 60.0, "plan_base_path goal"
+        )
+        assert handle.accepted
+        return handle, handle.get_result_async()
+
+    def result(self, request, feedback_callback=None):
+        from maru_planner.ros.planning_client import wait_for_future
+
+        _handle, result = self.send(request, feedback_callback)
+        response = wait_for_future(result, 120.0, "plan_base_path result")
+        return response.status, response.result
+
+
+def _pose_msg(pose):
+    import math
+
+    from geometry_msgs.msg import PoseStamped
+
+    msg = PoseStamped()
+    msg.header.frame_id = "map"
+    msg.pose.position.x, msg.pose.position.y = float(pose[0]), float(pose[1])
+    msg.pose.orientation.z, msg.pose.orientation.w = math.sin(pose[2] / 2), math.cos(pose[2] / 2)
+    return msg
+
+
+@pytest.fixture(scope="module")
+def base(base_node, tester):
+    from maru_planner.base.scenes import table1
+    from maru_planner.ros.planning_client import call_until_answered, goal_until_answered
+    from maru_planner_interfaces.action import PlanBasePath as PlanBasePathAction
+
+    client = BaseClient(tester, base_node)
+    assert client.service.wait_for_service(timeout_sec=120.0), "plan_base_path never appeared:\n" + base_node.log()
+    # both answered NO_MAP: the service and the action have matched this client both ways
+    call_until_answered(client.service, client.request(), timeout=120.0)
+    goal_until_answered(client.action, PlanBasePathAction.Goal(), timeout=120.0)
+    client.publish_map(table1("medium"), "map 60 x 40 cells")
+    return client
+
+
+def test_a_base_goal_ends_with_the_service_response(base):
+    stages = Stages()
+    for planner_id in ("mspp", "se2"):
+        request = base.request(planner_id=planner_id)
+        response = base.call(request)
+        status, result = base.result(request, stages)
+        assert status == _status().STATUS_SUCCEEDED, (planner_id, status, result.error_msg)
+        assert (
+            (result.error_code, result.error_msg)
+            == (response.error_code, response.error_msg)
+            == (0, response.error_msg)
+        )
+        assert [(p.pose.position.x, p.pose.position.y) for p in result.path.poses] == [
+            (p.pose.position.x, p.pose.position.y) for p in response.path.poses
+        ]
+        assert (result.expansions, result.deciding_stage) == (response.expansions, response.deciding_stage)
+    assert stages.messages and stages.messages[0][1].stage == "queued"
+
+
+def test_a_bad_base_goal_is_aborted_with_the_service_error_code(base):
+    from maru_planner_interfaces.srv import PlanBasePath
+
+    E = PlanBasePath.Response
+    for request, code in (
+        (base.request(planner_id="no_such_planner"), E.INVALID_PLANNER),
+        (base.request(start=(-50.0, 2.0, 0.0)), E.START_OUTSIDE_MAP),
+        (base.request(time_limit=-1.0), E.INVALID_REQUEST),
+    ):
+        response = base.call(request)
+        status, result = base.result(request)
+        assert response.error_code == code, response.error_msg
+        assert status == _status().STATUS_ABORTED
+        assert (result.error_code, result.error_msg) == (response.error_code, response.error_msg)
+
+
+def test_a_cancelled_base_goal_stops_and_the_node_keeps_serving(base):
+    """biped_wall's cost-to-go wavefront over a 2000 x 2000 map outlasts 10 s: cancelled while it runs."""
+    import numpy as np
+
+    from maru_planner.base.grid import OccupancyGrid
+    from maru_planner.base.scenes import table1
+    from maru_planner.ros.planning_client import wait_for_future
+
+    base.publish_map(OccupancyGrid(np.random.default_rng(0).random((2000, 2000)) < 0.001, 0.05), "map 2000 x 2000")
+    stages = Stages()
+    request = base.request(start=(10.0, 10.0, 0.0), goal=(90.0, 90.0, 0.0), planner_id="biped_wall", time_limit=10.0)
+    handle, result_future = base.send(request, stages)
+    assert stages.wait_for("search")
+    time.sleep(0.5)
+    assert not result_future.done(), "the long base plan ended before the cancel; the test proved nothing"
+    assert len(wait_for_future(handle.cancel_goal_async(), 30.0, "cancel").goals_canceling) == 1
+    response = wait_for_future(result_future, 60.0, "plan_base_path result")
+
+    assert response.status == _status().STATUS_CANCELED, response.result.error_msg
+    assert "cancelled" in response.result.error_msg
+    base.publish_map(table1("medium"), "map 60 x 40 cells")
+    assert base.call(base.request()).error_code == 0

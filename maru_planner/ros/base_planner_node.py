@@ -6,6 +6,9 @@
   id, footprint, start, goal -> Path, Nav2-style error code + message, stats)
   and ``make_plan`` (nav_msgs/GetPlan, the standard service: empty path on
   failure, the reason in the log);
+- offers ``plan_base_path`` also as an action (maru_planner_interfaces/action/PlanBasePath: the
+  service's request as goal, its response as result; feedback every 0.1 s: stage, elapsed,
+  expansions; a cancel stops the search at its next deadline check, the goal ends CANCELED);
 - publishes the last path on ``plan`` (nav_msgs/Path) and, only while someone
   subscribes, the grown maps on ``~/eca_map``, ``~/baa_map`` and
   ``~/grown_map`` (nav_msgs/OccupancyGrid).
@@ -16,6 +19,10 @@ re-read the last map); a bad value is rejected with the reason. Any planner of
 ``maru_planner.base.registry`` is served; it gets the ``headings`` and ``biped_world`` parameters
 only when its capabilities ask for them. Poses are in the map frame (an empty frame_id is taken
 as the map's).
+
+Plans run one at a time, in arrival order, on a planning thread (the planners share caches and
+numba workspaces); the service and action callbacks await them, so the executor keeps taking maps,
+feedback timers and cancel requests while a plan runs.
 """
 
 from __future__ import annotations
@@ -23,6 +30,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import sys
+from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 import numpy as np
@@ -30,8 +38,10 @@ import rclpy
 from nav_msgs.msg import OccupancyGrid as OccupancyGridMsg
 from nav_msgs.msg import Path
 from nav_msgs.srv import GetPlan
+from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.executors import ExternalShutdownException
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.task import Future
 
 from maru_planner.base import registry
 from maru_planner.base.biped.planners import resolve_world_path
@@ -41,15 +51,19 @@ from maru_planner.base.grid import OccupancyGrid
 from maru_planner.base.planner import BasePlanner
 from maru_planner.base.result import BasePlanResult
 from maru_planner.errors import InvalidRequest, MaruError
+from maru_planner.monitor import PlanMonitor, Progress
 from maru_planner.params import dataclass_params, param
 from maru_planner.ros import base_conversions as conv
 from maru_planner.ros import parameters
 from maru_planner.ros.env import network_from_environment
 from maru_planner.ros.lifecycle import ManagedNode
+from maru_planner.ros.plan_actions import PlanActionServer
+from maru_planner_interfaces.action import PlanBasePath as PlanBasePathAction
 from maru_planner_interfaces.srv import PlanBasePath
 
 E = PlanBasePath.Response
 _PLANNER_CACHE_SIZE = 16  # built planners kept (their rasterised footprints survive between requests)
+FEEDBACK_PERIOD = 0.1  # s between plan_base_path action feedback messages (10 Hz)
 
 
 @dataclasses.dataclass
@@ -96,6 +110,7 @@ class BasePlannerNode(ManagedNode):
         self.map_error = "not configured"
         self.planners: dict[tuple, BasePlanner] = {}
         self.requests = 0
+        self._plan_action: PlanActionServer | None = None
         parameters.add_on_set_parameters_callback(self, NODE_SPECS, self.when_configured(self.apply_parameters))
         self.start()
 
@@ -116,16 +131,35 @@ class BasePlannerNode(ManagedNode):
             name: self.create_lifecycle_publisher(OccupancyGridMsg, f"~/{name}_map", latched)
             for name in ("eca", "baa", "grown")
         }
-        self.create_managed_service(PlanBasePath, "plan_base_path", self._on_plan_base_path)
-        self.create_managed_service(GetPlan, "make_plan", self._on_get_plan)
+        self._planning = ThreadPoolExecutor(max_workers=1, thread_name_prefix="base_planner")
+        callbacks = ReentrantCallbackGroup()  # a callback awaiting its plan must not block the others
+        self.create_managed_service(
+            PlanBasePath, "plan_base_path", self._on_plan_base_path, callback_group=callbacks
+        )
+        self.create_managed_service(GetPlan, "make_plan", self._on_get_plan, callback_group=callbacks)
+        self._plan_action = PlanActionServer(
+            self,
+            PlanBasePathAction,
+            "plan_base_path",
+            plan=lambda goal, monitor: self._answer_plan(goal, PlanBasePathAction.Result(), monitor),
+            succeeded=lambda result: result.error_code == E.NONE,
+            feedback=_feedback_msg,
+            period=lambda: FEEDBACK_PERIOD,
+            callback_group=callbacks,
+        )
         self.get_logger().info(
             f"base planner ready (default planner {self.config.planner_id!r}, planners {registry.planner_ids()})"
         )
 
     def cleanup(self) -> None:
+        self._planning.shutdown(wait=False, cancel_futures=True)  # a running plan ends at its deadline
         self.grid, self.map_msg = None, None
         self.map_error = "not configured"
         self.planners.clear()
+
+    def requests_in_progress(self) -> int:
+        goals = self._plan_action.running_goals if self._plan_action is not None else 0
+        return super().requests_in_progress() + goals
 
     # ------------------------------------------------------------- parameters
     def apply_parameters(self, changes: dict[str, Any]) -> None:
@@ -154,8 +188,14 @@ class BasePlannerNode(ManagedNode):
             self.get_logger().warning(self.map_error)
 
     # --------------------------------------------------------------- planning
-    def plan(self, planner_id: str, footprint: np.ndarray, start_msg, goal_msg, time_limit: float):
-        """Returns (error_code, message, result or None, nav_msgs/Path of the result or None)."""
+    def plan(
+        self, planner_id: str, footprint: np.ndarray, start_msg, goal_msg, time_limit: float,
+        monitor: PlanMonitor | None = None,
+    ):
+        """Returns (error_code, message, result or None, nav_msgs/Path of the result or None).
+
+        ``monitor`` watches and cancels the plan (the action's goals).
+        """
         self.requests += 1
         if self.grid is None:
             return E.NO_MAP, f"no map: {self.map_error}", None, None
@@ -165,6 +205,7 @@ class BasePlannerNode(ManagedNode):
             result = planner.plan(
                 self.grid, conv.pose_from_msg(start_msg), conv.pose_from_msg(goal_msg),
                 time_limit=time_limit or self.config.allowed_planning_time,
+                monitor=monitor,
             )
         except MaruError as exc:
             return conv.error_code(exc), str(exc), None, None
@@ -210,13 +251,35 @@ class BasePlannerNode(ManagedNode):
                 pub.publish(conv.grid_to_msg(self.grid, layer, stamp, frame))
         return path_msg
 
-    def _on_plan_base_path(self, request, response):
-        code, message, result, path_msg = self.plan(
+    def _in_planning_thread(self, fn, *args) -> Future:
+        """Run ``fn(*args)`` on the planning thread (one plan at a time); an rclpy Future a callback can await."""
+        future = Future(executor=self.executor)
+
+        def job() -> None:
+            try:
+                future.set_result(fn(*args))
+            except BaseException as exc:  # noqa: BLE001 - handed to the awaiting callback
+                future.set_exception(exc)
+            finally:
+                if self.executor is not None:
+                    self.executor.wake()
+
+        self._planning.submit(job)
+        return future
+
+    async def _on_plan_base_path(self, request, response):
+        return await self._answer_plan(request, response)
+
+    async def _answer_plan(self, request, response, monitor: PlanMonitor | None = None):
+        """Plan ``request`` (a service request or action goal) and fill ``response`` (its response or result)."""
+        code, message, result, path_msg = await self._in_planning_thread(
+            self.plan,
             request.planner_id,
             conv.footprint_from_points(request.footprint),
             request.start,
             request.goal,
             request.allowed_planning_time,
+            monitor,
         )
         response.error_code, response.error_msg = code, message
         response.path.header.frame_id = self.grid.frame_id if self.grid is not None else "map"
@@ -231,8 +294,10 @@ class BasePlannerNode(ManagedNode):
         self._log_outcome("plan_base_path", code, message)
         return response
 
-    def _on_get_plan(self, request, response):
-        code, message, result, path_msg = self.plan("", np.zeros((0, 2)), request.start, request.goal, 0.0)
+    async def _on_get_plan(self, request, response):
+        code, message, result, path_msg = await self._in_planning_thread(
+            self.plan, "", np.zeros((0, 2)), request.start, request.goal, 0.0
+        )
         if result is not None and result.success:
             response.plan = path_msg
         else:
@@ -245,6 +310,12 @@ class BasePlannerNode(ManagedNode):
             self.get_logger().info(f"{service}: {message}")
         else:
             self.get_logger().warning(f"{service}: error {code}: {message}")
+
+
+def _feedback_msg(progress: Progress) -> PlanBasePathAction.Feedback:
+    return PlanBasePathAction.Feedback(
+        stage=progress.stage, elapsed=float(progress.elapsed), expansions=int(progress.info.get("expansions", 0))
+    )
 
 
 def main(args: list[str] | None = None) -> int:

@@ -21,6 +21,7 @@ from __future__ import annotations
 import threading
 import time
 from collections.abc import Callable, Sequence
+from typing import Any
 
 import rclpy
 from action_msgs.msg import GoalStatus
@@ -81,10 +82,10 @@ class PlanningClient:
     # ------------------------------------------------------------ calls
 
     def wait_until_ready(self, timeout: float = 60.0) -> None:
-        """Wait until every service of the node answers (see :func:`call_until_answered`).
+        """Wait until every service and the ``plan_motion`` action of the node answer (see :func:`call_until_answered`).
 
-        The probes change nothing: an empty plan / IK request (answered INVALID_REQUEST),
-        removing an obstacle name no scene uses (INVALID_SCENE), reading the scene.
+        The probes change nothing: an empty plan / IK request and an empty goal (answered
+        INVALID_REQUEST), removing an obstacle name no scene uses (INVALID_SCENE), reading the scene.
         """
         deadline = time.monotonic() + timeout
         probes = (
@@ -95,6 +96,7 @@ class PlanningClient:
         )
         for client, request in probes:
             call_until_answered(client, request, max(deadline - time.monotonic(), 0.001))
+        goal_until_answered(self.plan_action_client, PlanMotionAction.Goal(), max(deadline - time.monotonic(), 0.001))
 
     def call(self, client, request, timeout: float = 60.0):
         """Send ``request`` and wait for the response (the node must be spun by an executor)."""
@@ -275,7 +277,7 @@ def send_plan_goal(
     feedback_callback: Callable[[PlanMotionAction.Feedback], None] | None = None,
     timeout: float = 60.0,
 ) -> PlanGoal:
-    """Send ``goal`` on a ``plan_motion`` action client and wait for its acceptance (the node never rejects)."""
+    """Send ``goal`` on a planning action client and wait for its acceptance (an active node never rejects)."""
     if not client.wait_for_server(timeout_sec=timeout):
         raise TimeoutError(f"no plan_motion action server after {timeout} s")
     on_feedback = None if feedback_callback is None else (lambda message: feedback_callback(message.feedback))
@@ -283,6 +285,25 @@ def send_plan_goal(
     if not handle.accepted:
         raise RuntimeError("plan_motion rejected the goal")
     return PlanGoal(handle)
+
+
+def goal_until_answered(client: ActionClient, goal: Any, timeout: float = 60.0) -> tuple[int, Any]:
+    """Send a harmless ``goal`` again and again until its result arrives; (status, result).
+
+    As for services (:func:`call_until_answered`): right after discovery the server may not yet have
+    matched the client's readers, and the goal's acceptance or result is lost. Only for goals that
+    change nothing.
+    """
+    deadline = time.monotonic() + timeout
+    attempt = 1.0
+    while True:
+        left = deadline - time.monotonic()
+        if left <= 0.0:
+            raise TimeoutError(f"no answer to a probe goal within {timeout} s")
+        try:
+            return send_plan_goal(client, goal, timeout=min(attempt, left)).result(min(attempt, left))
+        except TimeoutError:
+            attempt = min(2.0 * attempt, 8.0)  # a slow server gets more time on each try
 
 
 def wait_for_future(future: Future, timeout: float, what: str):
