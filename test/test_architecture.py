@@ -90,9 +90,10 @@ def imports_of(importer: str, path: Path, known: set[str]) -> list[Import]:
     """The imports written in one module, each flagged function-level / type-only / justified.
 
     A ``# lazy: <reason>`` comment justifies the import on its line or, on a line of its own, the run
-    of import statements right below it.
+    of import statements right below it (blank lines between them, as isort puts between groups, included).
     """
     source = path.read_text()
+    lines = source.splitlines()
     trailing, below = _lazy_reason_lines(source)
     is_package = path.name == "__init__.py"
     found: list[Import] = []
@@ -101,7 +102,10 @@ def imports_of(importer: str, path: Path, known: set[str]) -> list[Import]:
         if isinstance(node, ast.Import | ast.ImportFrom):
             justified = node.lineno in trailing or node.lineno in below
             if node.lineno in below and node.end_lineno is not None:
-                below.add(node.end_lineno + 1)
+                following = node.end_lineno + 1
+                while following <= len(lines) and not lines[following - 1].strip():
+                    following += 1
+                below.add(following)
             for target in dict.fromkeys(_targets(node, importer, is_package, known)):
                 found.append(Import(importer, target, path, node.lineno, in_function, type_only, justified))
             return
@@ -284,9 +288,10 @@ FIXTURE_PACKAGE = {
     "pkg/lazy.py": (
         "def f():\n"
         "    # lazy: matplotlib is optional\n"
-        "    from pkg import a\n"
-        "    from pkg import b\n"
+        "    import os\n"
         "\n"
+        "    from pkg import a\n"
+        "    x = 1\n"
         "    from pkg import typed  # lazy:\n"
         "def g():\n"
         "    from pkg import a  # lazy: optional too\n"
@@ -320,4 +325,4 @@ def test_detects_ros_imports_in_the_core(fixture_imports):
 
 def test_detects_function_level_imports_without_a_reason(fixture_imports):
     offenders = [(i.importer, i.target, i.line) for i in unjustified_lazy_imports(fixture_imports, "pkg")]
-    assert offenders == [("pkg.b", "pkg.c", 2), ("pkg.lazy", "pkg.typed", 6), ("pkg.lazy", "pkg.b", 9)]
+    assert offenders == [("pkg.b", "pkg.c", 2), ("pkg.lazy", "pkg.typed", 7), ("pkg.lazy", "pkg.b", 10)]

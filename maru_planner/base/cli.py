@@ -174,7 +174,7 @@ def _write_outputs(args: argparse.Namespace, spec_id: str, grid, footprint, resu
 
 
 def _write_png(args: argparse.Namespace, spec_id: str, grid, footprint, result: BasePlanResult) -> None:
-    # matplotlib takes about half a second to import: only --png loads it.
+    # lazy: matplotlib takes about half a second to import; only --png loads it
     from maru_planner.viz.biped import save_result_png
     from maru_planner.viz.grids import save_plan_png
 

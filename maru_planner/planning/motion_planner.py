@@ -33,6 +33,7 @@ from ompl import base as ob
 from ompl import util as ou
 
 from maru_planner import errors
+from maru_planner.collision import CollisionChecker
 from maru_planner.monitor import PlanMonitor
 from maru_planner.planning import postprocess, timing
 from maru_planner.planning.cartesian import CartesianRequest, CartesianResult, compute_cartesian_path
@@ -251,7 +252,7 @@ class MotionPlanner:
         return result
 
     def _certify_path(self, request: MotionRequest, result: MotionResult, t0: float) -> None:
-        from maru_planner.collision.certify import certify_and_repair  # loaded by _make_certifier already
+        from maru_planner.collision.certify import certify_and_repair  # lazy: numba, as in _make_certifier
 
         stats = result.stats
         self._monitor.report("certify")
@@ -286,8 +287,6 @@ class MotionPlanner:
         It plans on the exact model padded by the margin, at ``config.resolution`` or :data:`REPAIR_RESOLUTION`
         if finer (a coarse search's gaps are what certification caught), with a short simplification.
         """
-        from maru_planner.collision import CollisionChecker  # lazy like make_checkers: exact model only
-
         names = self.robot.joint_names
         group = [names[i] for i in self.robot.group_joint_indices(request.group)]
         attempt = itertools.count(1)
@@ -767,7 +766,7 @@ def _set_internal_error(result: MotionResult, exc: Exception) -> None:
 
 def _record_verification(result: MotionResult, certificate, repairs: int) -> None:
     """A sphere plan's exact re-check is its certification: the verification fields report it."""
-    from maru_planner.collision.spheres import PathVerification  # loaded with the sphere checker
+    from maru_planner.collision.spheres import PathVerification  # lazy: numba; only sphere plans get here
 
     stats = result.stats
     stats.verified, stats.verify_time, stats.replans = stats.certified, certificate.seconds, repairs

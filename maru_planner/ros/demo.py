@@ -19,7 +19,11 @@ from types import SimpleNamespace
 import numpy as np
 
 from maru_planner.paths import config_path
+from maru_planner.planning.problems import PROBLEMS
+from maru_planner.robot import RobotModel
 from maru_planner.ros.env import configure_loopback_dds
+from maru_planner.scene import Scene
+from maru_planner.viz.plans import plot_plan
 
 PLANNERS = ("RRTConnect", "GoalBiasedRRT", "RCRRT", "PRM", "RRT")
 COLUMNS = ("planner", "success", "time [s]", "round trip [s]", "nodes", "collision checks", "path length [rad]")
@@ -101,10 +105,6 @@ def trajectory_as_result(response) -> SimpleNamespace:
 
 
 def draw_plan(rows, client, out_dir: Path) -> Path | None:
-    from maru_planner.robot import RobotModel
-    from maru_planner.scene import Scene
-    from maru_planner.viz.plans import plot_plan
-
     solved = [r for r in rows if r["success"]]
     if not solved:
         return None
@@ -127,10 +127,9 @@ def main(argv=None) -> int:
     env = configure_loopback_dds(args.domain_id, random_domain=args.domain_id is None)
     print(f"[demo] DDS on loopback only, ROS_DOMAIN_ID={env['ROS_DOMAIN_ID']}", flush=True)
 
+    # lazy: rclpy and its client load only once configure_loopback_dds has set the DDS environment
     import rclpy
 
-    from maru_planner.planning.problems import PROBLEMS
-    from maru_planner.robot import RobotModel
     from maru_planner.ros.planning_client import PlanningClient
 
     problem = PROBLEMS["maru13"]
