@@ -14,7 +14,7 @@ from maru_planner.collision.checker import bisection_order
 from maru_planner.collision.spheres import SphereCollisionChecker, verify_path
 from maru_planner.planning import PLANNERS, MotionPlanner, MotionRequest, PlannerConfig, PlanStatus
 from maru_planner.planning import rrtc_kernel as kernel
-from maru_planner.planning.compiled_rrtc import CompiledRRTConnect, sphere_kernel_inputs
+from maru_planner.planning.compiled_rrtc import CompiledRRTConnect
 from maru_planner.planning.problems import PROBLEMS
 from maru_planner.planning.space import EdgeChecker, GroupSpace
 from maru_planner.robot import RobotModel, load_example_robot
@@ -72,7 +72,7 @@ def kernel_edge(checker, gs: GroupSpace, qa, qb, exact_near: float = np.inf) -> 
     st = np.zeros(len(kernel.STATE_FIELDS), dtype=np.int64)
     amb_states = np.empty((int(np.ceil(np.abs(qb - qa).max() / RESOLUTION)) + 1, gs.dim))
     status = kernel.check_edge(np.asarray(qa, float), np.asarray(qb, float), RESOLUTION, gs.base,
-                               gs.indices.astype(np.int64), *sphere_kernel_inputs(checker), checker.confirm,
+                               gs.indices.astype(np.int64), *checker.kernel_inputs(), checker.confirm,
                                amb_states, st, np.array([qa, qa], dtype=float), exact_near)  # fmt: skip
     return int(status), amb_states[: st[kernel.N_AMB]]
 

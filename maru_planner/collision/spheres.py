@@ -21,6 +21,7 @@ does this for any planner on a sphere checker (``PlannerConfig.collision_model="
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import coal
 import numpy as np
@@ -184,12 +185,25 @@ class SphereCollisionChecker:
         self._scene_version = getattr(scene, "version", None)
         self._amb = np.zeros((self.spheres.n_groups * max(1, len(self.primitives.names)) + len(self.self_pairs), 3),
                              dtype=np.int64)
-        self._request = None
+        self._request: coal.CollisionRequest | None = None
 
     @property
     def uses_grid(self) -> bool:
         """Whether the kernels look obstacles up in a grid (large scenes) rather than test them all."""
         return bool(self._grid[0][0] > 0)
+
+    def kernel_inputs(self) -> tuple[np.ndarray, ...]:
+        """The current scene's arrays for compiled callers, in ``scan_nb``'s order after ``Q, start``: packed
+        robot (ints, floats), packed scene, grid (ints, floats) and the work arrays ``amb``, ``mark`` (numba only)."""
+        self._sync()
+        ri, rf, scene = self._packed()
+        return ri, rf, scene, *self._grid, self._amb, self._mark
+
+    def _packed(self) -> tuple[Any, Any, Any]:
+        """The numba kernels' packed robot (ints, floats) and packed scene."""
+        if self._packed_robot is None or self._packed_scene is None:
+            raise RuntimeError("packed arrays exist only with use_numba")
+        return (*self._packed_robot, self._packed_scene)
 
     def _build_grid(self) -> tuple[np.ndarray, np.ndarray]:
         """Grid broad phase over the reachable obstacles, cells about one robot sphere cluster's bound across."""
@@ -289,9 +303,9 @@ class SphereCollisionChecker:
     def _scan(self, Q: np.ndarray, start: int) -> tuple[int, int, int]:
         """First row >= start that is not clearly valid: (row, status, number of ambiguous pairs)."""
         if self.use_numba:
-            ri, rf = self._packed_robot
+            ri, rf, scene = self._packed()
             row, status, n_amb = _kernels.scan_nb(
-                Q, start, ri, rf, self._packed_scene, *self._grid, self._amb, self._mark, self.confirm
+                Q, start, ri, rf, scene, *self._grid, self._amb, self._mark, self.confirm
             )
             return int(row), int(status), int(n_amb)
         for row in range(start, len(Q)):

@@ -173,7 +173,7 @@ class CompiledRRTConnect(ob.Planner):
         nodes, parent, st = kernel.new_state(start, goal, _CAPACITY)
         self._trees = (nodes, parent, st)
         amb_states = np.empty((int(np.ceil((gs.upper - gs.lower).max() / self._edges.resolution)) + 2, len(start)))
-        fixed = (st, np.empty(len(start)), amb_states, *self._search_args(kernel), *sphere_kernel_inputs(checker),
+        fixed = (st, np.empty(len(start)), amb_states, *self._search_args(kernel), *checker.kernel_inputs(),
                  checker.confirm, self._exact_near())  # fmt: skip
         verdict, batch = False, _FIRST_EDGES
         while True:
@@ -234,10 +234,3 @@ def _kernel():
     from maru_planner.planning import rrtc_kernel
 
     return rrtc_kernel
-
-
-def sphere_kernel_inputs(checker) -> tuple[np.ndarray, ...]:
-    """The sphere checker's packed robot, scene, grid and work arrays, in the order ``rrtc_kernel.run`` takes them."""
-    checker._sync()
-    ri, rf = checker._packed_robot
-    return ri, rf, checker._packed_scene, *checker._grid, checker._amb, checker._mark
