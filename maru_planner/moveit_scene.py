@@ -241,7 +241,10 @@ def iter_mbm_problems(
             num = int(m["num"])
             if limit_per_set is not None and num > limit_per_set:
                 continue
-            with tar.extractfile(member) as fh:
+            fh = tar.extractfile(member)
+            if fh is None:  # only for members that are not files, skipped above
+                continue
+            with fh:
                 texts.setdefault((m["set"], num), {})[m["kind"]] = fh.read().decode("utf-8")
     chosen: dict[str, int] = {}
     for (set_name, num) in sorted(texts):

@@ -11,6 +11,7 @@ and planner registries use the same class for planner parameters. Nothing here i
 
 from __future__ import annotations
 
+import builtins
 import dataclasses
 import math
 from collections.abc import Callable, Sequence
@@ -36,10 +37,10 @@ class ParamSpec:
     choices: tuple[str, ...] | None = None
     read_only: bool = False
     optional: bool = False
-    type: type | None = None
+    type: builtins.type | None = None  # the field shadows the builtin inside the class body
 
     @property
-    def value_type(self) -> type:
+    def value_type(self) -> builtins.type:
         """bool, int, float, str, list or dict (from ``type``, else from the default)."""
         if self.type is not None:
             return self.type

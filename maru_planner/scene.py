@@ -143,7 +143,7 @@ class Obstacle:
     def from_dict(cls, d: dict, base_dir: Path | None = None) -> Obstacle:
         if not isinstance(d, dict):
             raise InvalidScene(f"obstacle entry must be a mapping, got {d!r:.60}")
-        name = d.get("name")
+        name: Any = d.get("name")  # Obstacle checks it
         if "type" not in d:
             raise InvalidScene(f"obstacle {name!r:.60}: missing field 'type'")
         spec = shape(d["type"], f"obstacle {name!r:.60}")

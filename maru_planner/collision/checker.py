@@ -137,7 +137,6 @@ class CollisionChecker:
         self._self_pairs = self_collision_pairs(robot)
         self._model = robot.model
         self._data = robot.model.createData()
-        self._scene: Scene | None = None
         self._scene_version = -1
         self.set_scene(scene if scene is not None else Scene())
 

@@ -22,6 +22,7 @@ import hashlib
 import os
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import coal
 import numpy as np
@@ -184,7 +185,8 @@ def load_or_fit(model, collision_model, options: SphereFitOptions | None = None,
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
             tmp = path.with_suffix(f".{os.getpid()}.tmp.npz")
-            np.savez(tmp, **{f.name: np.asarray(getattr(spheres, f.name)) for f in dataclasses.fields(spheres)})
+            arrays: dict[str, Any] = {f.name: np.asarray(getattr(spheres, f.name)) for f in dataclasses.fields(spheres)}
+            np.savez(tmp, **arrays)
             os.replace(tmp, path)
         except OSError:
             pass

@@ -32,11 +32,11 @@ def smoothness(path: np.ndarray) -> float:
     """OMPL's ``PathGeometric::smoothness``: Σ (2·turn angle / (a + b))² over waypoint triples (0 = straight)."""
     total = 0.0
     for i in range(2, len(path)):
-        a = np.linalg.norm(path[i - 1] - path[i - 2])
-        b = np.linalg.norm(path[i] - path[i - 1])
+        a = float(np.linalg.norm(path[i - 1] - path[i - 2]))
+        b = float(np.linalg.norm(path[i] - path[i - 1]))
         if a < 1e-12 or b < 1e-12:
             continue
-        c = np.linalg.norm(path[i] - path[i - 2])
+        c = float(np.linalg.norm(path[i] - path[i - 2]))
         cos_value = (a * a + b * b - c * c) / (2.0 * a * b)
         if -1.0 < cos_value < 1.0:
             angle = math.pi - math.acos(cos_value)
@@ -53,7 +53,7 @@ def drop_collinear(path: np.ndarray, tol: float = 1e-9) -> np.ndarray:
     for i in range(1, len(path) - 1):
         a = path[i] - path[keep[-1]]
         b = path[i + 1] - path[i]
-        na, nb = np.linalg.norm(a), np.linalg.norm(b)
+        na, nb = float(np.linalg.norm(a)), float(np.linalg.norm(b))
         if na < tol:
             continue
         if nb > tol and abs(float(a @ b) - na * nb) <= tol * max(1.0, na * nb):

@@ -42,6 +42,11 @@ def _parent_link(model: pin.Model, link: str, with_geometry: set[str]) -> str | 
         frame = parent
 
 
+def _ordered(a: str, b: str, order: dict[str, int]) -> tuple[str, str]:
+    """The pair (a, b) in link order, as the reasons are keyed."""
+    return (a, b) if order[a] <= order[b] else (b, a)
+
+
 def _random_configuration(model: pin.Model, rng: np.random.Generator) -> np.ndarray:
     lo, hi = model.lowerPositionLimit.copy(), model.upperPositionLimit.copy()
     finite = np.isfinite(lo) & np.isfinite(hi) & (hi - lo < 1e3)
@@ -65,11 +70,11 @@ def compute_disabled_collisions(
             reasons[(a, b)] = "Adjacent"
     order = {name: i for i, name in enumerate(link_names)}
     for i, j in combinations(range(len(links)), 2):
-        if links[i] != links[j] and tuple(sorted((links[i], links[j]), key=order.get)) not in reasons:
+        if links[i] != links[j] and _ordered(links[i], links[j], order) not in reasons:
             geom_model.addCollisionPair(pin.CollisionPair(i, j))
     geom_data = pin.GeometryData(geom_model)
     data = model.createData()
-    pair_links = [tuple(sorted((links[p.first], links[p.second]), key=order.get)) for p in geom_model.collisionPairs]
+    pair_links = [_ordered(links[p.first], links[p.second], order) for p in geom_model.collisionPairs]
     hits = dict.fromkeys(pair_links, 0)
     closest = dict.fromkeys(pair_links, np.inf)
     rng = np.random.default_rng(seed)

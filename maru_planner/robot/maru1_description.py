@@ -64,6 +64,13 @@ class DHRow:
     alpha: float
     theta0: float = 0.0
 
+    @property
+    def revolute_joint(self) -> str:
+        """The joint's name; ValueError for a fixed row."""
+        if self.joint is None:
+            raise ValueError("a fixed DH row has no joint")
+        return self.joint
+
 
 def body_row() -> DHRow:
     return DHRow("waist_yaw", L_U, D_U, HALF_PI)
@@ -215,7 +222,7 @@ def generate_urdf() -> str:
 
     add_link("base_link", 0.0)
     body = body_row()
-    joints_xml.append(_joint_xml(body.joint, "base_link", "torso", dh_matrix(body.theta0, 0, 0, 0), True))
+    joints_xml.append(_joint_xml(body.revolute_joint, "base_link", "torso", dh_matrix(body.theta0, 0, 0, 0), True))
     add_link("torso", 5.0)
     body_const = dh_matrix(0.0, body.d, body.a, body.alpha)
     for side in ("r", "l"):
@@ -230,7 +237,8 @@ def generate_urdf() -> str:
         add_link(f"{side}_arm_mount", 0.0)
         parent, pending = f"{side}_arm_mount", np.eye(4)
         for row, link in zip(rows[1:], side_links[side]):
-            joints_xml.append(_joint_xml(row.joint, parent, link, pending @ dh_matrix(row.theta0, 0, 0, 0), True))
+            origin = pending @ dh_matrix(row.theta0, 0, 0, 0)
+            joints_xml.append(_joint_xml(row.revolute_joint, parent, link, origin, True))
             add_link(link)
             parent, pending = link, dh_matrix(0.0, row.d, row.a, row.alpha)
         joints_xml.append(_joint_xml(f"{side}_hand_joint", parent, f"{side}_hand", pending, False))

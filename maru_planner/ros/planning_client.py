@@ -150,7 +150,7 @@ class PlanningClient:
             request.seed_state = _joint_state(seed)
         return self.call(self.ik_client, request, timeout)
 
-    def apply_scene(self, obstacles: list[SceneObstacle] = (), *, clear: bool = False, timeout: float = 30.0):
+    def apply_scene(self, obstacles: Sequence[SceneObstacle] = (), *, clear: bool = False, timeout: float = 30.0):
         """Add/move/remove ``SceneObstacle`` messages (after an optional clear)."""
         return self.call(self.apply_client, ApplyScene.Request(clear=clear, obstacles=list(obstacles)), timeout)
 
@@ -229,7 +229,7 @@ class PlanningClient:
     # ------------------------------------------------------------ lifetime
 
     def close(self) -> None:
-        if self._owns_node:
+        if self._executor is not None:  # the client spins its own node
             self._executor.shutdown(timeout_sec=10.0)
             self._thread.join(timeout=10.0)  # out of the wait set before the node's handles go
             self.node.destroy_node()

@@ -7,9 +7,10 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from numpy.typing import ArrayLike  # noqa: E402
 
 
-def big_cells_mask(cells: np.ndarray, size: int, shape) -> np.ndarray:
+def big_cells_mask(cells: ArrayLike, size: int, shape) -> np.ndarray:
     """Small-cell mask covered by the big cells ``cells`` (k, 2) of ``size``."""
     mask = np.zeros(shape, dtype=bool)
     for r, c in np.asarray(cells, dtype=int).reshape(-1, 2):
