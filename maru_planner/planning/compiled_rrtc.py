@@ -114,8 +114,6 @@ class CompiledRRTConnect(ob.Planner):
             data = ob.PlannerData(self._si)
             self._fallback.getPlannerData(data)
             return int(data.numVertices()), int(data.numEdges())
-        if self._trees is None:
-            return 0, 0
         n = self._node_count()
         return n, max(0, n - 2)
 
@@ -126,7 +124,8 @@ class CompiledRRTConnect(ob.Planner):
         self._data_states = []
 
     def solve(self, ptc: ob.PlannerTerminationCondition) -> ob.PlannerStatus:
-        if not self.compiled:
+        edges = self._edges
+        if edges is None or not self.compiled:
             return self._solve_fallback(ptc)
         space = self._si.getStateSpace()
         dim = space.getDimension()
@@ -137,7 +136,7 @@ class CompiledRRTConnect(ob.Planner):
             return ob.PlannerStatus(missing)
         start = np.array([start_state[i] for i in range(dim)])
         goal = np.array([goal_state[i] for i in range(dim)])
-        path = self._search(start, goal, ptc)
+        path = self._search(start, goal, edges, ptc)
         if path is None:
             return ob.PlannerStatus(ob.PlannerStatus.TIMEOUT)
         solution = og.PathGeometric(self._si)
@@ -167,13 +166,15 @@ class CompiledRRTConnect(ob.Planner):
                 data.addEdge(ids[parent[tree, i]], ids[i])
 
     # --- the search ------------------------------------------------------------------------
-    def _search(self, start: np.ndarray, goal: np.ndarray, ptc: ob.PlannerTerminationCondition) -> np.ndarray | None:
+    def _search(
+        self, start: np.ndarray, goal: np.ndarray, edges: EdgeChecker, ptc: ob.PlannerTerminationCondition
+    ) -> np.ndarray | None:
         kernel = _kernel()
-        checker, gs = self._edges.checker, self._edges.gs
+        checker, gs = edges.checker, edges.gs
         nodes, parent, st = kernel.new_state(start, goal, _CAPACITY)
         self._trees = (nodes, parent, st)
-        amb_states = np.empty((int(np.ceil((gs.upper - gs.lower).max() / self._edges.resolution)) + 2, len(start)))
-        fixed = (st, np.empty(len(start)), amb_states, *self._search_args(kernel), *checker.kernel_inputs(),
+        amb_states = np.empty((int(np.ceil((gs.upper - gs.lower).max() / edges.resolution)) + 2, len(start)))
+        fixed = (st, np.empty(len(start)), amb_states, *self._search_args(kernel, edges), *checker.kernel_inputs(),
                  checker.confirm, self._exact_near())  # fmt: skip
         verdict, batch = False, _FIRST_EDGES
         while True:
@@ -192,18 +193,20 @@ class CompiledRRTConnect(ob.Planner):
             if ptc():
                 return None
 
-    def _search_args(self, kernel) -> tuple:
+    def _search_args(self, kernel, edges: EdgeChecker) -> tuple:
         """The kernel's sampling bounds, generator, range, resolution, base configuration and group indices."""
-        gs, seed = self._edges.gs, self._values["seed"]
+        gs, seed = edges.gs, self._values["seed"]
         rng = kernel.seed_rng(int(seed if seed is not None else self._seed_rng.uniformInt(0, 2**31 - 2)))
         max_range = float(self._values["range"]) or 0.2 * self._si.getMaximumExtent()
-        return gs.lower, gs.upper, rng, max_range, self._edges.resolution, gs.base, gs.indices.astype(np.int64)
+        return gs.lower, gs.upper, rng, max_range, edges.resolution, gs.base, gs.indices.astype(np.int64)
 
     def _exact_near(self) -> float:
         exact_near = self._values["exact_near"]
         return np.inf if exact_near is None else float(exact_near)
 
     def _node_count(self) -> int:
+        if self._trees is None:
+            return 0
         st = self._trees[2]
         return int(st[_kernel().N0] + st[_kernel().N1])
 

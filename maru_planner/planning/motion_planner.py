@@ -27,6 +27,7 @@ import secrets
 import threading
 import time
 from collections.abc import Iterator
+from typing import Any
 
 import numpy as np
 from ompl import base as ob
@@ -129,7 +130,8 @@ class MotionPlanner:
         self._scene_epoch = 0
         self._roadmaps: dict[tuple, Roadmap] = {}
         self._setups: dict[tuple, GroupSetup] = {}  # per (group's joint indices, checker), reused across requests
-        self._padded = None  # (padding, checker padded by it): the search's checker when certifying with a margin
+        # (padding, checker padded by it): the search's checker when certifying with a margin
+        self._padded: tuple[float, Any] | None = None
         self._search_checker = checker  # the checker the running search plans on (_search_checker_for)
         self._monitor = PlanMonitor()  # the running plan's (plan() sets it under the lock); never cancelled idle
         self.last_revalidation = None
@@ -776,11 +778,11 @@ def _record_verification(result: MotionResult, certificate, repairs: int) -> Non
 
 def _safety_margin(request: MotionRequest, config: PlannerConfig) -> float:
     """The request's safety margin (m), else the configuration's; InvalidRequest unless finite and >= 0."""
-    margin = config.safety_margin if getattr(request, "safety_margin", None) is None else request.safety_margin
+    value: Any = config.safety_margin if getattr(request, "safety_margin", None) is None else request.safety_margin
     try:
-        margin = float(margin)
+        margin = float(value)
     except (TypeError, ValueError) as exc:
-        raise errors.InvalidRequest(f"safety_margin must be a number (m), got {margin!r}") from exc
+        raise errors.InvalidRequest(f"safety_margin must be a number (m), got {value!r}") from exc
     if not (math.isfinite(margin) and margin >= 0.0):
         raise errors.InvalidRequest(f"safety_margin must be a finite number >= 0 m, got {margin}")
     return margin

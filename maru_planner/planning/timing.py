@@ -89,7 +89,7 @@ class Limits:
         )
 
 
-def default_jerk_limits(acceleration_limits: Sequence[float]) -> np.ndarray:
+def default_jerk_limits(acceleration_limits: Sequence[float] | np.ndarray) -> np.ndarray:
     """Jerk limits reaching the full acceleration in :data:`JERK_RAMP_TIME` (URDF has no jerk field)."""
     return np.asarray(acceleration_limits, float) / JERK_RAMP_TIME
 
@@ -123,12 +123,19 @@ class BlendedPath(toppra.interpolator.AbstractGeometricPath):
             a = waypoints[k] + half_lengths[k] * units[k]
             straight = np.linalg.norm(waypoints[k + 1] - waypoints[k]) - half_lengths[k] - half_lengths[k + 1]
             if straight > 1e-12:
-                starts.append(s), p0.append(a), v0.append(units[k]), dd.append(np.zeros_like(a)), blend_of.append(-1)
+                starts.append(s)
+                p0.append(a)
+                v0.append(units[k])
+                dd.append(np.zeros_like(a))
+                blend_of.append(-1)
                 s += straight
             if k + 1 < len(waypoints) - 1:
                 l_blend = half_lengths[k + 1]
-                starts.append(s), p0.append(waypoints[k + 1] - l_blend * units[k]), v0.append(units[k])
-                dd.append((units[k + 1] - units[k]) / (2.0 * l_blend)), blend_of.append(k + 1)
+                starts.append(s)
+                p0.append(waypoints[k + 1] - l_blend * units[k])
+                v0.append(units[k])
+                dd.append((units[k + 1] - units[k]) / (2.0 * l_blend))
+                blend_of.append(k + 1)
                 s += 2.0 * l_blend
         self.starts = np.array(starts + [s])
         self.p0, self.v0, self.dd = np.array(p0), np.array(v0), np.array(dd)
@@ -650,7 +657,9 @@ def _sample(sections, joint_names, end: np.ndarray, dt: float, max_points: int, 
     for index, (section, duration) in enumerate(zip(sections, durations, strict=True)):
         t = np.linspace(0.0, duration, max(1, math.ceil(duration / period)) + 1)
         q, qd, qdd = _state_in_chunks(section, t if index == 0 else t[1:], deadline)
-        pos.append(q), vel.append(qd), acc.append(qdd)
+        pos.append(q)
+        vel.append(qd)
+        acc.append(qdd)
         times.append(t0 + t[1:])
         t0 += duration
     positions, velocities = np.vstack(pos), np.vstack(vel)

@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Mapping
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 import pinocchio as pin
@@ -94,7 +94,7 @@ def solve_ik(
     *,
     deadline: float | None = None,
     is_valid: Validity | None = None,
-    **numeric: float | int | np.random.Generator,
+    **numeric: Any,
 ) -> np.ndarray:
     """A full configuration putting each target frame at its 4x4 pose (root frame).
 
