@@ -210,7 +210,8 @@ class _Run:
         self.downstream = np.einsum("gjk,sk->sgj", downstream, self.motion)
         self.clearance = np.full(self.n_segments, math.inf)
         self.failed = self.n_segments  # first failing segment so far (n_segments: none)
-        self.reason, self.witness = "", None
+        self.reason = ""
+        self.witness: np.ndarray | None = None
         n_pairs = len(pairs.first)
         # Pending work, one row per (segment, pair, piece [a, b] of the segment not yet proven for the pair).
         self.seg = np.repeat(np.arange(self.n_segments), n_pairs)
@@ -316,7 +317,7 @@ class PathCertifier:
             return math.inf
         pin.computeDistances(self._model, self._data, pairs.hull_model, pairs.hull_data, np.asarray(q, dtype=float))
         lower = np.array([r.min_distance for r in pairs.hull_data.distanceResults]) - DISTANCE_TOLERANCE
-        best, placed = math.inf, set()
+        best, placed = math.inf, set[int]()
         for p in np.argsort(lower):
             if lower[p] >= best:
                 break
@@ -415,10 +416,10 @@ class PathCertifier:
         exact = np.zeros(len(pair), dtype=bool)
         rows = np.flatnonzero(refine)
         rows = rows[np.argsort(config_of[rows], kind="stable")]
-        current, placed = -1, set()
+        current, placed = -1, set[int]()
         for row in rows:
             if config_of[row] != current:
-                current, placed = config_of[row], set()
+                current, placed = config_of[row], set[int]()
                 pin.forwardKinematics(self._model, self._data, configs[current])
             p = int(pair[row])
             if pairs.has_hull[p]:
@@ -431,7 +432,7 @@ class PathCertifier:
             exact[row] = True
         return exact
 
-    def _distance(self, model: pin.GeometryModel, data: pin.GeometryData, pair: int, placed: set) -> float:
+    def _distance(self, model: pin.GeometryModel, data: pin.GeometryData, pair: int, placed: set[int]) -> float:
         """Coal distance of ``pair`` at the last forward kinematics (placements updated once per model)."""
         if id(model) not in placed:
             pin.updateGeometryPlacements(self._model, self._data, model, data)
