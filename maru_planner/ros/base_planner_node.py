@@ -197,26 +197,27 @@ class BasePlannerNode(ManagedNode):
         ``monitor`` watches and cancels the plan (the action's goals).
         """
         self.requests += 1
-        if self.grid is None:
+        grid = self.grid  # the map of this request, whatever arrives meanwhile
+        if grid is None:
             return E.NO_MAP, f"no map: {self.map_error}", None, None
         try:
-            self._check_request(start_msg, goal_msg, time_limit)
+            self._check_request(grid, start_msg, goal_msg, time_limit)
             planner = self._planner(planner_id or self.config.planner_id, footprint)
             result = planner.plan(
-                self.grid, conv.pose_from_msg(start_msg), conv.pose_from_msg(goal_msg),
+                grid, conv.pose_from_msg(start_msg), conv.pose_from_msg(goal_msg),
                 time_limit=time_limit or self.config.allowed_planning_time,
                 monitor=monitor,
             )
         except MaruError as exc:
             return conv.error_code(exc), str(exc), None, None
-        return conv.STATUS_TO_ERROR[result.status], result.message, result, self._publish(result)
+        return conv.STATUS_TO_ERROR[result.status], result.message, result, self._publish(result, grid)
 
-    def _check_request(self, start_msg, goal_msg, time_limit: float) -> None:
+    def _check_request(self, grid: OccupancyGrid, start_msg, goal_msg, time_limit: float) -> None:
         for name, pose in (("start", start_msg), ("goal", goal_msg)):
             frame = pose.header.frame_id
-            if frame and frame != self.grid.frame_id:
+            if frame and frame != grid.frame_id:
                 raise InvalidRequest(
-                    f"{name} is in frame {frame[:40]!r}; poses must be in the map frame {self.grid.frame_id!r}"
+                    f"{name} is in frame {frame[:40]!r}; poses must be in the map frame {grid.frame_id!r}"
                 )
         if not (math.isfinite(time_limit) and 0 <= time_limit <= 3600):
             raise InvalidRequest(f"allowed_planning_time must be in [0, 3600] s, got {time_limit}")
@@ -238,17 +239,17 @@ class BasePlannerNode(ManagedNode):
             self.planners[key] = registry.make_planner(spec.id, footprint, **params)
         return self.planners[key]
 
-    def _publish(self, result: BasePlanResult) -> Path:
+    def _publish(self, result: BasePlanResult, grid: OccupancyGrid) -> Path:
         """Publish the path (when solved) and the watched layers; returns the path message for the response."""
         stamp = self.get_clock().now().to_msg()
-        frame = self.grid.frame_id
+        frame = grid.frame_id
         path_msg = conv.path_to_msg(result.path, stamp, frame)
         if result.success:
             self.path_pub.publish(path_msg)
         for name, pub in self.layer_pubs.items():
             layer = result.layers.get(name)
             if layer is not None and pub.get_subscription_count() > 0:
-                pub.publish(conv.grid_to_msg(self.grid, layer, stamp, frame))
+                pub.publish(conv.grid_to_msg(grid, layer, stamp, frame))
         return path_msg
 
     def _in_planning_thread(self, fn, *args) -> Future:
