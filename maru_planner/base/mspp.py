@@ -106,7 +106,7 @@ class MultiStagePlanner(SE2AStarPlanner):
             path = self._baa(space, start, goal, run)
             return path if path is not None else self._last_stage(space, start, goal, run)
         finally:
-            run.stats.total()
+            run.stats_as(MultiStageStats).total()
 
     def _last_stage(self, grid: OccupancyGrid, start: Endpoint, goal: Endpoint, run: PlanRun) -> np.ndarray:
         return self._full(grid, start, goal, run)
@@ -114,7 +114,7 @@ class MultiStagePlanner(SE2AStarPlanner):
     # ---------------------------------------------------------------- stages
     def _eca(self, grid: OccupancyGrid, start: Endpoint, goal: Endpoint, run: PlanRun) -> None:
         t = time.perf_counter()
-        stage = run.stats.add(StageStats("ECA", radius=self.r_in))
+        stage = run.stats_as(MultiStageStats).add(StageStats("ECA", radius=self.r_in))
         run.monitor.report(stage.name)
         eca = grid.inflate(max(self.r_in - RADIUS_GUARD, 0.0), run.deadline).occupied
         labels, _ = ndimage.label(~eca, structure=np.ones((3, 3), dtype=int))
@@ -131,7 +131,7 @@ class MultiStagePlanner(SE2AStarPlanner):
 
     def _baa(self, grid: OccupancyGrid, start: Endpoint, goal: Endpoint, run: PlanRun) -> np.ndarray | None:
         t = time.perf_counter()
-        stage = run.stats.add(StageStats("BAA", radius=self.r_out))
+        stage = run.stats_as(MultiStageStats).add(StageStats("BAA", radius=self.r_out))
         run.monitor.report(stage.name)
         baa = grid.inflate(self.r_out + RADIUS_GUARD, run.deadline).occupied
         run.layers["baa"] = baa
@@ -149,7 +149,7 @@ class MultiStagePlanner(SE2AStarPlanner):
 
     def _full(self, grid: OccupancyGrid, start: Endpoint, goal: Endpoint, run: PlanRun) -> np.ndarray:
         t = time.perf_counter()
-        stage = run.stats.add(StageStats("full", decided=True))
+        stage = run.stats_as(MultiStageStats).add(StageStats("full", decided=True))
         run.monitor.report(stage.name)
         run.stats.deciding_stage = "full"
         try:
@@ -188,7 +188,7 @@ class LocalMultiStagePlanner(MultiStagePlanner):
     def _last_stage(self, grid: OccupancyGrid, start: Endpoint, goal: Endpoint, run: PlanRun) -> np.ndarray:
         t = time.perf_counter()
         eca, baa = run.layers["eca"], run.layers["baa"]
-        stage = run.stats.add(StageStats("local", windows=[]))
+        stage = run.stats_as(MultiStageStats).add(StageStats("local", windows=[]))
         run.monitor.report(stage.name)
         guide, _, guide_exp = astar_2d(eca, start.cell, goal.cell, cell_cost=baa * self.narrow_penalty,
                                        deadline=run.deadline)

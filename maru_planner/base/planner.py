@@ -79,6 +79,9 @@ class Endpoint:
     cell: Cell
 
 
+StatsT = TypeVar("StatsT", bound=PlanStats)
+
+
 @dataclass
 class PlanRun:
     """What one ``plan`` call accumulates: its deadline, stats and drawable layers (kept on failure).
@@ -91,6 +94,12 @@ class PlanRun:
     layers: dict[str, Any] = field(default_factory=dict)
     message: str = ""
     monitor: PlanMonitor = field(default_factory=PlanMonitor)
+
+    def stats_as(self, kind: type[StatsT]) -> StatsT:
+        """The stats as the planner's own ``PlanStats`` subclass (the one its ``new_stats`` returns)."""
+        if not isinstance(self.stats, kind):
+            raise TypeError(f"the run's stats are {type(self.stats).__name__}, not {kind.__name__}")
+        return self.stats
 
 
 def as_pose(pose: Sequence[float], name: str) -> Pose:

@@ -315,7 +315,7 @@ class SE2AStarPlanner(GridPlanner[OccupancyGrid]):
 
     def search(self, space: OccupancyGrid, start: Endpoint, goal: Endpoint, run: PlanRun) -> np.ndarray:
         full = self.full_search(space, start, goal, run.deadline)
-        stats = run.stats
+        stats = run.stats_as(SE2Stats)
         stats.expansions, stats.collision_checks = full.search.expansions, full.search.collision_checks
         stats.cspace_time, stats.cspace_cells, stats.search_time = full.cspace_time, full.cspace_cells, full.search_time
         if not full.search.found:

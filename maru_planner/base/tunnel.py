@@ -551,7 +551,7 @@ class TunnelGridPlanner(DiscPlanner):
         return TunnelStats(deciding_stage="tunnel")
 
     def search(self, space: OccupancyGrid, start: Endpoint, goal: Endpoint, run: PlanRun) -> np.ndarray:
-        plan = self.planner.plan_cells(space.occupied, start.cell, goal.cell, run.deadline, run.stats)
+        plan = self.planner.plan_cells(space.occupied, start.cell, goal.cell, run.deadline, run.stats_as(TunnelStats))
         run.stats.collision_checks = run.stats.expansions
         last = plan.attempts[-1] if plan.attempts else None
         run.stats.deciding_stage = f"tunnel b={last.big_cell_size}" if last else "tunnel"

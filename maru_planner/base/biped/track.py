@@ -204,7 +204,7 @@ class TrackFollowingPlanner(BipedPlanner):
             run.stats.collision_checks = space.checker.checks
 
     def _search(self, m: BipedMap2D, checker, start, goal, run: PlanRun) -> np.ndarray:
-        robot, p, stats, layers = self.robot, self.params, run.stats, run.layers
+        robot, p, stats, layers = self.robot, self.params, run.stats_as(TrackStats), run.layers
         # the turning rule and the gait width never ask for more than K (+ a cell)
         clearance = ClearanceLookup(m, robot.corner_distance + m.resolution, run.deadline)
         verts, adjacency = build_track_graph(m, robot, clearance, run.deadline)

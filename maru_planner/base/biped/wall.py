@@ -260,7 +260,7 @@ class VirtualWallPlanner(BipedPlanner):
         return self._walk(m, checker, field, start, goal, run, trace)
 
     def _walk(self, m, checker, field, start, goal, run: PlanRun, trace) -> list:
-        p, stats = self.params, run.stats
+        p, stats = self.params, run.stats_as(WallStats)
         pose = tuple(float(v) for v in start)
         poses = [pose]
         prev_limits = None
