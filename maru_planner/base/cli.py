@@ -66,7 +66,7 @@ def parse_footprint(text: str) -> np.ndarray:
     if kind == "rect":
         return rectangle(*numbers)
     if kind == "disc":
-        return disc(*numbers)
+        return disc(numbers[0])
     return np.array(numbers).reshape(-1, 2)
 
 

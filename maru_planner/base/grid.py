@@ -164,8 +164,9 @@ class OccupancyGrid:
 
     def with_occupied(self, occupied: np.ndarray) -> OccupancyGrid:
         """Same geometry, different occupancy (unknown cells carried over as information only)."""
+        unknown = None if self.unknown is None else self.unknown.copy()
         return OccupancyGrid(
-            occupied, self.resolution, self.origin, self.unknown.copy(), False, self.frame_id, dict(self.meta)
+            occupied, self.resolution, self.origin, unknown, False, self.frame_id, dict(self.meta)
         )
 
     # ---------------------------------------------------------- int8 values
@@ -190,9 +191,9 @@ class OccupancyGrid:
         data = np.asarray(values, dtype=np.int16).ravel()
         if data.size != width * height:
             raise InvalidMap(f"map data has {data.size} values, width x height = {width} x {height} = {width * height}")
-        data = data.reshape(height, width)
+        cells = data.reshape(height, width)
         return cls(
-            data >= occupied_threshold, resolution, origin, data < 0, unknown_is_occupied, frame_id=frame_id
+            cells >= occupied_threshold, resolution, origin, cells < 0, unknown_is_occupied, frame_id=frame_id
         )
 
     # ---------------------------------------------------------------- file I/O

@@ -284,6 +284,7 @@ class LocalMultiStagePlanner(MultiStagePlanner):
                             self.rot_cost_cells(grid.resolution), deadline=run.deadline)
         stage.expansions += out.expansions
         stage.collision_checks += out.collision_checks
+        assert stage.windows is not None  # the local stage is made with windows=[]
         stage.windows.append(WindowStats([int(v) for v in box], int(window_layers.size), out.expansions, out.found,
                                          time.perf_counter() - t))
         if not out.found:
@@ -305,9 +306,8 @@ class LocalMultiStagePlanner(MultiStagePlanner):
 
     def _assemble(self, grid, pieces, start, goal) -> np.ndarray:
         """Concatenate easy stretches (headings interpolated) and hard SE(2) stretches."""
-        hard_paths = [states_to_path(grid, p, self.headings) if kind == "hard" else None
-                      for kind, p in pieces]
-        out = []
+        hard_paths = {i: states_to_path(grid, p, self.headings) for i, (kind, p) in enumerate(pieces) if kind == "hard"}
+        out: list[np.ndarray] = []
         for i, (kind, cells) in enumerate(pieces):
             if kind == "hard":
                 path = hard_paths[i]

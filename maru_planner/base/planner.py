@@ -62,7 +62,8 @@ class BasePlanner(Protocol):
 class PlanningMap(Protocol):
     """What the skeleton needs of a planner's map: its cells and where a point falls."""
 
-    resolution: float
+    @property
+    def resolution(self) -> float: ...
 
     @property
     def shape(self) -> tuple[int, int]: ...
@@ -180,8 +181,8 @@ class GridPlanner(ABC, Generic[MapT]):
             )
         reason = self.collision(space, pose, cell)
         if reason:
-            error = StartOccupied if name == "start" else GoalOccupied
-            raise error(f"{name} ({pose[0]:.3f}, {pose[1]:.3f}, {pose[2]:.3f}) is in collision: {reason}")
+            occupied = StartOccupied if name == "start" else GoalOccupied
+            raise occupied(f"{name} ({pose[0]:.3f}, {pose[1]:.3f}, {pose[2]:.3f}) is in collision: {reason}")
         return Endpoint(name, pose, cell)
 
     def new_stats(self) -> PlanStats:

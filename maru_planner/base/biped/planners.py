@@ -15,6 +15,7 @@ Other keyword arguments are :class:`TrackParams` / :class:`WallParams` fields. A
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -60,7 +61,7 @@ def resolve_world_path(world) -> Path:
 class BipedGridPlanner(GridPlanner[BipedSpace]):
     """One of the two biped planners, on a 3-D world or on a plain grid (the skeleton steps delegate to it)."""
 
-    KINDS: dict[str, type[BipedPlanner]] = {"track": TrackFollowingPlanner, "wall": VirtualWallPlanner}
+    KINDS: dict[str, Callable[..., BipedPlanner]] = {"track": TrackFollowingPlanner, "wall": VirtualWallPlanner}
 
     def __init__(self, kind: str, footprint=None, world: str | Path | BipedWorld | None = None, **params):
         if kind not in self.KINDS:

@@ -142,7 +142,7 @@ def build_track_graph(m: BipedMap2D, robot: BipedRobot, clearance: ClearanceLook
 
 def _shortest(adjacency: dict, source, target, banned: set):
     dist = {source: 0.0}
-    prev = {}
+    prev: dict = {}
     heap = [(0.0, source)]
     while heap:
         d, u = heapq.heappop(heap)

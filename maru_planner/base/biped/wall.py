@@ -210,8 +210,8 @@ class VirtualWallPlanner(BipedPlanner):
             window = field[max(0, row - 3) : row + 4, max(0, col - 3) : col + 4]
             if not np.isfinite(window).any():
                 return None
-            r, c = np.unravel_index(np.argmin(window), window.shape)
-            row, col = max(0, row - 3) + r, max(0, col - 3) + c
+            lowest = np.unravel_index(np.argmin(window), window.shape)
+            row, col = max(0, row - 3) + int(lowest[0]), max(0, col - 3) + int(lowest[1])
         steps = int(math.ceil(self.params.lookahead / m.resolution))
         for _ in range(steps):
             best = (field[row, col], row, col)
@@ -242,7 +242,7 @@ class VirtualWallPlanner(BipedPlanner):
 
     def _search(self, m: BipedMap2D, checker: RectangleChecker, start, goal, run: PlanRun) -> list:
         robot = self.robot
-        trace = {"theta_cw": [], "theta_ccw": [], "xi": [], "widening": [], "damping": []}
+        trace: dict[str, list[float]] = {"theta_cw": [], "theta_ccw": [], "xi": [], "widening": [], "damping": []}
         run.layers["trace"] = trace
         # passability and the centring cost look at clearances up to K only
         clearance = m.clearance(robot.corner_distance + m.resolution, run.deadline)

@@ -131,7 +131,7 @@ def _floats(value, n: int, what: str) -> tuple:
     return out
 
 
-def _robot_from(data: dict) -> BipedRobot:
+def _robot_from(data: dict | None) -> BipedRobot:
     data = dict(data or {})
     known = {"gait_length", "gait_width", "body_width", "body_left", "body_right", "step_height", "body_bottom",
              "height"}
