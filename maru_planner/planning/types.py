@@ -37,6 +37,7 @@ class PlanStatus(enum.Enum):
     INVALID_OBJECT = "INVALID_OBJECT"
     OBJECT_ALREADY_ATTACHED = "OBJECT_ALREADY_ATTACHED"
     START_VIOLATES_CONSTRAINTS = "START_VIOLATES_CONSTRAINTS"
+    BUSY = "BUSY"
 
 
 # Most specific class first: the first isinstance match wins.
@@ -58,15 +59,21 @@ _STATUS_OF_ERROR: list[tuple[type[errors.MaruError], PlanStatus]] = [
     (errors.InvalidScene, PlanStatus.INVALID_SCENE),
     (errors.PlanningTimedOut, PlanStatus.TIMED_OUT),
     (errors.PlanningFailed, PlanStatus.PLANNING_FAILED),
+    (errors.Busy, PlanStatus.BUSY),
 ]
+
+
+def known_status_of_error(error: BaseException) -> PlanStatus | None:
+    """The status a typed error maps to; None for an error the table does not know (a bug)."""
+    for cls, status in _STATUS_OF_ERROR:
+        if isinstance(error, cls):
+            return status
+    return None
 
 
 def status_of_error(error: BaseException) -> PlanStatus:
     """The status code a typed error maps to (PLANNING_FAILED for anything unknown)."""
-    for cls, status in _STATUS_OF_ERROR:
-        if isinstance(error, cls):
-            return status
-    return PlanStatus.PLANNING_FAILED
+    return known_status_of_error(error) or PlanStatus.PLANNING_FAILED
 
 
 @dataclass

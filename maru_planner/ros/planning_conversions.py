@@ -2,7 +2,7 @@
 
 Everything that turns a ROS message into a plain Python/numpy value for the
 core (and back) lives here, and so does the ONE table mapping the core's
-typed exceptions and ``PlanStatus`` values to ``PlanningError`` codes.
+``PlanStatus`` values to ``PlanningError`` codes (typed exceptions map to a status in the core).
 Joint values are always matched by name, never by position in an array.
 """
 
@@ -19,32 +19,12 @@ from shape_msgs.msg import SolidPrimitive
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from maru_planner import errors, shapes
+from maru_planner.planning.types import known_status_of_error
 from maru_planner.scene import pose_matrix
 from maru_planner_interfaces.msg import PlannerStats, PlanningError, SceneObstacle
 
-# Most specific class first: the first isinstance match wins.
-ERROR_CODES: tuple[tuple[type[errors.MaruError], int], ...] = (
-    (errors.InvalidGroup, PlanningError.INVALID_GROUP_NAME),
-    (errors.InvalidPlanner, PlanningError.INVALID_PLANNER),
-    (errors.InvalidJointNames, PlanningError.INVALID_JOINT_NAMES),
-    (errors.InvalidJointCount, PlanningError.INVALID_JOINT_COUNT),
-    (errors.InvalidState, PlanningError.INVALID_ROBOT_STATE),
-    (errors.NoStartState, PlanningError.NO_START_STATE),
-    (errors.InvalidLink, PlanningError.INVALID_LINK_NAME),
-    (errors.StartViolatesConstraints, PlanningError.START_STATE_VIOLATES_PATH_CONSTRAINTS),
-    (errors.InvalidRequest, PlanningError.INVALID_REQUEST),
-    (errors.StartInCollision, PlanningError.START_STATE_IN_COLLISION),
-    (errors.GoalInCollision, PlanningError.GOAL_IN_COLLISION),
-    (errors.NoIKSolution, PlanningError.NO_IK_SOLUTION),
-    (errors.ObjectAlreadyAttached, PlanningError.OBJECT_ALREADY_ATTACHED),
-    (errors.InvalidObject, PlanningError.INVALID_OBJECT_NAME),
-    (errors.InvalidScene, PlanningError.INVALID_SCENE),
-    (errors.PlanningTimedOut, PlanningError.TIMED_OUT),
-    (errors.PlanningFailed, PlanningError.PLANNING_FAILED),
-    (errors.Busy, PlanningError.BUSY),
-)
-
-# PlanStatus member name -> code (the status of a MotionResult without a typed error).
+# PlanStatus member name -> code: the one table from the core's statuses to PlanningError codes
+# (typed errors reach it through the core's own error -> status table, planning.types).
 STATUS_CODES: dict[str, int] = {
     "SUCCESS": PlanningError.SUCCESS,
     "PLANNING_FAILED": PlanningError.PLANNING_FAILED,
@@ -64,6 +44,7 @@ STATUS_CODES: dict[str, int] = {
     "INVALID_OBJECT": PlanningError.INVALID_OBJECT_NAME,
     "OBJECT_ALREADY_ATTACHED": PlanningError.OBJECT_ALREADY_ATTACHED,
     "START_VIOLATES_CONSTRAINTS": PlanningError.START_STATE_VIOLATES_PATH_CONSTRAINTS,
+    "BUSY": PlanningError.BUSY,
 }
 
 CODE_NAMES: dict[int, str] = {
@@ -79,11 +60,9 @@ def code_name(code: int) -> str:
 
 
 def error_code(exc: BaseException) -> int:
-    """``PlanningError`` code of a core exception; INTERNAL_ERROR for anything else."""
-    for cls, code in ERROR_CODES:
-        if isinstance(exc, cls):
-            return code
-    return PlanningError.INTERNAL_ERROR
+    """``PlanningError`` code of a core exception (via its status); INTERNAL_ERROR for anything else."""
+    status = known_status_of_error(exc)
+    return PlanningError.INTERNAL_ERROR if status is None else STATUS_CODES[status.name]
 
 
 def error_msg(exc: BaseException | None = None, *, source: str = "") -> PlanningError:
