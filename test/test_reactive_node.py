@@ -502,7 +502,7 @@ def test_bad_parameters_stop_the_node_with_one_line(tmp_path, override, message)
     assert result.returncode == 2
     lines = (result.stderr + result.stdout).strip().splitlines()
     assert len(lines) == 1 and "Traceback" not in lines[0], lines
-    assert lines[0].startswith("reactive_node: bad parameters:") and message in lines[0], lines[0]
+    assert lines[0].startswith("reactive_node: cannot start:") and message in lines[0], lines[0]
 
 
 def test_params_file_that_is_not_yaml_stops_the_node_without_a_traceback(tmp_path):

@@ -34,12 +34,10 @@ from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 import numpy as np
-import rclpy
 from nav_msgs.msg import OccupancyGrid as OccupancyGridMsg
 from nav_msgs.msg import Path
 from nav_msgs.srv import GetPlan
 from rclpy.callback_groups import ReentrantCallbackGroup
-from rclpy.executors import ExternalShutdownException
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.task import Future
 
@@ -55,8 +53,7 @@ from maru_planner.monitor import PlanMonitor, Progress
 from maru_planner.params import dataclass_params, param
 from maru_planner.ros import base_conversions as conv
 from maru_planner.ros import parameters
-from maru_planner.ros.env import network_from_environment
-from maru_planner.ros.lifecycle import ManagedNode
+from maru_planner.ros.lifecycle import ManagedNode, run_node
 from maru_planner.ros.plan_actions import PlanActionServer
 from maru_planner_interfaces.action import PlanBasePath as PlanBasePathAction
 from maru_planner_interfaces.srv import PlanBasePath
@@ -320,28 +317,10 @@ def _feedback_msg(progress: Progress) -> PlanBasePathAction.Feedback:
 
 
 def main(args: list[str] | None = None) -> int:
-    network = network_from_environment()
-    try:
-        rclpy.init(args=args)
-    except RuntimeError as exc:  # rcl's RCLError, e.g. a params file that is not valid YAML
-        print(f"base_planner_node: cannot start: {' '.join(str(exc).split())[:200]}", file=sys.stderr)
-        return 2
-    try:
-        node = BasePlannerNode()
-    except (MaruError, ValueError) as exc:
-        print(f"base_planner_node: bad parameters: {exc}", file=sys.stderr)
-        rclpy.try_shutdown()
-        return 2
-    node.get_logger().info(network)
-    try:
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        node.get_logger().info(f"served {node.requests} requests")
-        node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    """Entry point of ``ros2 run maru_planner base_planner_node``; exit code 2 on bad start-up input."""
+    return run_node("base_planner_node", BasePlannerNode, args,
+                    farewell=lambda node: f"served {node.requests} requests")  # fmt: skip
+
 
 
 if __name__ == "__main__":

@@ -28,23 +28,28 @@ node down through the shutdown transition (a deactivation first, when active).
 from __future__ import annotations
 
 import inspect
+import sys
 import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from typing import Any
+from typing import Any, TypeVar
 
+import rclpy
 from rclpy.action import ActionServer, GoalResponse
 from rclpy.client import Client
+from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor, SingleThreadedExecutor
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from rclpy.lifecycle import Publisher as LifecyclePublisher
+from rclpy.node import Node
 from rclpy.publisher import Publisher
 from rclpy.service import Service
 from rclpy.subscription import Subscription
 from rclpy.timer import Timer
 
-from maru_planner.errors import one_line
+from maru_planner.errors import MaruError, one_line
 from maru_planner.params import ParamSpec
 from maru_planner.ros import parameters
+from maru_planner.ros.env import network_from_environment
 from maru_planner_interfaces.msg import PlanningError
 
 AUTOSTART = ParamSpec(
@@ -278,3 +283,51 @@ class ManagedNode(LifecycleNode):
                 self.destroy_client(entity)
             elif isinstance(entity, Timer):
                 self.destroy_timer(entity)
+
+
+NodeT = TypeVar("NodeT", bound=Node)
+
+
+def run_node(
+    name: str,
+    make_node: Callable[[], NodeT],
+    args: list[str] | None = None,
+    *,
+    startup_errors: tuple[type[BaseException], ...] = (MaruError, ValueError),
+    executor_threads: Callable[[NodeT], int] | None = None,
+    farewell: Callable[[NodeT], str] | None = None,
+) -> int:
+    """The whole ``main()`` of a node: networking, init, construction, spin, clean exit.
+
+    Bad start-up input (rcl's own errors, e.g. a params file that is not YAML, and ``startup_errors``
+    raised while constructing the node: parameters, robot or scene files) is one stderr line
+    ``<name>: cannot start: ...`` and exit code 2, never a traceback. ``executor_threads`` spins the
+    node on a multi-threaded executor of that size; ``farewell`` is logged when the node stops.
+    """
+    network = network_from_environment()
+    try:
+        rclpy.init(args=args)
+    except RuntimeError as exc:  # rcl's RCLError
+        print(f"{name}: cannot start: {one_line(exc)}", file=sys.stderr)
+        return 2
+    try:
+        node = make_node()
+    except startup_errors as exc:
+        print(f"{name}: cannot start: {one_line(exc)}", file=sys.stderr)
+        rclpy.try_shutdown()
+        return 2
+    node.get_logger().info(network)
+    executor = (
+        MultiThreadedExecutor(num_threads=executor_threads(node)) if executor_threads else SingleThreadedExecutor()
+    )
+    executor.add_node(node)
+    try:
+        executor.spin()
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        if farewell is not None:
+            node.get_logger().info(farewell(node))
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return 0

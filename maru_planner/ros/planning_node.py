@@ -50,7 +50,7 @@ from typing import Any
 import numpy as np
 import rclpy
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
-from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -75,8 +75,7 @@ from maru_planner.robot import RobotModel
 from maru_planner.robot.ik import solve_ik
 from maru_planner.ros import manipulation, parameters
 from maru_planner.ros import planning_conversions as conv
-from maru_planner.ros.env import network_from_environment
-from maru_planner.ros.lifecycle import ManagedNode
+from maru_planner.ros.lifecycle import ManagedNode, run_node
 from maru_planner.ros.markers import plan_markers, scene_markers
 from maru_planner.ros.plan_actions import PlanActionServer
 from maru_planner.scene import Obstacle, Scene
@@ -955,35 +954,14 @@ class BackgroundPlanningNode:
 
 def main(args: list[str] | None = None) -> int:
     """Entry point of ``ros2 run maru_planner planning_node`` (and ``python -m``); exit code 2 on bad start-up input."""
-    network = network_from_environment()
-    logger = rclpy.logging.get_logger(NODE_NAME)
-    try:
-        rclpy.init(args=args)
-    except RuntimeError as exc:  # rcl's RCLError, e.g. a params file that is not valid YAML
-        logger.fatal(f"cannot start: {_one_line(exc)}")
-        return 2
-    try:
-        node = PlanningNode()
-    except (errors.MaruError, OSError, ValueError) as exc:  # parameters, robot or scene files
-        logger.fatal(f"cannot start: {_one_line(exc)}")
-        rclpy.try_shutdown()
-        return 2
-    node.get_logger().info(network)
-    executor = MultiThreadedExecutor(num_threads=node.settings.executor_threads)
-    executor.add_node(node)
-    try:
-        executor.spin()
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    return run_node(
+        NODE_NAME,
+        PlanningNode,
+        args,
+        startup_errors=(errors.MaruError, OSError, ValueError),  # parameters, robot or scene files
+        executor_threads=lambda node: node.settings.executor_threads,
+    )
 
-
-def _one_line(exc: BaseException, limit: int = 300) -> str:
-    text = " ".join(str(exc).split()) or type(exc).__name__
-    return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 if __name__ == "__main__":

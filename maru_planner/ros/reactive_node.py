@@ -45,13 +45,11 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-import rclpy
 import yaml
 from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
 from nav_msgs.msg import Odometry, Path
 from rclpy.clock import Clock, ClockType, JumpThreshold, TimeJump
 from rclpy.duration import Duration
-from rclpy.executors import ExternalShutdownException
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.subscription import Subscription
 from rclpy.timer import Timer
@@ -59,14 +57,13 @@ from sensor_msgs.msg import LaserScan
 from trajectory_msgs.msg import JointTrajectory
 from visualization_msgs.msg import MarkerArray
 
-from maru_planner.errors import InvalidRequest, MaruError
+from maru_planner.errors import InvalidRequest, MaruError, one_line
 from maru_planner.params import dataclass_params, param
 from maru_planner.reactive import ControlOutput, ElasticStripController, LaserScanData, ScanError, StripParams
 from maru_planner.reactive.description import arm_joint_names
 from maru_planner.ros import parameters
 from maru_planner.ros import reactive_conversions as conv
-from maru_planner.ros.env import network_from_environment
-from maru_planner.ros.lifecycle import ManagedNode
+from maru_planner.ros.lifecycle import ManagedNode, run_node
 
 
 @dataclasses.dataclass(frozen=True)
@@ -140,12 +137,6 @@ def node_section(params_file: dict) -> dict:
         if key in params_file:
             return params_file[key].get("ros__parameters", {})
     return {}
-
-
-def one_line(exc: BaseException, limit: int = 300) -> str:
-    """An exception as one log line of at most ``limit`` characters."""
-    text = " ".join(str(exc).split()) or type(exc).__name__
-    return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 class ReactiveNode(ManagedNode):
@@ -461,28 +452,9 @@ class ReactiveNode(ManagedNode):
 
 
 def main(args: list[str] | None = None) -> int:
-    network = network_from_environment()
-    try:
-        rclpy.init(args=args)
-    except RuntimeError as exc:  # rcl's RCLError, e.g. a params file that is not valid YAML
-        print(f"reactive_node: cannot start: {one_line(exc)}", file=sys.stderr)
-        return 2
-    try:
-        node = ReactiveNode()
-    except (MaruError, ValueError) as exc:
-        print(f"reactive_node: bad parameters: {one_line(exc)}", file=sys.stderr)
-        rclpy.try_shutdown()
-        return 2
-    node.get_logger().info(network)
-    try:
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        node.get_logger().info(node.status())
-        node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    """Entry point of ``ros2 run maru_planner reactive_node``; exit code 2 on bad start-up input."""
+    return run_node("reactive_node", ReactiveNode, args, farewell=lambda node: node.status())
+
 
 
 if __name__ == "__main__":
