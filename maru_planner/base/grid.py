@@ -228,6 +228,8 @@ class OccupancyGrid:
                 pixels = np.asarray(img.convert("L") if img.mode not in ("L", "I", "I;16") else img, dtype=float)
         except (UnidentifiedImageError, Image.DecompressionBombError) as exc:
             raise InvalidMap(f"map image {image_path}: {exc}") from None
+        except OSError as exc:  # missing, unreadable, or a name the file system refuses: quote an excerpt only
+            raise InvalidMap(f"map image {_excerpt(image_path)}: {exc.strerror or type(exc).__name__}") from None
         if pixels.size == 0:
             raise InvalidMap(f"map image {image_path} is empty")
         p = pixels / 255.0 if negate else (255.0 - pixels) / 255.0
@@ -311,3 +313,9 @@ def _number(info: dict, key: str, default: float | None) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
         raise InvalidMap(f"{key} must be a finite number, got {str(value)[:40]}")
     return float(value)
+
+
+def _excerpt(value: object, limit: int = 60) -> str:
+    """A path quoted by its end (the file name), at most ``limit`` characters."""
+    text = str(value)
+    return repr(text) if len(text) <= limit else repr("..." + text[-(limit - 3) :])
