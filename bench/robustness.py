@@ -174,6 +174,7 @@ def run_reactive_node(bench: Bench) -> None:
         target.connect()
 
         def good() -> bool:
+            target.settle()
             target.send_good_goal()
             return target.good_step() and spinning.wait_for(lambda: target.callback_errors() == 0, timeout=30)
 

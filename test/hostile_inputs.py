@@ -1172,6 +1172,22 @@ class ReactiveNodeTarget:
             junk.ranges[i % len(junk.ranges)] = math.nan if i % 3 else -1.0
             self.client.scan_pub.publish(junk)
 
+    def settle(self, quiet: float = 0.5, timeout: float = 15.0) -> None:
+        """Wait until the node's log has been still for ``quiet`` s: the batch's messages are all handled.
+
+        Messages on different topics are not ordered, so a good goal sent at once could be overtaken by a
+        hostile /plan still in flight (which legitimately replaces the goal's path).
+        """
+        deadline = time.monotonic() + timeout
+        size, still_since = len(self.process.log()), time.monotonic()
+        while time.monotonic() < deadline:
+            time.sleep(0.05)
+            now = len(self.process.log())
+            if now != size:
+                size, still_since = now, time.monotonic()
+            elif time.monotonic() - still_since >= quiet:
+                return
+
     def good_step(self):
         """Good odometry + scan after the good goal: the command must move the base, within the limits."""
         stamp = next(self._stamps)

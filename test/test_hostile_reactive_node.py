@@ -50,6 +50,7 @@ def test_hostile_messages_on_every_topic(node, batch):
     before = rss_mb(node.process.proc.pid)
     run_batch(TARGET, reactive_messages(), node.send, EXAMPLES, seed_value=1800 + batch)
     MEASURED.append(f"reactive_node RSS {before:.1f} MB -> {rss_mb(node.process.proc.pid):.1f} MB over batch {batch}")
+    node.settle()
     node.send_good_goal()
     assert node.good_step(), node.process.log()[-2000:]
     assert node.spinning.wait_for(lambda: node.callback_errors() == 0, timeout=30), node.process.log()[-2000:]
@@ -59,6 +60,7 @@ def test_rss_over_10000_junk_scans(node):
     assert node.good_step()
     before = rss_mb(node.process.proc.pid)
     node.junk_scans(JUNK_SCANS)
+    node.settle()
     node.send_good_goal()
     assert node.good_step(), "no good command after the junk scans"
     after = rss_mb(node.process.proc.pid)
