@@ -15,6 +15,17 @@ def one_line(message: object, limit: int = MESSAGE_LIMIT) -> str:
     return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
+EXCERPT_LIMIT = 60  # characters of a bad value quoted in a message
+
+
+def excerpt(value: object, limit: int = EXCERPT_LIMIT, *, tail: bool = False) -> str:
+    """``repr`` of a bad value cut to ``limit`` characters; ``tail`` keeps the end (a path's file name)."""
+    text = repr(value)
+    if len(text) <= limit:
+        return text
+    return "..." + text[-(limit - 3) :] if tail else text[: limit - 3] + "..."
+
+
 class MaruError(Exception):
     """Base of all maru_planner errors."""
 

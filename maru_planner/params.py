@@ -17,7 +17,7 @@ import math
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from maru_planner.errors import InvalidRequest
+from maru_planner.errors import InvalidRequest, excerpt
 
 
 @dataclasses.dataclass(frozen=True)
@@ -57,14 +57,14 @@ class ParamSpec:
         kind = self.value_type
         if kind is bool:
             if not isinstance(value, bool):
-                raise InvalidRequest(f"parameter {self.name!r} must be true or false, got {_short(value)}")
+                raise InvalidRequest(f"parameter {self.name!r} must be true or false, got {excerpt(value, 40)}")
             return value
         if kind in (int, float):
             if isinstance(value, bool) or not isinstance(value, (int, float)):
-                raise InvalidRequest(f"parameter {self.name!r} must be a number, got {_short(value)}")
+                raise InvalidRequest(f"parameter {self.name!r} must be a number, got {excerpt(value, 40)}")
             if kind is int and isinstance(value, float):
                 if not value.is_integer():
-                    raise InvalidRequest(f"parameter {self.name!r} must be an integer, got {_short(value)}")
+                    raise InvalidRequest(f"parameter {self.name!r} must be an integer, got {excerpt(value, 40)}")
                 value = int(value)
             value = kind(value)
             if not math.isfinite(value):
@@ -76,14 +76,14 @@ class ParamSpec:
             return value
         if kind is str:
             if not isinstance(value, str):
-                raise InvalidRequest(f"parameter {self.name!r} must be a string, got {_short(value)}")
+                raise InvalidRequest(f"parameter {self.name!r} must be a string, got {excerpt(value, 40)}")
             if self.choices is not None and value not in self.choices:
                 raise InvalidRequest(
-                    f"parameter {self.name!r} = {_short(value)} is not one of {', '.join(self.choices)}"
+                    f"parameter {self.name!r} = {excerpt(value, 40)} is not one of {', '.join(self.choices)}"
                 )
             return value
         if not isinstance(value, kind):
-            raise InvalidRequest(f"parameter {self.name!r} must be a {kind.__name__}, got {_short(value)}")
+            raise InvalidRequest(f"parameter {self.name!r} must be a {kind.__name__}, got {excerpt(value, 40)}")
         return value
 
     def describe(self) -> str:
@@ -162,7 +162,3 @@ def check_params(specs: dict[str, ParamSpec], values: dict[str, Any], owner: str
 def _bound(value: float | None, infinite: str = "inf") -> str:
     return infinite if value is None else f"{value:g}"
 
-
-def _short(value: Any, limit: int = 40) -> str:
-    text = repr(value)
-    return text if len(text) <= limit else text[: limit - 3] + "..."

@@ -36,7 +36,7 @@ from PIL import Image, UnidentifiedImageError
 from scipy import ndimage
 
 from maru_planner.base.budget import Deadline, check_map_cells, unlimited
-from maru_planner.errors import InvalidMap, InvalidRequest
+from maru_planner.errors import InvalidMap, InvalidRequest, excerpt
 
 # Inflation works on strips of this many rows (plus the radius on each side), checking the deadline between.
 _INFLATE_STRIP_ROWS = 128
@@ -229,7 +229,8 @@ class OccupancyGrid:
         except (UnidentifiedImageError, Image.DecompressionBombError) as exc:
             raise InvalidMap(f"map image {image_path}: {exc}") from None
         except OSError as exc:  # missing, unreadable, or a name the file system refuses: quote an excerpt only
-            raise InvalidMap(f"map image {_excerpt(image_path)}: {exc.strerror or type(exc).__name__}") from None
+            reason = exc.strerror or type(exc).__name__
+            raise InvalidMap(f"map image {excerpt(str(image_path), tail=True)}: {reason}") from None
         if pixels.size == 0:
             raise InvalidMap(f"map image {image_path} is empty")
         p = pixels / 255.0 if negate else (255.0 - pixels) / 255.0
@@ -313,9 +314,3 @@ def _number(info: dict, key: str, default: float | None) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
         raise InvalidMap(f"{key} must be a finite number, got {str(value)[:40]}")
     return float(value)
-
-
-def _excerpt(value: object, limit: int = 60) -> str:
-    """A path quoted by its end (the file name), at most ``limit`` characters."""
-    text = str(value)
-    return repr(text) if len(text) <= limit else repr("..." + text[-(limit - 3) :])
