@@ -15,7 +15,7 @@ from maru_planner.base.grid import OccupancyGrid
 from maru_planner.base.result import PlanStatus
 from maru_planner.base.scenes import table1
 from maru_planner.base.se2 import cspace_layers, search_layers
-from maru_planner.errors import PlanningTimedOut, TooLarge
+from maru_planner.errors import PlanningCancelled, PlanningTimedOut, TooLarge
 
 HUGE = rectangle(100.0, 100.0)
 
@@ -69,6 +69,18 @@ def test_2d_astar_checks_the_deadline():
     occupied[1401, 1401] = False  # the goal is walled in: A* must look at every other cell
     with pytest.raises(PlanningTimedOut, match="2-D A\\*"):
         astar_2d(occupied, (0, 0), (1401, 1401), method="astar", deadline=Deadline(1e-4))
+
+
+def test_a_terminated_deadline_stops_a_kernel_as_a_cancel():
+    deadline = Deadline(60.0)
+    assert not deadline.cancelled and deadline.remaining() > 0
+    deadline.terminate()
+    assert deadline.cancelled and deadline.expired()
+    occupied = np.zeros((300, 300), bool)
+    occupied[0:3, 297:300] = True
+    occupied[1, 298] = False  # the goal is walled in: the kernel reaches its clock check
+    with pytest.raises(PlanningCancelled, match="2-D A\\* .* cancelled"):
+        astar_2d(occupied, (299, 0), (1, 298), method="astar", deadline=deadline)
 
 
 def test_map_inflation_checks_the_deadline():

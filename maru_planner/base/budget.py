@@ -36,16 +36,22 @@ class Deadline:
             raise InvalidRequest(f"time limit must be > 0 s, got {seconds}")
         self.seconds = float(seconds)
         self.start = time.perf_counter()
-        self.at = self.start + seconds if math.isfinite(seconds) else NEVER
-        self.kernel_at = np.array([self.at])  # a kernel reads [0] at each clock check: terminate() reaches it
-        self.cancelled = False
+        # The one copy of the deadline: kernels read [0] at each clock check, so terminate() reaches them.
+        self.kernel_at = np.array([self.start + seconds if math.isfinite(seconds) else NEVER])
         self.every = every
         self._calls = 0
 
+    @property
+    def at(self) -> float:
+        """perf_counter() time the budget ends at (-inf once terminated)."""
+        return float(self.kernel_at[0])
+
+    @property
+    def cancelled(self) -> bool:
+        return self.at == -math.inf
+
     def terminate(self) -> None:
         """Cancel (from any thread): the deadline passes now; what raises for it raises PlanningCancelled."""
-        self.cancelled = True
-        self.at = -math.inf
         self.kernel_at[0] = -math.inf
 
     def remaining(self) -> float:
