@@ -83,6 +83,16 @@ def test_a_terminated_deadline_stops_a_kernel_as_a_cancel():
         astar_2d(occupied, (299, 0), (1, 298), method="astar", deadline=deadline)
 
 
+def test_reserve_raises_for_the_deadline_unless_the_time_is_left():
+    deadline = Deadline(60.0)
+    deadline.reserve(1.0, "a short step")
+    with pytest.raises(PlanningTimedOut, match="a long step \\(needs about 120.00 s, .* left\\) timed out"):
+        deadline.reserve(120.0, "a long step")
+    deadline.terminate()
+    with pytest.raises(PlanningCancelled, match="a short step .* cancelled"):
+        deadline.reserve(1.0, "a short step")
+
+
 def test_map_inflation_checks_the_deadline():
     grid = random_grid(3000, 0.05)
     with pytest.raises(PlanningTimedOut, match="inflating the map"):

@@ -71,6 +71,11 @@ class Deadline:
         if self.expired():
             self.raise_timeout(what)
 
+    def reserve(self, seconds: float, what: str) -> None:
+        """Raise for the deadline now (timed out, or cancelled) unless ``seconds`` are left for ``what``."""
+        if self.remaining() < seconds:
+            self.raise_timeout(f"{what} (needs about {seconds:.2f} s, {max(self.remaining(), 0.0):.2f} s left)")
+
     def raise_timeout(self, what: str) -> None:
         elapsed = time.perf_counter() - self.start
         if self.cancelled:

@@ -31,8 +31,6 @@ from maru_planner.errors import (
     GoalOutsideMap,
     InvalidRequest,
     MaruError,
-    PlanningCancelled,
-    PlanningTimedOut,
     StartOccupied,
     StartOutsideMap,
 )
@@ -153,8 +151,6 @@ class GridPlanner(ABC, Generic[MapT]):
                 path = self._plan(run, grid, start, goal)
             status, message = PlanStatus.SOLVED, run.message
         except MaruError as error:
-            if monitor.cancelled and isinstance(error, PlanningTimedOut):  # a step that raised for the deadline
-                error = PlanningCancelled(f"cancelled: {error}")
             status, message = status_of(error), str(error)
         stats.planning_time = time.perf_counter() - t0
         return BasePlanResult(status, message, path, stats, layers)

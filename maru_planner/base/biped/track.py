@@ -34,7 +34,7 @@ from maru_planner.base.biped.world import BipedRobot
 from maru_planner.base.budget import Deadline
 from maru_planner.base.common import wrap_angle
 from maru_planner.base.planner import Endpoint, PlanRun
-from maru_planner.errors import InvalidRequest, NoPath, PlanningTimedOut, TooLarge
+from maru_planner.errors import InvalidRequest, NoPath, TooLarge
 from maru_planner.params import param
 
 # Qhull cannot be interrupted: more obstacle-boundary points than this are refused up front.
@@ -115,10 +115,8 @@ def build_track_graph(m: BipedMap2D, robot: BipedRobot, clearance: ClearanceLook
     if len(pts) > MAX_VORONOI_POINTS:
         raise TooLarge(f"the map has {len(pts)} obstacle-boundary points, over the track planner's limit of "
                        f"{MAX_VORONOI_POINTS}: use a coarser map")
-    needed = len(pts) * _VORONOI_SECONDS_PER_POINT
-    if deadline.remaining() < needed:  # Qhull cannot be interrupted: start it only with time to finish
-        raise PlanningTimedOut(f"not enough budget left for the Voronoi diagram of {len(pts)} points "
-                               f"(about {needed:.2f} s, {max(deadline.remaining(), 0.0):.2f} s left)")
+    # Qhull cannot be interrupted: start it only with time to finish
+    deadline.reserve(len(pts) * _VORONOI_SECONDS_PER_POINT, f"the Voronoi diagram of {len(pts)} points")
     vor = Voronoi(pts)
     deadline.check_now("building the track graph")
     verts = vor.vertices
