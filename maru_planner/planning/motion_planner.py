@@ -281,7 +281,9 @@ class MotionPlanner:
                 source="planner",
             )
         if repaired.repairs:  # timing the repaired path may take as long as the certification was allowed to
-            self._replace_path(request, result, repaired.path, certify_deadline)
+            indices = [self.robot.joint_names.index(n) for n in result.joint_names]
+            full_path = repaired.path
+            self._set_path(request, result, full_path[:, indices], full_path[0], indices, certify_deadline)
 
     def _repair_planner(self, request: MotionRequest, seed: int):
         """The local planner of a repair: RRTConnect between two waypoints of the request's group.
@@ -316,19 +318,18 @@ class MotionPlanner:
 
         return plan_between
 
-    def _replace_path(self, request: MotionRequest, result: MotionResult, full_path: np.ndarray, deadline) -> None:
-        """Make the repaired ``full_path`` the result's path: new waypoints, trajectory and path statistics."""
+    def _set_path(self, req: MotionRequest, result: MotionResult, path: np.ndarray, start_full: np.ndarray,
+                  indices, deadline: float) -> Trajectory:  # fmt: skip
+        """Make ``path`` (group configurations) the result's path, with its trajectory (returned) and statistics."""
         stats = result.stats
-        indices = [self.robot.joint_names.index(n) for n in result.joint_names]
-        path = full_path[:, indices]
-        method = request.time_parameterization or self.config.time_parameterization
         t_par = time.monotonic()
-        result.trajectory = self._time_parameterize(request, method, path, full_path[0], indices, stats, deadline)
+        result.trajectory = self._time_parameterize(req, path, start_full, indices, stats, deadline)
         stats.parameterize_time += time.monotonic() - t_par
         result.path = path
         stats.waypoints = len(path)
         stats.path_length = postprocess.path_length(path)
         stats.smoothness = postprocess.smoothness(path)
+        return result.trajectory
 
     def _verify(self, request: MotionRequest, result: MotionResult, t0: float) -> MotionResult:
         """Re-check ``result``'s path on the exact model; re-plan at half the step while it fails (class doc)."""
@@ -428,13 +429,7 @@ class MotionPlanner:
             stats.collision_checks = int(self._search_checker.check_count - checks0)
 
         monitor.report("parameterize", best_cost=postprocess.path_length(path))
-        t_par = time.monotonic()
-        result.trajectory = self._time_parameterize(req, method, path, start_full, indices, stats, deadline)
-        stats.parameterize_time = time.monotonic() - t_par
-        result.path = path
-        stats.waypoints = len(path)
-        stats.path_length = postprocess.path_length(path)
-        stats.smoothness = postprocess.smoothness(path)
+        trajectory = self._set_path(req, result, path, start_full, indices, deadline)
         if time.monotonic() > deadline:
             raise errors.PlanningTimedOut(
                 f"a path was found but the {budget:.3g} s budget ran out during post-processing", source="planner"
@@ -442,11 +437,12 @@ class MotionPlanner:
         result.status = PlanStatus.SUCCESS
         result.message = (
             f"{planner_id}: {len(path)} waypoints, length {stats.path_length:.3f} rad, "
-            f"trajectory {result.trajectory.duration:.2f} s ({stats.time_parameterization})"
+            f"trajectory {trajectory.duration:.2f} s ({stats.time_parameterization})"
         )
 
-    def _time_parameterize(self, req, method: str, path, start_full, indices, stats, deadline=None) -> Trajectory:
-        """``path`` timed by ``method`` (:mod:`~maru_planner.planning.timing`), blends checked by :meth:`_curve_check`.
+    def _time_parameterize(self, req, path, start_full, indices, stats, deadline=None) -> Trajectory:
+        """``path`` timed by the request's method (:mod:`~maru_planner.planning.timing`), blends checked by
+        :meth:`_curve_check`.
 
         Blends still unchecked at ``deadline`` (the request's budget; None: no limit) become stops, so a
         tight budget gets a slower trajectory rather than a timeout.
@@ -463,7 +459,7 @@ class MotionPlanner:
             path,
             [self.robot.joint_names[i] for i in indices],
             limits,
-            method,
+            req.time_parameterization or self.config.time_parameterization,
             curve_free=curve_free,
             max_deviation=self.config.blend_deviation,
             dt=self.config.trajectory_dt,
