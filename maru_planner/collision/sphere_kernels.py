@@ -59,7 +59,12 @@ def cylinder_distance(px, py, pz, k, cyl_c, cyl_a, cyl_h, cyl_r):
 @njit(cache=True, inline="always")
 def point_obstacle_distance(p, k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r):
     """Signed distance from ``p`` to obstacle ``k`` (boxes first, then spheres, then cylinders)."""
-    px, py, pz = p[0], p[1], p[2]
+    return obstacle_distance(p[0], p[1], p[2], k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r)
+
+
+@njit(cache=True, inline="always")
+def obstacle_distance(px, py, pz, k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r):
+    """:func:`point_obstacle_distance` of the point (px, py, pz)."""
     nb, ns = box_c.shape[0], sph_c.shape[0]
     if k < nb:
         return box_distance(px, py, pz, k, box_c, box_r, box_h)

@@ -36,8 +36,7 @@ from maru_planner.collision.sphere_kernels import (
     AMBIGUOUS,
     COLLIDING,
     VALID,
-    box_distance,
-    cylinder_distance,
+    obstacle_distance,
     scan_nb,
     unpack_robot,
     unpack_scene,
@@ -160,16 +159,9 @@ def _world(rot, pos, joint, local, i):
 
 @njit(cache=True, inline="always")
 def _obstacle_distance(x, y, z, k, scene):
-    """Signed distance from a point to obstacle ``k`` (point_obstacle_distance's arithmetic, on scalars)."""
+    """Signed distance from a point to obstacle ``k`` of an unpack_scene tuple."""
     box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, _ = scene
-    nb, ns = box_c.shape[0], sph_c.shape[0]
-    if k < nb:
-        return box_distance(x, y, z, k, box_c, box_r, box_h)
-    k -= nb
-    if k < ns:
-        d0, d1, d2 = x - sph_c[k, 0], y - sph_c[k, 1], z - sph_c[k, 2]
-        return np.sqrt(d0 * d0 + d1 * d1 + d2 * d2) - sph_r[k]
-    return cylinder_distance(x, y, z, k - ns, cyl_c, cyl_a, cyl_h, cyl_r)
+    return obstacle_distance(x, y, z, k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r)
 
 
 @njit(cache=True, inline="always")
