@@ -237,6 +237,7 @@ class Scene:
         self.obstacles: OrderedDict[str, Obstacle] = OrderedDict()
         self.attached: OrderedDict[str, AttachedObject] = OrderedDict()
         self.version = 0
+        self._origin_distances = (-1, np.zeros(0))  # (version, per obstacle): see obstacles_within
         for obstacle in obstacles or []:
             self.add(obstacle)
 
@@ -306,6 +307,22 @@ class Scene:
             have = list(itertools.islice(self.obstacles, 10)) + (["..."] if len(self.obstacles) > 10 else [])
             raise InvalidScene(f"obstacle '{name}': not in the scene (have {have})")
         return self.obstacles[name]
+
+    def obstacles_within(self, radius: float, clock: BuildClock | None = None) -> list[Obstacle]:
+        """The obstacles whose kernel primitive's bounding sphere comes within ``radius`` of the frame origin.
+
+        How near each one comes is worked out once per scene version (``clock`` ticking) and shared by every
+        checker of the scene (a padded twin, the exact verifier), so far obstacles cost one pass per edit.
+        """
+        obstacles = list(self.obstacles.values())
+        if self._origin_distances[0] != self.version:
+            clock = clock or BuildClock(None, len(obstacles))
+            distances = np.empty(len(obstacles))
+            for k, obstacle in enumerate(obstacles):
+                clock.tick(k, "culling far obstacles")
+                distances[k] = obstacle.kernel_primitive().origin_distance
+            self._origin_distances = (self.version, distances)
+        return [obstacles[k] for k in np.flatnonzero(self._origin_distances[1] <= radius)]
 
     def __len__(self) -> int:
         return len(self.obstacles)

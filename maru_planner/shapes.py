@@ -51,9 +51,10 @@ class KernelPrimitive:
     half_extents: np.ndarray  # (3,) box: half sides; sphere: (r, r, r); cylinder: (r, r, half length)
     exact: bool = True  # False: only bounds the shape, so touching it never decides a collision alone
 
-    def within(self, radius: float) -> bool:
-        """Whether the primitive's bounding sphere comes within ``radius`` of the scene origin."""
-        return math.hypot(*self.center) - math.hypot(*self.half_extents) <= radius
+    @property
+    def origin_distance(self) -> float:
+        """How near the primitive's bounding sphere comes to the scene origin (negative: it contains it)."""
+        return math.hypot(*self.center) - math.hypot(*self.half_extents)
 
 
 @dataclass(frozen=True)

@@ -101,6 +101,25 @@ def test_far_obstacles_cost_no_pairs_and_change_no_answer(maru1):
     np.testing.assert_array_equal(fast.are_valid(Q), SphereCollisionChecker(maru1, Scene(near)).are_valid(Q))
 
 
+def test_far_obstacles_are_culled_once_per_scene_version(maru1, monkeypatch):
+    rng = np.random.default_rng(3)
+    near = clutter(rng, 4, (0.4, 0.0, 0.0), 0.3)
+    scene = Scene(near + far_field(rng, 200, robot_reach(maru1)))
+    calls = []
+    primitive = Obstacle.kernel_primitive
+    monkeypatch.setattr(Obstacle, "kernel_primitive", lambda self: calls.append(self.name) or primitive(self))
+    exact = CollisionChecker(maru1, scene)
+    padded = CollisionChecker(maru1, scene, padding=0.02)
+    spheres = SphereCollisionChecker(maru1, scene)
+    assert sum(name.startswith("far") for name in calls) == 200  # one pass, shared by the three checkers
+    assert len(exact.checked_pairs) == len(padded.checked_pairs) and len(spheres.primitives.names) == len(near)
+    scene.move("far0", [0.4, 0.0, 0.0])  # a new version: culled again, the moved box now within reach
+    calls.clear()
+    spheres.is_valid(maru1.neutral())  # picks the edit up
+    assert "far0" in spheres.primitives.names
+    assert sum(name.startswith("far") for name in calls) == 201  # the culling pass, then far0's conversion
+
+
 @pytest.mark.parametrize("padding", [0.0, 0.02])
 def test_tree_agrees_with_every_pair(maru1, padding):
     rng = np.random.default_rng(4)

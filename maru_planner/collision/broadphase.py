@@ -3,8 +3,8 @@
 - :func:`robot_reach`: the radius around the root frame's origin that no moving collision geometry
   can leave, whatever the configuration (joint offsets, prismatic travel and geometry sizes added up
   along each chain). An obstacle whose bounding sphere lies outside it can never be touched and is
-  dropped when the scene is built (:func:`reachable_obstacles`), so 100,000 far obstacles cost one
-  pass at build time and nothing per check.
+  dropped when the scene is built (:meth:`~maru_planner.scene.Scene.obstacles_within`), so 100,000 far
+  obstacles cost one pass per scene version, shared by its checkers, and nothing per check.
 - :class:`SceneTree`: the reachable obstacles in a coal dynamic AABB tree, built once per scene
   version, and the robot's moving geometries in a second manager that pinocchio updates; one
   manager-vs-manager query per check (``collides``), plus the diagnostics ``colliding_pairs`` and
@@ -44,16 +44,6 @@ def robot_reach(robot: RobotModel) -> float:
         size = reach[obj.parentJoint] + np.linalg.norm(obj.placement.translation) + np.linalg.norm(corner)
         radius = max(radius, float(size))
     return radius
-
-
-def reachable_obstacles(obstacles: list[Obstacle], reach: float, padding: float, clock: BuildClock) -> list[Obstacle]:
-    """The obstacles whose bounding sphere comes within ``reach + padding`` of the root origin."""
-    kept = []
-    for k, obstacle in enumerate(obstacles):
-        clock.tick(k, "culling far obstacles")
-        if obstacle.kernel_primitive().within(reach + padding):
-            kept.append(obstacle)
-    return kept
 
 
 def coal_transform(pose: np.ndarray) -> coal.Transform3s:

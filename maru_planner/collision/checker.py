@@ -30,7 +30,7 @@ import coal
 import numpy as np
 import pinocchio as pin
 
-from maru_planner.collision.broadphase import SceneTree, reachable_obstacles, robot_reach
+from maru_planner.collision.broadphase import SceneTree, robot_reach
 from maru_planner.robot.model import RobotModel
 from maru_planner.scene import BuildClock, Obstacle, Scene
 
@@ -151,9 +151,8 @@ class CollisionChecker:
         self._build()
 
     def _build(self) -> None:
-        obstacles = list(self._scene.obstacles.values())
-        clock = BuildClock(self.build_budget, len(obstacles))
-        self._reachable = reachable_obstacles(obstacles, self.reach, self.padding, clock)
+        clock = BuildClock(self.build_budget, len(self._scene.obstacles))
+        self._reachable = self._scene.obstacles_within(self.reach + self.padding, clock)
         listed = self._reachable if len(self._reachable) <= self.pair_list_limit else []
         tree = SceneTree(self.robot, self._reachable, self.padding, clock) if not listed and self._reachable else None
         self.scene_tree = tree

@@ -73,14 +73,13 @@ class ScenePrimitives:
     def from_scene(cls, scene: Scene | None, reach: float = np.inf, clock: BuildClock | None = None) -> ScenePrimitives:
         """Convert a :class:`~maru_planner.scene.Scene` (``None`` = empty), keeping the obstacles whose
         bounding sphere comes within ``reach`` of the root origin."""
-        obstacles = list(scene.obstacles.values()) if scene is not None else []
+        obstacles = scene.obstacles_within(reach, clock) if scene is not None else []
         clock = clock or BuildClock(None, len(obstacles))
         by_kind: dict[str, list[tuple[Obstacle, KernelPrimitive]]] = {kind: [] for kind in KERNEL_KINDS}
         for k, obstacle in enumerate(obstacles):
             clock.tick(k, "converting obstacles to primitives")
             primitive = obstacle.kernel_primitive()
-            if primitive.within(reach):
-                by_kind[primitive.kind].append((obstacle, primitive))
+            by_kind[primitive.kind].append((obstacle, primitive))
         boxes, spheres, cylinders = (by_kind[kind] for kind in KERNEL_KINDS)
         ordered = boxes + spheres + cylinders
         return cls(
