@@ -29,7 +29,6 @@ import numpy as np
 
 from maru_planner.base.budget import Deadline, unlimited
 from maru_planner.base.common import cells_to_path
-from maru_planner.base.footprint import footprint_radii
 from maru_planner.base.grid import OccupancyGrid
 from maru_planner.base.kernels import heap_grow, heap_pop, heap_push, now
 from maru_planner.base.planner import DiscPlanner, Endpoint, PlanRun
@@ -399,9 +398,7 @@ class GridAStarPlanner(DiscPlanner):
     """
 
     def __init__(self, footprint=None, inflation_radius: float | None = None):
-        if inflation_radius is None:
-            inflation_radius = footprint_radii(footprint)[1] if footprint is not None else 0.0
-        super().__init__(inflation_radius)
+        super().__init__(inflation_radius, footprint)
 
     @property
     def inflation_radius(self) -> float:

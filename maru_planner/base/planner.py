@@ -24,6 +24,7 @@ from typing import Any, Generic, Protocol, TypeVar
 import numpy as np
 
 from maru_planner.base.budget import DEFAULT_TIME_LIMIT, Deadline
+from maru_planner.base.footprint import footprint_radii
 from maru_planner.base.grid import OccupancyGrid
 from maru_planner.base.result import BasePlanResult, PlanStats, PlanStatus, empty_path, status_of
 from maru_planner.errors import (
@@ -199,9 +200,16 @@ class GridPlanner(ABC, Generic[MapT]):
 
 
 class DiscPlanner(GridPlanner[OccupancyGrid]):
-    """A disc robot of ``radius`` metres on the grid grown by that radius (astar, tunnel)."""
+    """A disc robot of ``radius`` metres on the grid grown by that radius (astar, tunnel).
 
-    def __init__(self, radius: float):
+    Without a radius the disc is the ``footprint``'s circumcircle, or ``default_radius`` without either.
+    """
+
+    default_radius = 0.0
+
+    def __init__(self, radius: float | None, footprint: Any = None):
+        if radius is None:
+            radius = footprint_radii(footprint)[1] if footprint is not None else self.default_radius
         if not (math.isfinite(radius) and radius >= 0):
             raise InvalidRequest(f"robot radius must be finite and >= 0 m, got {radius}")
         self.radius = float(radius)

@@ -44,7 +44,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from maru_planner.base.budget import Deadline, unlimited
-from maru_planner.base.footprint import footprint_radii
 from maru_planner.base.grid import OccupancyGrid
 from maru_planner.base.planner import DiscPlanner, Endpoint, PlanRun
 from maru_planner.base.result import PlanStats, PlanStatus, status_of
@@ -537,10 +536,10 @@ class TunnelGridPlanner(DiscPlanner):
     keyword arguments are :class:`TunnelParams` fields.
     """
 
+    default_radius = 0.25
+
     def __init__(self, footprint=None, robot_radius: float | None = None, **params):
-        if robot_radius is None:
-            robot_radius = footprint_radii(footprint)[1] if footprint is not None else 0.25
-        super().__init__(robot_radius)
+        super().__init__(robot_radius, footprint)
         self.planner = TunnelPlanner(**params)
 
     @property
