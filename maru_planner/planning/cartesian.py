@@ -188,10 +188,8 @@ def _compute(planner, request: CartesianRequest, result: CartesianResult, t0: fl
     waypoints = [_pose(w, k) for k, w in enumerate(request.waypoints)]
     if not waypoints:
         raise errors.InvalidRequest("no waypoints: give at least one pose of the link")
-    if request.avoid_collisions and not planner.checker.is_valid(start):
-        pairs = planner.checker.colliding_pairs(start)
-        named = ", ".join(f"{a}–{b}" for a, b in pairs[:5])
-        raise errors.StartInCollision(f"start configuration is in collision: {named}", pairs=pairs)
+    if request.avoid_collisions:
+        planner.check_free(start, errors.StartInCollision, "start")
     poses = interpolate_poses(robot.frame_pose(start, link), waypoints, max_step)
     states, reason = _follow(robot, link, indices, start, poses, deadline)
     states, reason = _jump_cut(states, reason, jump)
