@@ -22,10 +22,8 @@ Writes bench/results/certify.{json,md,png}; progress on stderr.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -34,6 +32,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
+from _common import RESULTS, Progress, log, write_results  # noqa: E402
 from peers_arm import mbm_cases, panda_robot  # noqa: E402
 
 from maru_planner.collision import CollisionChecker  # noqa: E402
@@ -44,29 +43,8 @@ from maru_planner.planning.registry import planner_ids  # noqa: E402
 from maru_planner.robot import RobotModel  # noqa: E402
 from maru_planner.scene import Scene  # noqa: E402
 
-RESULTS = ROOT / "bench" / "results"
 MODES = ("certified", "baseline")
 SHARE_TARGET = 0.30  # issue 13: certification adds at most 30 % to the median plan time on MBM
-
-
-def log(msg: str) -> None:
-    print(msg, file=sys.stderr, flush=True)
-
-
-class Progress:
-    """A one-line progress bar on stderr."""
-
-    def __init__(self, total: int):
-        self.total, self.done, self.t0 = total, 0, time.monotonic()
-
-    def step(self, label: str) -> None:
-        self.done += 1
-        frac = self.done / max(self.total, 1)
-        bar = "#" * int(30 * frac) + "." * (30 - int(30 * frac))
-        elapsed = time.monotonic() - self.t0
-        print(f"\r[{bar}] {self.done}/{self.total} {elapsed:7.1f}s {label:<44}", end="", file=sys.stderr, flush=True)
-        if self.done == self.total:
-            print(file=sys.stderr, flush=True)
 
 
 class Case:
@@ -331,12 +309,7 @@ def main(argv: list[str] | None = None) -> int:
         warm_up(cases[0].robot, cases[-1], args)
         results["runs"][suite] = run_suite(cases, jobs, args, progress)
     summary = results["summary"] = build_summary(results)
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.with_suffix(".json").write_text(json.dumps(results, indent=1))
-    md = markdown(summary, args)
-    args.out.with_suffix(".md").write_text(md)
-    plot(summary, args.out.with_suffix(".png"))
-    print(md)
+    write_results(args.out, results, markdown(summary, args), lambda path: plot(summary, path))
     return 0
 
 

@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 import math
 import sys
 import time
@@ -35,6 +34,8 @@ from scipy.spatial.transform import Rotation
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
+
+from _common import RESULTS, Progress, log, write_results  # noqa: E402
 
 from maru_planner.collision import CollisionChecker  # noqa: E402
 from maru_planner.paths import config_path  # noqa: E402
@@ -47,24 +48,8 @@ from maru_planner.planning.types import MotionResult, PlanStats, PlanStatus  # n
 from maru_planner.robot import RobotModel  # noqa: E402
 from maru_planner.scene import Scene  # noqa: E402
 
-RESULTS = ROOT / "bench" / "results"
 TOLERANCE = 0.1  # rad: the constrained suite's orientation tolerance about x and y
 MIN_SINGULAR_VALUE = 0.05
-
-
-def log(msg: str) -> None:
-    print(msg, file=sys.stderr, flush=True)
-
-
-class Progress:
-    """``[done/total] what`` lines on stderr with the elapsed time."""
-
-    def __init__(self, total: int):
-        self.total, self.done, self.t0 = total, 0, time.monotonic()
-
-    def step(self, what: str) -> None:
-        self.done += 1
-        log(f"[{self.done}/{self.total} {time.monotonic() - self.t0:6.1f} s] {what}")
 
 
 # ------------------------------------------------------------------------------- cartesian --
@@ -355,14 +340,9 @@ def main(argv: list[str] | None = None) -> int:
         "dual_arm": dual_suite(seeds, args.budget, progress),
     }  # fmt: skip
     results["summary"] = summarize(results)
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.with_suffix(".json").write_text(json.dumps(results, indent=1))
-    md = markdown(results["summary"], args)
-    args.out.with_suffix(".md").write_text(md)
-    plot(results, args.out.with_suffix(".png"))
+    write_results(args.out, results, markdown(results["summary"], args), lambda path: plot(results, path))
     for picture in pictures(args.out):
         log(f"picture {picture}")
-    print(md)
     return 0
 
 

@@ -30,12 +30,13 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from _common import RESULTS, Progress, log  # noqa: E402
+
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig  # noqa: E402
 from maru_planner.planning.problems import PROBLEMS  # noqa: E402
 from maru_planner.planning.roadmap import Roadmap  # noqa: E402
 from maru_planner.planning.space import GroupSpace  # noqa: E402
 
-RESULTS = ROOT / "bench" / "results"
 PLANNERS = ("RRT", "GoalBiasedRRT", "RRTConnect", "PRM", "RCRRT")
 # Paper 000, sec. VI (2008 PC): nodes and seconds; PRM: nodes / edges, build and query seconds.
 PAPER = {
@@ -50,26 +51,6 @@ PAPER = {
     ("maru13", "GoalBiasedRRT"): {"nodes": 700, "time": 6.05},
     ("maru13", "RCRRT"): {"nodes": 3750, "time": 76.63},
 }
-
-
-def log(msg: str) -> None:
-    print(msg, file=sys.stderr, flush=True)
-
-
-class Progress:
-    """A one-line progress bar on stderr."""
-
-    def __init__(self, total: int):
-        self.total, self.done, self.t0 = total, 0, time.monotonic()
-
-    def step(self, label: str) -> None:
-        self.done += 1
-        frac = self.done / self.total
-        bar = "#" * int(30 * frac) + "." * (30 - int(30 * frac))
-        elapsed = time.monotonic() - self.t0
-        print(f"\r[{bar}] {self.done}/{self.total} {elapsed:6.1f}s {label:<40}", end="", file=sys.stderr, flush=True)
-        if self.done == self.total:
-            print(file=sys.stderr, flush=True)
 
 
 def make_checker(kind: str, robot, scene):

@@ -19,8 +19,6 @@ Target: median plan_motion overhead <= 5 ms.
 from __future__ import annotations
 
 import argparse
-import json
-import os
 import subprocess
 import sys
 import tempfile
@@ -29,18 +27,13 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _common import PAPER_GOAL, PAPER_START, RESULTS, log, start_python, write_results
 
 from maru_planner.paths import config_path
 from maru_planner.ros.env import configure_loopback_dds
 
-RESULTS = Path(__file__).resolve().parent / "results"
 NAME = "service_latency"
 TARGET_MS = 5.0
-JOINTS = ["waist_yaw"] + [f"r_arm_j{i}" for i in range(1, 7)] + [f"l_arm_j{i}" for i in range(1, 7)]
-START = dict(zip(JOINTS, (-0.9, -0.7, 1.57, 0.7, 0.7, -0.9, -0.9, -0.8, 1.57, 2.0, 0.7, -1.9, -1.25), strict=True))
-PAPER_GOAL = dict(
-    zip(JOINTS, (0.9, -0.8, 1.57, 1.14, 0.7, -1.24, -1.9, -0.7, 1.57, 2.44, 0.7, -2.24, -1.25), strict=True)
-)
 
 TRIGGER_SERVER = textwrap.dedent(
     """
@@ -61,20 +54,6 @@ TRIGGER_SERVER = textwrap.dedent(
         pass
     """
 )
-
-
-def log(message: str) -> None:
-    print(message, file=sys.stderr, flush=True)
-
-
-def start_process(args: list[str], log_file) -> subprocess.Popen:
-    return subprocess.Popen(
-        [sys.executable, *args],
-        stdout=log_file,
-        stderr=subprocess.STDOUT,
-        stdin=subprocess.DEVNULL,
-        env=dict(os.environ),
-    )
 
 
 def timed_calls(client, make_request, calls: int, label: str, timeout: float = 60.0):
@@ -120,8 +99,8 @@ def timed_goals(client, make_goal, calls: int, label: str, timeout: float = 60.0
 
 def small_move(i: int) -> tuple[dict, dict]:
     """Goal joints and request fields of the i-th small right-arm move (service call and action goal alike)."""
-    goal = dict(START, r_arm_j4=START["r_arm_j4"] + 0.1 + 0.002 * (i % 50))
-    return goal, dict(start=START, group="upper_body", planner_id="RRTConnect", time_budget=5.0, seed=i)
+    goal = dict(PAPER_START, r_arm_j4=PAPER_START["r_arm_j4"] + 0.1 + 0.002 * (i % 50))
+    return goal, dict(start=PAPER_START, group="upper_body", planner_id="RRTConnect", time_budget=5.0, seed=i)
 
 
 def plan_request_factory():
@@ -150,7 +129,7 @@ def paper_request_factory():
 
     def make(i: int):
         return plan_request(
-            PAPER_GOAL, start=START, group="upper_body", planner_id="RRTConnect", time_budget=20.0, seed=3
+            PAPER_GOAL, start=PAPER_START, group="upper_body", planner_id="RRTConnect", time_budget=20.0, seed=3
         )
 
     return make
@@ -181,8 +160,8 @@ def run(calls: int, paper_calls: int) -> dict:
     node_log = open(Path(logs.name) / "planning_node.log", "w")
     trigger_log = open(Path(logs.name) / "trigger.log", "w")
     params = str(config_path("planner.yaml"))
-    node = start_process(["-m", "maru_planner.ros.planning_node", "--ros-args", "--params-file", params], node_log)
-    trigger = start_process(["-c", TRIGGER_SERVER], trigger_log)
+    node = start_python(["-m", "maru_planner.ros.planning_node", "--ros-args", "--params-file", params], node_log)
+    trigger = start_python(["-c", TRIGGER_SERVER], trigger_log)
     rclpy.init()
     client_node = rclpy.create_node("latency_client")
     executor = MultiThreadedExecutor(num_threads=2)
@@ -314,12 +293,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     configure_loopback_dds(random_domain=True)
     results = run(20 if args.quick else args.calls, 5 if args.quick else args.paper_calls)
-    RESULTS.mkdir(parents=True, exist_ok=True)
-    (RESULTS / f"{NAME}.json").write_text(json.dumps(results, indent=2))
-    markdown = table(results)
-    (RESULTS / f"{NAME}.md").write_text(markdown)
-    plot(results, RESULTS / f"{NAME}.png")
-    print(markdown)
+    write_results(RESULTS / NAME, results, table(results), lambda path: plot(results, path))
     return 0
 
 

@@ -17,7 +17,6 @@ Writes bench/results/throughput.{json,md,png}.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import subprocess
 import sys
@@ -27,25 +26,18 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _common import PAPER_GOAL, PAPER_START, RESULTS, log, start_python, write_results
 
 from maru_planner.paths import config_path
 from maru_planner.ros.env import configure_loopback_dds
 
-RESULTS = Path(__file__).resolve().parent / "results"
 NAME = "throughput"
 TARGET_RATIO = 1.8
-JOINTS = ["waist_yaw"] + [f"r_arm_j{i}" for i in range(1, 7)] + [f"l_arm_j{i}" for i in range(1, 7)]
-START = dict(zip(JOINTS, (-0.9, -0.7, 1.57, 0.7, 0.7, -0.9, -0.9, -0.8, 1.57, 2.0, 0.7, -1.9, -1.25), strict=True))
-GOAL = dict(zip(JOINTS, (0.9, -0.8, 1.57, 1.14, 0.7, -1.24, -1.9, -0.7, 1.57, 2.44, 0.7, -2.24, -1.25), strict=True))
 # RRTConnect seeds of this problem whose paths certify without repairs (a repair's timing is bounded by
 # certify_timeout, which a loaded machine can miss): 0.1-0.2 s of planning each on a quiet core.
 SEEDS = (1, 2, 4, 6, 7, 8, 12, 13, 18, 24, 25, 26, 27, 28)
 BUDGET = 20.0  # s per request: far above what a request needs, so none times out
 CALL_TIMEOUT = 600.0
-
-
-def log(message: str) -> None:
-    print(message, file=sys.stderr, flush=True)
 
 
 def configurations(workers: int, quick: bool) -> list[dict]:
@@ -68,13 +60,7 @@ def start_node(config: dict, requests: int, log_file) -> subprocess.Popen:
         "-p", f"workers:={config['workers']}", "-p", f"worker_processes:={str(config['processes']).lower()}",
         "-p", f"queue_size:={requests}",
     ]  # fmt: skip
-    return subprocess.Popen(
-        [sys.executable, *args],
-        stdout=log_file,
-        stderr=subprocess.STDOUT,
-        stdin=subprocess.DEVNULL,
-        env=dict(os.environ),
-    )
+    return start_python(args, log_file)
 
 
 def stop_node(node: subprocess.Popen) -> None:
@@ -89,7 +75,9 @@ def stop_node(node: subprocess.Popen) -> None:
 def make_request(seed: int):
     from maru_planner.ros.planning_client import plan_request  # ROS loads after main's configure_loopback_dds
 
-    return plan_request(GOAL, start=START, group="upper_body", planner_id="RRTConnect", time_budget=BUDGET, seed=seed)
+    return plan_request(
+        PAPER_GOAL, start=PAPER_START, group="upper_body", planner_id="RRTConnect", time_budget=BUDGET, seed=seed
+    )
 
 
 def drive(clients: list, seeds: list[int]) -> dict:
@@ -250,12 +238,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     configure_loopback_dds(random_domain=True)
     results = run(configurations(args.workers, args.quick), args.clients, 16 if args.quick else args.requests)
-    RESULTS.mkdir(parents=True, exist_ok=True)
-    (RESULTS / f"{NAME}.json").write_text(json.dumps(results, indent=2))
-    markdown = table(results)
-    (RESULTS / f"{NAME}.md").write_text(markdown)
-    plot(results, RESULTS / f"{NAME}.png")
-    print(markdown)
+    write_results(RESULTS / NAME, results, table(results), lambda path: plot(results, path))
     return 0
 
 
