@@ -36,11 +36,7 @@ class OrientationConstraint:
 
     def __post_init__(self) -> None:
         _check_matrix(self.target, (3, 3), f"orientation constraint on {self.link!r}: target")
-        tol = np.asarray(self.tolerance, dtype=float)
-        if tol.shape != (3,) or not np.all(np.isfinite(tol)) or np.any(tol <= 0):
-            raise errors.InvalidRequest(
-                f"orientation constraint on {self.link!r}: tolerance must be 3 finite values > 0 rad, got {tol}"
-            )
+        _check_positive3(self.tolerance, f"orientation constraint on {self.link!r}: tolerance", "rad")
 
     def excess(self, pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(rotation vector r in the target frame, per-axis amount outside the tolerance)."""
@@ -56,11 +52,7 @@ class PositionConstraint:
 
     def __post_init__(self) -> None:
         _check_matrix(self.box_pose, (4, 4), f"position constraint on {self.link!r}: box pose")
-        size = np.asarray(self.box_size, dtype=float)
-        if size.shape != (3,) or not np.all(np.isfinite(size)) or np.any(size <= 0):
-            raise errors.InvalidRequest(
-                f"position constraint on {self.link!r}: box size must be 3 finite values > 0 m, got {size}"
-            )
+        _check_positive3(self.box_size, f"position constraint on {self.link!r}: box size", "m")
 
     def excess(self, pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(link origin in the box frame, per-axis amount outside the box)."""
@@ -178,6 +170,12 @@ def _check_matrix(value: np.ndarray, shape: tuple[int, int], what: str) -> None:
     value = np.asarray(value, dtype=float)
     if value.shape != shape or not np.all(np.isfinite(value)):
         raise errors.InvalidRequest(f"{what} must be a finite {shape[0]}x{shape[1]} matrix")
+
+
+def _check_positive3(value: np.ndarray, what: str, unit: str) -> None:
+    values = np.asarray(value, dtype=float)
+    if values.shape != (3,) or not np.all(np.isfinite(values)) or np.any(values <= 0):
+        raise errors.InvalidRequest(f"{what} must be 3 finite values > 0 {unit}, got {values}")
 
 
 def _pull(J: np.ndarray, value: np.ndarray, bound: np.ndarray, rows: list, residual: list) -> None:
