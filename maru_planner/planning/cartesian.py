@@ -280,8 +280,8 @@ def _collision_cut(planner, states, reason: str, deadline: float, margin: float,
 
 
 def _timed(planner, request: CartesianRequest, states, indices, deadline: float, margin: float) -> Trajectory:
-    scalings = (_scaling(request.velocity_scaling, "velocity_scaling"),
-                _scaling(request.acceleration_scaling, "acceleration_scaling"))  # fmt: skip
+    scalings = (timing.check_scaling(request.velocity_scaling, "velocity_scaling"),
+                timing.check_scaling(request.acceleration_scaling, "acceleration_scaling"))  # fmt: skip
     method = request.time_parameterization or planner.config.time_parameterization
     certifier = planner.certifier if request.avoid_collisions else None
     return time_dense_path(planner.robot, planner.config, certifier, states, indices, method, scalings, deadline,
@@ -318,10 +318,3 @@ def time_dense_path(robot, config, certifier, states: np.ndarray, indices: np.nd
         sample_deadline=deadline,
     )
     return trajectory
-
-
-def _scaling(value, name: str) -> float:
-    value = float(value)
-    if not (math.isfinite(value) and 1e-4 <= value <= 1.0):
-        raise errors.InvalidRequest(f"{name} must be in [0.0001, 1], got {value}")
-    return value

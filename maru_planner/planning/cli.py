@@ -31,9 +31,10 @@ from maru_planner import errors
 from maru_planner.planning.cartesian import CartesianRequest, CartesianResult, default_link
 from maru_planner.planning.config import COLLISION_MODELS, TIME_PARAMETERIZATIONS, PlannerConfig
 from maru_planner.planning.links import check_link
-from maru_planner.planning.motion_planner import MIN_SCALING, MotionPlanner
+from maru_planner.planning.motion_planner import MotionPlanner
 from maru_planner.planning.problems import PROBLEMS
 from maru_planner.planning.registry import PLANNERS, get_spec, merged_params
+from maru_planner.planning.timing import MIN_SCALING
 from maru_planner.planning.types import MotionRequest, MotionResult, PlanStatus, status_of_error
 from maru_planner.robot import RobotModel, load_example_robot
 from maru_planner.scene import Scene

@@ -16,8 +16,6 @@ path constraints are planned by this planner (``planner_id`` ``CBiRRT`` or empty
 
 from __future__ import annotations
 
-import math
-import secrets
 import time
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -93,9 +91,7 @@ def _plan(planner, request: MotionRequest, constraints: PathConstraints, result:
         raise errors.InvalidPlanner(
             f"planner {request.planner_id!r} does not support path constraints; use {PLANNER_ID} (or leave it empty)"
         )
-    budget = float(request.time_budget)
-    if not (math.isfinite(budget) and budget > 0):
-        raise errors.InvalidRequest(f"time_budget must be a finite number > 0, got {request.time_budget}")
+    budget, seed = planner.check_request(request)
     deadline = t0 + budget
     robot, stats = planner.robot, result.stats
     constraints.check_links(robot)
@@ -109,7 +105,6 @@ def _plan(planner, request: MotionRequest, constraints: PathConstraints, result:
     planner.check_free(goal, errors.GoalInCollision, "goal")
     params = {**{n: p.default for n, p in PARAMS.items()}, **planner.config.planner_params.get(PLANNER_ID, {})}
     problem = _Problem(planner, constraints, start, indices, STEP.check(params["step"]), INSET.check(params["inset"]))
-    seed = int(request.seed) if request.seed is not None else secrets.randbelow(2**31 - 1)
     stats.seed = seed
     rng = np.random.default_rng(seed)
     t_solve = time.monotonic()

@@ -59,6 +59,7 @@ from maru_planner.planning.registry import (
 )
 from maru_planner.planning.roadmap import Roadmap
 from maru_planner.planning.space import EdgeChecker, GroupSetup, GroupSpace
+from maru_planner.planning.timing import MIN_SCALING as MIN_SCALING  # re-exported: the planning node reads it here
 from maru_planner.planning.types import (
     MotionRequest,
     MotionResult,
@@ -72,9 +73,6 @@ from maru_planner.scene_attached import attachment_key, robot_with_attached
 OMPL_LOCK = threading.RLock()
 REPAIR_RESOLUTION = 0.02  # rad: the coarsest motion step of a repair's local search
 REPAIR_SHORTCUT_TRIES = 10  # a repair's local path is short: few failed shortcuts end its simplification
-# Slowest scaling a request may ask for (10,000x the full-speed duration); far below it the time
-# parameterisations overflow (1e-300 gave NaN durations and internal errors).
-MIN_SCALING = 1e-4
 ou.setLogLevel(ou.LOG_WARN)  # OMPL's INFO chatter would mix into CLI output
 
 
@@ -373,26 +371,10 @@ class MotionPlanner:
 
     def _plan(self, req: MotionRequest, result: MotionResult, t0: float, resolution: float) -> None:
         stats = result.stats
-        budget = _finite_time(req.time_budget, "time_budget")
-        deadline = t0 + budget
         spec = get_spec(req.planner_id or self.config.default_planner)
         planner_id = stats.planner_id = spec.id
-        attempts = int(req.attempts)
-        if attempts < 1:
-            raise errors.InvalidRequest(f"attempts must be >= 1, got {req.attempts}")
-        for name in ("velocity_scaling", "acceleration_scaling", "jerk_scaling"):
-            value = float(getattr(req, name))
-            if not (math.isfinite(value) and MIN_SCALING <= value <= 1.0):
-                raise errors.InvalidRequest(f"{name} must be in [{MIN_SCALING:g}, 1], got {value:.3g}")
-        method = req.time_parameterization or self.config.time_parameterization
-        if method not in timing.METHODS:
-            raise errors.InvalidRequest(
-                f"time_parameterization must be one of {', '.join(timing.METHODS)}, got {method!r}"
-            )
-        _safety_margin(req, self.config)
-        seed = int(req.seed) if req.seed is not None else secrets.randbelow(2**31 - 1)
-        if not 0 <= seed < 2**63:
-            raise errors.InvalidRequest(f"seed must be in [0, 2^63), got {seed}")
+        budget, seed = self.check_request(req)
+        deadline = t0 + budget
         stats.seed = seed
 
         monitor = self._monitor
@@ -420,7 +402,7 @@ class MotionPlanner:
         checks0 = self._search_checker.check_count
         try:
             monitor.report("search")
-            raw = self._search(spec, gs, start, goal, seed, attempts, deadline, stats, resolution)
+            raw = self._search(spec, gs, start, goal, seed, int(req.attempts), deadline, stats, resolution)
             stats.raw_waypoints = len(raw)
             stats.raw_path_length = postprocess.path_length(raw)
             monitor.report("simplify", best_cost=stats.raw_path_length)
@@ -504,6 +486,21 @@ class MotionPlanner:
         return free, timing.CERTIFY_STEP
 
     # --- request validation -----------------------------------------------------------------
+    def check_request(self, req: MotionRequest) -> tuple[float, int]:
+        """``req``'s time budget and seed (its own, or a random one); InvalidRequest naming the first bad field
+        among time_budget, attempts, the scalings, time_parameterization, safety_margin and seed."""
+        budget = _finite_time(req.time_budget, "time_budget")
+        if int(req.attempts) < 1:
+            raise errors.InvalidRequest(f"attempts must be >= 1, got {req.attempts}")
+        for name in ("velocity_scaling", "acceleration_scaling", "jerk_scaling"):
+            timing.check_scaling(getattr(req, name), name)
+        timing.check_method(req.time_parameterization or self.config.time_parameterization)
+        _safety_margin(req, self.config)
+        seed = int(req.seed) if req.seed is not None else secrets.randbelow(2**31 - 1)
+        if not 0 <= seed < 2**63:
+            raise errors.InvalidRequest(f"seed must be in [0, 2^63), got {seed}")
+        return budget, seed
+
     def _check_values(self, values: dict, what: str) -> dict[int, float]:
         """Joint index → value for a name → value map; unknown names, NaN and limits raise."""
         if not isinstance(values, dict):

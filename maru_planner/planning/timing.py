@@ -57,6 +57,9 @@ GRID_INTERVALS = 30  # toppra grid intervals along a section (plus ≥ BLEND_INT
 BLEND_INTERVALS = 3
 RATIO_TOL = 1e-9
 RUCKIG_DURATION = 100.0  # s: longer sections are computed sped up and played back slower (_RuckigPieces)
+# Slowest scaling a request may ask for (10,000x the full-speed duration); far below it the time
+# parameterisations overflow (1e-300 gave NaN durations and internal errors).
+MIN_SCALING = 1e-4
 
 CurveFree = Callable[[np.ndarray, np.ndarray], bool]  # (states, chord deviation per joint) -> collision-free
 
@@ -87,6 +90,24 @@ class Limits:
             acc * acceleration_scaling,
             jerk * jerk_scaling,
         )
+
+
+def check_scaling(value: object, name: str) -> float:
+    """``value`` as a limit scaling; InvalidRequest naming ``name`` unless it is a number in [MIN_SCALING, 1]."""
+    try:
+        scaling = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError) as exc:
+        raise errors.InvalidRequest(f"{name} must be a number in [{MIN_SCALING:g}, 1], got {value!r:.40}") from exc
+    if not (math.isfinite(scaling) and MIN_SCALING <= scaling <= 1.0):
+        raise errors.InvalidRequest(f"{name} must be in [{MIN_SCALING:g}, 1], got {scaling:.3g}")
+    return scaling
+
+
+def check_method(method: str) -> str:
+    """``method`` if it is one of :data:`METHODS`, else InvalidRequest naming them."""
+    if method not in METHODS:
+        raise errors.InvalidRequest(f"time_parameterization must be one of {', '.join(METHODS)}, got {method!r}")
+    return method
 
 
 def default_jerk_limits(acceleration_limits: Sequence[float] | np.ndarray) -> np.ndarray:
@@ -252,8 +273,7 @@ def parameterize(
     (``time.monotonic()``) no more blends are checked: the corners left stop. Sampling the
     sections raises PlanningTimedOut once ``sample_deadline`` has passed (a caller's hard budget).
     """
-    if method not in METHODS:
-        raise errors.InvalidRequest(f"time_parameterization must be one of {', '.join(METHODS)}, got {method!r}")
+    check_method(method)
     if not (math.isfinite(max_deviation) and max_deviation >= 0.0):
         raise errors.InvalidRequest(f"blend deviation must be a finite number >= 0 rad, got {max_deviation}")
     if max_points < 2:
