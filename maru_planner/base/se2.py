@@ -207,9 +207,11 @@ class LayerSearch:
         return len(self.states) > 0
 
 
-def search_bytes(headings: int, height: int, width: int) -> float:
-    """Memory an SE(2) search over (headings, height, width) allocates (padded layers, g, parent, closed)."""
-    return float(_BYTES_PER_STATE) * headings * (height + 2) * (width + 2)
+def check_search_memory(headings: int, height: int, width: int) -> None:
+    """TooLarge when an SE(2) search over (headings, height, width) would not fit (padded layers, g, parent, closed)."""
+    check_bytes(float(_BYTES_PER_STATE) * headings * (height + 2) * (width + 2),
+                f"SE(2) A* over {headings} headings x {width} x {height} cells",
+                "use fewer headings, a coarser map or mspp_local")
 
 
 def search_layers(
@@ -228,8 +230,7 @@ def search_layers(
     PlanningTimedOut when ``deadline`` passes, TooLarge when the search would not fit in memory.
     """
     num_k, h, w = layers.shape
-    check_bytes(search_bytes(num_k, h, w), f"SE(2) A* over {num_k} headings x {w} x {h} cells",
-                "use fewer headings, a coarser map or mspp_local")
+    check_search_memory(num_k, h, w)
     deadline = deadline or unlimited()
     padded = np.ones((num_k, h + 2, w + 2), dtype=np.bool_)
     padded[:, 1:-1, 1:-1] = layers
@@ -326,8 +327,7 @@ class SE2AStarPlanner(GridPlanner[OccupancyGrid]):
 
     def full_search(self, grid: OccupancyGrid, start: Endpoint, goal: Endpoint, deadline: Deadline) -> FullSearch:
         """C-space layers for the whole map, then the search (memory checked before either)."""
-        check_bytes(search_bytes(self.headings, *grid.shape), f"SE(2) A* over {self.headings} headings x "
-                    f"{grid.width} x {grid.height} cells", "use fewer headings, a coarser map or mspp_local")
+        check_search_memory(self.headings, *grid.shape)
         t = time.perf_counter()
         layers = cspace_layers(grid.occupied, self.footprint, grid.resolution, self.headings,
                                self.offsets(grid, deadline), deadline)
