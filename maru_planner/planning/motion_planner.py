@@ -363,7 +363,7 @@ class MotionPlanner:
     def _full_path(self, request: MotionRequest, result: MotionResult) -> np.ndarray:
         """The result's waypoints as full configurations (joints outside the group at their start values)."""
         indices = [self.robot.joint_names.index(n) for n in result.joint_names]
-        start = self._start_state(request, indices)
+        start = self.start_configuration(request.start, indices, request.group)
         path = np.asarray(result.path, dtype=float)
         out = np.repeat(start[None], len(path), axis=0)
         out[:, indices] = path
@@ -382,7 +382,7 @@ class MotionPlanner:
         indices = sorted(self.robot.group_joint_indices(req.group))
         names = [self.robot.joint_names[i] for i in indices]
         result.joint_names = names
-        start_full = self._start_state(req, indices)
+        start_full = self.start_configuration(req.start, indices, req.group)
         if req.goal_poses:
             monitor.report("ik")
             t_ik = time.monotonic()
@@ -392,8 +392,8 @@ class MotionPlanner:
         else:
             goal_full = self._goal_state(req, start_full, indices)
         t_val = time.monotonic()
-        self._check_free(start_full, errors.StartInCollision, "start")
-        self._check_free(goal_full, errors.GoalInCollision, "goal")
+        self.check_free(start_full, errors.StartInCollision, "start")
+        self.check_free(goal_full, errors.GoalInCollision, "goal")
         stats.validation_time = time.monotonic() - t_val
 
         self._search_checker = self._search_checker_for(req, start_full, goal_full)
@@ -526,9 +526,6 @@ class MotionPlanner:
             out[i] = min(max(v, lower[i]), upper[i])
         return out
 
-    def _start_state(self, req: MotionRequest, indices) -> np.ndarray:
-        return self.start_configuration(req.start, indices, req.group)
-
     def start_configuration(self, start: dict | None, indices, group: str = "") -> np.ndarray:
         """Full configuration of ``start`` ({joint: value}, checked: names, NaN, limits, every joint of
         ``indices`` given); joints it does not name are at neutral."""
@@ -548,10 +545,6 @@ class MotionPlanner:
         if req.goal_poses:
             return self._solve_pose_goal(req, start_full, indices, time.monotonic() + float(req.time_budget))
         return self._goal_state(req, start_full, indices)
-
-    def check_free(self, q: np.ndarray, error_cls, what: str) -> None:
-        """Raise ``error_cls`` naming the colliding pairs if the full configuration ``q`` collides."""
-        self._check_free(q, error_cls, what)
 
     def _goal_state(self, req: MotionRequest, start_full: np.ndarray, indices) -> np.ndarray:
         region = getattr(req, "goal_region", None)
@@ -585,7 +578,8 @@ class MotionPlanner:
             raise errors.InvalidRequest("give either goal_joints or goal_poses, not both")
         return solve_pose_goal(self.robot, self.checker, req.group, req.goal_poses or {}, start_full, indices, deadline)
 
-    def _check_free(self, q: np.ndarray, error_cls, what: str) -> None:
+    def check_free(self, q: np.ndarray, error_cls, what: str) -> None:
+        """Raise ``error_cls`` naming the colliding pairs if the full configuration ``q`` collides."""
         if self.checker.is_valid(q):
             return
         pairs = list(self.checker.colliding_pairs(q))
