@@ -22,6 +22,7 @@ import numpy as np
 import pinocchio as pin
 
 from maru_planner import errors
+from maru_planner.planning.links import check_link
 
 LOCAL = pin.ReferenceFrame.LOCAL
 PROJECTION_ITERATIONS = 30
@@ -117,8 +118,7 @@ class PathConstraints:
     def check_links(self, robot) -> None:
         """InvalidLink for a constrained link the robot does not have."""
         for link in self.links():
-            if not robot.model.existFrame(link):
-                raise errors.InvalidLink(f"path constraint link {link!r} is not a link of {robot.name}")
+            check_link(robot, link, "path constraint link")
 
     def violation(self, robot, q: np.ndarray) -> tuple[float, float]:
         """(orientation violation in rad, position violation in m) at ``q``: how far outside; 0 = satisfied."""
