@@ -27,14 +27,20 @@ from maru_planner.planning.registry import PLANNERS, ArmPlannerSpec
 
 def compute_fk(robot, q: np.ndarray, links: Sequence[str] = ()) -> dict[str, np.ndarray]:
     """{link: 4x4 pose in the root frame} at full configuration ``q``; every link when ``links`` is empty."""
-    q = np.asarray(q, dtype=float)
-    if q.shape != (robot.nq,) or not np.all(np.isfinite(q)):
-        raise errors.InvalidState(f"robot state must be {robot.nq} finite values, got shape {q.shape}")
+    q = _robot_state(robot, q)
     wanted = list(links) or link_names(robot)
     ids = [check_link(robot, link) for link in wanted]
     data = robot.model.createData()
     pin.framesForwardKinematics(robot.model, data, q)
     return {link: data.oMf[fid].homogeneous.copy() for link, fid in zip(wanted, ids, strict=True)}
+
+
+def _robot_state(robot, q: np.ndarray) -> np.ndarray:
+    """``q`` as a float array; InvalidState unless it is ``robot.nq`` finite values."""
+    q = np.asarray(q, dtype=float)
+    if q.shape != (robot.nq,) or not np.all(np.isfinite(q)):
+        raise errors.InvalidState(f"robot state must be {robot.nq} finite values, got shape {q.shape}")
+    return q
 
 
 @dataclass
@@ -54,9 +60,7 @@ def check_state_validity(
     robot, checker, q: np.ndarray, constraints: PathConstraints | None = None
 ) -> StateValidity:
     """Collisions (self, scene, attached objects), joint limits and ``constraints`` at full configuration ``q``."""
-    q = np.asarray(q, dtype=float)
-    if q.shape != (robot.nq,) or not np.all(np.isfinite(q)):
-        raise errors.InvalidState(f"robot state must be {robot.nq} finite values, got shape {q.shape}")
+    q = _robot_state(robot, q)
     pairs = list(checker.colliding_pairs(q))
     closest, distance = checker.closest_pair(q)
     within = robot.within_limits(q)
