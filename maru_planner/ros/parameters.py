@@ -135,11 +135,14 @@ def declare_parameters(node: Node, specs: Mapping[str, ParamSpec]) -> dict[str, 
     Raises InvalidParameter (one line naming the parameter) for a value of the wrong type or
     outside its range/choices, from a params file or ``-p``.
     """
-    values = {}
     for name, spec in specs.items():
         _declare(node, name, spec)
-        values[name] = read_parameter(node, name, spec)
-    return values
+    return read_parameters(node, specs)
+
+
+def read_parameters(node: Node, specs: Mapping[str, ParamSpec]) -> dict[str, Any]:
+    """The current values of the declared ``specs``, each checked (InvalidParameter if bad)."""
+    return {name: read_parameter(node, name, spec) for name, spec in specs.items()}
 
 
 def read_parameter(node: Node, name: str, spec: ParamSpec) -> Any:

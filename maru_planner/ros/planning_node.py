@@ -351,7 +351,7 @@ class PlanningNode(ManagedNode):
 
     def configure(self) -> None:
         """Read the parameters, load the robot and scene, start the workers, create topics and services."""
-        values = {name: parameters.read_parameter(self, name, spec) for name, spec in self._specs.items()}
+        values = parameters.read_parameters(self, self._specs)
         self.settings = NodeSettings(**{name: values[name] for name in NODE_PARAMS})
         self.config = _checked_config(lambda: planner_config(values))
         self._description_files = self._robot_description_files()

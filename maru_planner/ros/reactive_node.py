@@ -91,6 +91,7 @@ class NodeSettings:
 
 NODE_SPECS = dataclass_params(NodeSettings)
 STRIP_SPECS = dataclass_params(StripParams)
+SPECS = {**STRIP_SPECS, **NODE_SPECS}  # every parameter the node declares
 ROS_PARAMETERS = ("use_sim_time",)  # declared by rclpy itself
 
 
@@ -145,7 +146,7 @@ class ReactiveNode(ManagedNode):
     def __init__(self, **kwargs: Any) -> None:
         """InvalidParameter (one line) for a bad parameter; with ``autostart`` what configuring raises."""
         super().__init__("reactive_node", **kwargs)
-        values = parameters.declare_parameters(self, {**STRIP_SPECS, **NODE_SPECS})
+        values = parameters.declare_parameters(self, SPECS)
         self.settings = NodeSettings(**{name: values[name] for name in NODE_SPECS})
         self.warnings = ThrottledWarnings(self.get_logger(), self.settings.warn_throttle_period)
 
@@ -164,16 +165,13 @@ class ReactiveNode(ManagedNode):
         self._watchdog: Timer | None = None
         self._status_timer: Timer | None = None
         self._inputs: list[Subscription] = []
-        parameters.add_on_set_parameters_callback(
-            self, {**STRIP_SPECS, **NODE_SPECS}, self.when_configured(self.apply_parameters)
-        )
+        parameters.add_on_set_parameters_callback(self, SPECS, self.when_configured(self.apply_parameters))
         self.start()
 
     # ------------------------------------------------------------ lifecycle
     def configure(self) -> None:
         """Read the parameters, build the controller, create the publishers, follow clock jumps."""
-        specs = {**STRIP_SPECS, **NODE_SPECS}
-        values = {name: parameters.read_parameter(self, name, spec) for name, spec in specs.items()}
+        values = parameters.read_parameters(self, SPECS)
         self.settings = NodeSettings(**{name: values[name] for name in NODE_SPECS})
         self.controller = ElasticStripController(StripParams(**{name: values[name] for name in STRIP_SPECS}))
         self.warnings.period = self.settings.warn_throttle_period
