@@ -30,7 +30,6 @@ which ran). Falling back rather than rejecting keeps the id usable from every en
 from __future__ import annotations
 
 import time
-from functools import partial
 from typing import Any
 
 import numpy as np
@@ -40,7 +39,7 @@ from ompl import util as ou
 
 from maru_planner.params import ParamSpec
 from maru_planner.planning.checkers import is_sphere_checker
-from maru_planner.planning.planner_params import PlannerParams
+from maru_planner.planning.planner_params import PlannerParams, stored_params
 from maru_planner.planning.space import EdgeChecker
 
 COMPILED_RRTC_PARAMS: dict[str, ParamSpec] = {
@@ -80,11 +79,7 @@ class CompiledRRTConnect(ob.Planner):
         super().__init__(si, name)
         self._si = si
         self._edges = edge_checker
-        self._values = {name: spec.default for name, spec in COMPILED_RRTC_PARAMS.items()}
-        self._params = PlannerParams(name)
-        for spec in COMPILED_RRTC_PARAMS.values():
-            self._params.declare_param(spec, partial(self._values.__setitem__, spec.name),
-                                       partial(self._values.__getitem__, spec.name))  # fmt: skip
+        self._params, self._values = stored_params(name, COMPILED_RRTC_PARAMS)
         self._seed_rng = ou.RNG()
         self._fallback: og.RRTConnect | None = None
         self._trees: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None

@@ -6,8 +6,8 @@ callers set them by name through ``planner->params()``. OMPL 2.0.1's nanobind bi
 expose ``ParamSet`` (``Planner.params()`` raises "Unable to convert function return value"), so
 this module provides the same mechanism on the Python side:
 
-* a Python planner (:class:`~maru_planner.planning.rc_rrt.RCRRT`) owns a :class:`PlannerParams`,
-  declares each parameter with its setter and getter in ``__init__`` and returns it from ``params()``;
+* a Python planner (:class:`~maru_planner.planning.rc_rrt.RCRRT`) owns a :class:`PlannerParams`
+  (:func:`stored_params`: values in a dict) and returns it from ``params()``;
 * an OMPL C++ planner gets a :class:`PlannerParams` bound to the setters and getters its C++
   constructor declares, under the same names (:func:`ompl_params`).
 
@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 from maru_planner.errors import InvalidRequest
@@ -63,6 +64,15 @@ class PlannerParams:
             known = ", ".join(self._declared) or "none"
             raise InvalidRequest(f"planner {self.owner} has no parameter {name!r}; known: {known}", source="planner")
         return declared
+
+
+def stored_params(owner: str, specs: Mapping[str, ParamSpec]) -> tuple[PlannerParams, dict[str, Any]]:
+    """A Python planner's :class:`PlannerParams` whose values live in the returned dict (the specs' defaults)."""
+    values = {name: spec.default for name, spec in specs.items()}
+    params = PlannerParams(owner)
+    for name, spec in specs.items():
+        params.declare_param(spec, partial(values.__setitem__, name), partial(values.__getitem__, name))
+    return params, values
 
 
 def ompl_params(

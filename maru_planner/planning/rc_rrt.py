@@ -32,8 +32,6 @@ nanobind trampoline cannot pass a ``PlannerData&`` from C++ to Python, so do not
 
 from __future__ import annotations
 
-from functools import partial
-
 import numpy as np
 from ompl import base as ob
 from ompl import geometric as og
@@ -41,7 +39,7 @@ from ompl import util as ou
 
 from maru_planner.params import ParamSpec
 from maru_planner.planning.kdtree import GrowingKDTree
-from maru_planner.planning.planner_params import PlannerParams
+from maru_planner.planning.planner_params import PlannerParams, stored_params
 
 RCRRT_PARAMS: dict[str, ParamSpec] = {
     spec.name: spec
@@ -66,11 +64,7 @@ class RCRRT(ob.Planner):
         super().__init__(si, name)
         self._si = si
         self._edges = edge_checker
-        self._values = {name: spec.default for name, spec in RCRRT_PARAMS.items()}
-        self._params = PlannerParams(name)
-        for spec in RCRRT_PARAMS.values():
-            self._params.declare_param(spec, partial(self._values.__setitem__, spec.name),
-                                       partial(self._values.__getitem__, spec.name))  # fmt: skip
+        self._params, self._values = stored_params(name, RCRRT_PARAMS)
         self._seed_rng = ou.RNG()
         self.exhausted = False
         self.collisions = 0
