@@ -279,10 +279,6 @@ class SceneStore:
         with self._lock:
             return copy.deepcopy(self._scene.to_dict()), self.version
 
-    def scene(self):
-        scene_dict, _ = self.snapshot()
-        return Scene.from_dict(scene_dict)
-
     def apply(
         self, obstacles: list[SceneObstacle], clear: bool, frame: str, attachments: manipulation.Attachments
     ) -> list[str]:
@@ -367,8 +363,6 @@ class PlanningNode(ManagedNode):
             f"scene {len(self._scene.snapshot()[0].get('obstacles', []))} obstacles, "
             f"{self.settings.workers} workers, queue_size {self.settings.queue_size}; {self._description_origin}"
         )
-
-    # ------------------------------------------------------------ set-up
 
     def activate(self) -> None:
         self._marker_subscribers = 0  # the marker timer sends the scene to whoever listens now
@@ -650,9 +644,7 @@ class PlanningNode(ManagedNode):
             deadline = time.monotonic() + motion_request.time_budget
             result = await self._in_worker(_plan_in_context, motion_request, deadline, monitor)
         except Exception as exc:  # noqa: BLE001 - every failure becomes an error code
-            answer.error = conv.error_msg(exc, source="node")
-            self._log_failure(name, answer.error)
-            return answer
+            return self._failed(name, answer, exc)
         answer.error = conv.result_error_msg(result)
         answer.planning_time = float(getattr(result.stats, "total_time", 0.0) or 0.0)
         answer.stats = conv.stats_msg(result.stats)
@@ -740,9 +732,7 @@ class PlanningNode(ManagedNode):
             deadline = time.monotonic() + timeout
             q = await self._in_worker(_ik_in_context, group, targets, seed, strict, deadline, request.avoid_collisions)
         except Exception as exc:  # noqa: BLE001
-            response.error = conv.error_msg(exc, source="node")
-            self._log_failure("compute_ik", response.error)
-            return response
+            return self._failed("compute_ik", response, exc)
         response.error = conv.error_msg(None)
         response.solution = conv.joint_state_msg(self._robot.joint_names, q, self.get_clock().now().to_msg())
         return response
@@ -760,10 +750,8 @@ class PlanningNode(ManagedNode):
                 attachments=self._attachments,
             )  # fmt: skip
         except Exception as exc:  # noqa: BLE001
-            response.error = conv.error_msg(exc, source="scene")
             response.obstacle_names = [o["name"] for o in self._scene.snapshot()[0].get("obstacles", [])]
-            self._log_failure("apply_scene", response.error)
-            return response
+            return self._failed("apply_scene", response, exc, source="scene")
         response.error = conv.error_msg(None)
         self._publish_markers()
         return response
@@ -811,8 +799,9 @@ class PlanningNode(ManagedNode):
             self._log_failure("compute_cartesian_path", response.error)
         return response
 
-    def _failed(self, service: str, response, exc: BaseException):
-        response.error = conv.error_msg(exc, source="node")
+    def _failed(self, service: str, response: Any, exc: BaseException, source: str = "node") -> Any:
+        """``response`` (or action result) with ``exc`` as its error, logged."""
+        response.error = conv.error_msg(exc, source=source)
         self._log_failure(service, response.error)
         return response
 
