@@ -30,8 +30,8 @@ from maru_planner import errors
 from maru_planner.planning import timing
 from maru_planner.planning.links import check_link
 from maru_planner.planning.types import PlanStatus, Trajectory, status_of_error
+from maru_planner.robot.ik import DampedLeastSquares
 
-LOCAL = pin.ReferenceFrame.LOCAL
 ROTATION_STEP_RADIUS = 0.1  # m: a rotation step of max_step / this radius moves a point this far as much as max_step
 IK_ITERATIONS = 20
 POSITION_TOLERANCE = 1e-4  # m
@@ -137,25 +137,23 @@ def interpolate_poses(start: np.ndarray, waypoints: list[np.ndarray], max_step: 
 
 
 class _StepIK:
-    """Damped least squares from the previous state to one link pose, the group's joints only."""
+    """Damped least squares (the IK's :class:`DampedLeastSquares`) from the previous state to one link pose,
+    the group's joints only."""
 
     def __init__(self, robot, link: str, indices: np.ndarray):
-        self.robot, self.indices = robot, indices
-        self.fid = robot.model.getFrameId(link)
-        self.data = robot.model.createData()
+        self.robot, self.link, self.indices = robot, link, indices
+        self.all_free = np.ones(len(indices))
         self.lower, self.upper = robot.lower_limits[indices], robot.upper_limits[indices]
 
     def solve(self, q: np.ndarray, target: np.ndarray) -> np.ndarray | None:
-        model, data, goal = self.robot.model, self.data, pin.SE3(target[:3, :3].copy(), target[:3, 3].copy())
+        problem = DampedLeastSquares(self.robot, {self.link: target}, self.indices)
         q = q.copy()
         for _ in range(IK_ITERATIONS):
-            pin.computeJointJacobians(model, data, q)
-            error = pin.updateFramePlacement(model, data, self.fid).actInv(goal)
-            e = pin.log6(error).vector
+            problem.residual(q, True)
+            e = problem.err
             if np.linalg.norm(e[:3]) < POSITION_TOLERANCE and np.linalg.norm(e[3:]) < ROTATION_TOLERANCE:
                 return q
-            J = pin.Jlog6(error.inverse()) @ pin.getFrameJacobian(model, data, self.fid, LOCAL)[:, self.indices]
-            step = J.T @ np.linalg.solve(J @ J.T + DAMPING * np.eye(6), e)
+            step = problem.step(DAMPING, self.all_free)
             q[self.indices] = np.clip(q[self.indices] + step, self.lower, self.upper)
         return None
 

@@ -51,7 +51,7 @@ def _se3(T: np.ndarray) -> pin.SE3:
     return pin.SE3(T[:3, :3].copy(), T[:3, 3].copy())
 
 
-class _DLS:
+class DampedLeastSquares:
     """One robot + targets: residual, Jacobian and damped steps, buffers reused across iterations."""
 
     def __init__(self, robot: RobotModel, targets: Mapping[str, np.ndarray], idx: np.ndarray):
@@ -152,7 +152,7 @@ def solve_ik_numeric(
     """
     q_seed = _checked_seed(robot, targets, q_seed)
     idx = robot.group_joint_indices(group)
-    problem = _DLS(robot, targets, idx)
+    problem = DampedLeastSquares(robot, targets, idx)
     rng = rng or np.random.default_rng()
     lo, hi = robot.lower_limits[idx], robot.upper_limits[idx]
     revolute = _revolute_mask(robot)[idx]
@@ -181,7 +181,7 @@ def _revolute_mask(robot: RobotModel) -> np.ndarray:
     return np.array([n.startswith("JointModelR") and "Unbounded" not in n for n in names])
 
 
-def _attempt(problem: _DLS, q, lo, hi, revolute, tol, max_iters, max_step, deadline) -> float:
+def _attempt(problem: DampedLeastSquares, q, lo, hi, revolute, tol, max_iters, max_step, deadline) -> float:
     """Descend with revolute limits relaxed, wrap angles into the limits; if that fails, descend with limits."""
     idx = problem.idx
     loose_lo = np.where(revolute, lo - 2 * np.pi, lo)
@@ -200,7 +200,7 @@ def _attempt(problem: _DLS, q, lo, hi, revolute, tol, max_iters, max_step, deadl
     return _descend(problem, q, lo, hi, tol, max_iters, max_step, deadline)
 
 
-def _descend(problem: _DLS, q, lo, hi, tol, max_iters, max_step, deadline) -> float:
+def _descend(problem: DampedLeastSquares, q, lo, hi, tol, max_iters, max_step, deadline) -> float:
     """Damped Gauss-Newton from q (modified in place); returns the final residual."""
     idx = problem.idx
     residual = problem.residual(q, True)
