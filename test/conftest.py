@@ -19,6 +19,7 @@ from pathlib import Path
 
 import pytest
 
+from maru_planner.robot import RobotModel, load_example_robot
 from maru_planner.ros.env import configure_loopback_dds
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
@@ -48,6 +49,16 @@ def _unused_domain_id() -> int:
 def pytest_configure(config):
     configure_loopback_dds(domain_id=_unused_domain_id())
     os.environ.setdefault("MPLBACKEND", "Agg")
+
+
+@pytest.fixture(scope="module")
+def panda() -> RobotModel:
+    return load_example_robot("panda")
+
+
+@pytest.fixture(scope="module")
+def maru1() -> RobotModel:
+    return RobotModel.maru1()
 
 
 @pytest.fixture(scope="session")

@@ -17,21 +17,11 @@ from maru_planner.planning import rrtc_kernel as kernel
 from maru_planner.planning.compiled_rrtc import CompiledRRTConnect
 from maru_planner.planning.problems import PROBLEMS
 from maru_planner.planning.space import EdgeChecker, GroupSpace
-from maru_planner.robot import RobotModel, load_example_robot
+from maru_planner.robot import RobotModel
 from maru_planner.scene import Obstacle, Scene
 
 ARM = [f"panda_joint{i}" for i in range(1, 8)]
 RESOLUTION = 0.05
-
-
-@pytest.fixture(scope="module")
-def panda():
-    return load_example_robot("panda")
-
-
-@pytest.fixture(scope="module")
-def maru1():
-    return RobotModel.maru1()
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -204,13 +194,12 @@ def test_a_goal_inside_an_obstacle_ends_at_the_termination_condition(panda):
     assert (data.numVertices(), data.numEdges()) == (nodes, edges)
 
 
-def test_on_the_exact_checker_it_falls_back_to_ompl_rrtconnect(maru1):
+def test_on_the_exact_checker_it_falls_back_to_ompl_rrtconnect(maru1, panda):
     scene = Scene.from_yaml(PROBLEMS["maru13"].scene_path)
     planner = MotionPlanner.from_scene(maru1, scene, PlannerConfig(collision_model="exact"))
     res = planner.plan(paper_request(maru1, "maru13", simplify=False))
     assert res.success, res.message
     assert res.stats.planner_id == "CompiledRRTConnect" and res.stats.nodes > 2
-    panda = load_example_robot("panda")
     gs = arm_space(panda)
     si = og.SimpleSetup(gs.space).getSpaceInformation()
     assert not CompiledRRTConnect(si, EdgeChecker(gs, CollisionChecker(panda), RESOLUTION)).compiled

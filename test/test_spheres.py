@@ -10,18 +10,7 @@ from maru_planner.collision import CollisionChecker
 from maru_planner.collision.batch_fk import KinematicTree, batch_joint_poses, joint_poses_nb
 from maru_planner.collision.sphere_model import SphereFitOptions, fit_geometry, subdivide, surface_of
 from maru_planner.collision.spheres import SphereCollisionChecker, densify, verify_path
-from maru_planner.robot import RobotModel, load_example_robot
 from maru_planner.scene import Obstacle, Scene
-
-
-@pytest.fixture(scope="module")
-def panda():
-    return load_example_robot("panda")
-
-
-@pytest.fixture(scope="module")
-def maru1():
-    return RobotModel.maru1()
 
 
 def random_scene(rng: np.random.Generator, n: int = 6, center=(0.0, 0.0, 0.45), spread=(0.6, 0.6, 0.45)) -> Scene:
