@@ -22,7 +22,11 @@ from hostile_inputs import (
     sim_worlds,
 )
 
+from maru_planner.base.biped.world import load_world
+from maru_planner.base.grid import OccupancyGrid
 from maru_planner.errors import MaruError
+from maru_planner.planning.cli import load_scene
+from maru_planner.sim import World
 
 TYPED = (MaruError, OSError)
 
@@ -33,41 +37,20 @@ def files(tmp_path_factory, request):
     report_counts(request, ["maru-plan", "maru-base-plan", "maru-reactive-sim"])
 
 
-def test_scene_files(files):
-    from maru_planner.planning.cli import load_scene
-
-    def load(document):
-        path = files.document(document)
-        return loader_outcome(lambda: load_scene(path), f"scene {document!r:.200}", TYPED)
-
-    run_batch("maru-plan", scene_documents(), load, SUITE_EXAMPLES["scene_files"])
+LOADERS = {  # file kind -> (the CLI that reads it, generator, Files writer, loader, SUITE_EXAMPLES key)
+    "scene": ("maru-plan", scene_documents, Files.document, load_scene, "scene_files"),
+    "map": ("maru-base-plan", map_files, Files.map_file, OccupancyGrid.from_yaml, "map_files"),
+    "biped world": ("maru-base-plan", biped_worlds, Files.document, load_world, "biped_files"),
+    "sim world": ("maru-reactive-sim", sim_worlds, Files.document, World.from_yaml, "sim_files"),
+}
 
 
-def test_map_files(files):
-    from maru_planner.base.grid import OccupancyGrid
+@pytest.mark.parametrize("kind", LOADERS)
+def test_generated_files_load_or_raise_a_typed_error(files, kind):
+    cli, generator, write, loader, examples = LOADERS[kind]
 
     def load(generated):
-        path = files.map_file(generated)
-        return loader_outcome(lambda: OccupancyGrid.from_yaml(path), f"map {generated!r:.200}", TYPED)
+        path = write(files, generated)
+        return loader_outcome(lambda: loader(path), f"{kind} {generated!r:.200}", TYPED)
 
-    run_batch("maru-base-plan", map_files(), load, SUITE_EXAMPLES["map_files"])
-
-
-def test_biped_world_files(files):
-    from maru_planner.base.biped.world import load_world
-
-    def load(document):
-        path = files.document(document)
-        return loader_outcome(lambda: load_world(path), f"biped world {document!r:.200}", TYPED)
-
-    run_batch("maru-base-plan", biped_worlds(), load, SUITE_EXAMPLES["biped_files"])
-
-
-def test_simulator_world_files(files):
-    from maru_planner.sim import World
-
-    def load(document):
-        path = files.document(document)
-        return loader_outcome(lambda: World.from_yaml(path), f"sim world {document!r:.200}", TYPED)
-
-    run_batch("maru-reactive-sim", sim_worlds(), load, SUITE_EXAMPLES["sim_files"])
+    run_batch(cli, generator(), load, SUITE_EXAMPLES[examples])
