@@ -189,14 +189,14 @@ class BasePlannerNode(ManagedNode):
         self, planner_id: str, footprint: np.ndarray, start_msg, goal_msg, time_limit: float,
         monitor: PlanMonitor | None = None,
     ):
-        """Returns (error_code, message, result or None, nav_msgs/Path of the result or None).
+        """Returns (error_code, message, result or None, nav_msgs/Path of the result, empty on failure).
 
         ``monitor`` watches and cancels the plan (the action's goals).
         """
         self.requests += 1
         grid = self.grid  # the map of this request, whatever arrives meanwhile
         if grid is None:
-            return E.NO_MAP, f"no map: {self.map_error}", None, None
+            return E.NO_MAP, f"no map: {self.map_error}", None, _empty_path("map")
         try:
             self._check_request(grid, start_msg, goal_msg, time_limit)
             planner = self._planner(planner_id or self.config.planner_id, footprint)
@@ -206,7 +206,7 @@ class BasePlannerNode(ManagedNode):
                 monitor=monitor,
             )
         except MaruError as exc:
-            return conv.error_code(exc), str(exc), None, None
+            return conv.error_code(exc), str(exc), None, _empty_path(grid.frame_id)
         return conv.STATUS_TO_ERROR[result.status], result.message, result, self._publish(result, grid)
 
     def _check_request(self, grid: OccupancyGrid, start_msg, goal_msg, time_limit: float) -> None:
@@ -279,10 +279,8 @@ class BasePlannerNode(ManagedNode):
             request.allowed_planning_time,
             monitor,
         )
-        response.error_code, response.error_msg = code, message
-        response.path.header.frame_id = self.grid.frame_id if self.grid is not None else "map"
+        response.error_code, response.error_msg, response.path = code, message, path_msg
         if result is not None:
-            response.path = path_msg
             stats = result.stats
             response.deciding_stage = stats.deciding_stage
             response.planning_time = float(stats.planning_time)
@@ -293,13 +291,10 @@ class BasePlannerNode(ManagedNode):
         return response
 
     async def _on_get_plan(self, request, response):
-        code, message, result, path_msg = await self._in_planning_thread(
+        code, message, _, path_msg = await self._in_planning_thread(
             self.plan, "", np.zeros((0, 2)), request.start, request.goal, 0.0
         )
-        if result is not None and result.success:
-            response.plan = path_msg
-        else:
-            response.plan.header.frame_id = self.grid.frame_id if self.grid is not None else "map"
+        response.plan = path_msg  # empty on failure
         self._log_outcome("make_plan", code, message)
         return response
 
@@ -308,6 +303,12 @@ class BasePlannerNode(ManagedNode):
             self.get_logger().info(f"{service}: {message}")
         else:
             self.get_logger().warning(f"{service}: error {code}: {message}")
+
+
+def _empty_path(frame_id: str) -> Path:
+    msg = Path()
+    msg.header.frame_id = frame_id
+    return msg
 
 
 def _feedback_msg(progress: Progress) -> PlanBasePathAction.Feedback:
