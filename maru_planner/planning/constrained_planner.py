@@ -25,7 +25,7 @@ import numpy as np
 from maru_planner import errors
 from maru_planner.params import ParamSpec
 from maru_planner.planning import postprocess
-from maru_planner.planning.cartesian import time_dense_path
+from maru_planner.planning.cartesian import end_margin, time_dense_path
 from maru_planner.planning.constraints import PathConstraints
 from maru_planner.planning.space import edge_states
 from maru_planner.planning.types import MotionRequest, MotionResult, PlanStats, PlanStatus, status_of_error
@@ -146,8 +146,7 @@ def _certify(planner, full: np.ndarray, deadline: float, stats: PlanStats) -> fl
     certifier = planner.certifier
     if certifier is None:
         return 0.0
-    ends = min(certifier.clearance(full[0]), certifier.clearance(full[-1]))
-    margin = min(planner.config.safety_margin, 0.5 * max(ends, 0.0))
+    margin = end_margin(planner, full[0], full[-1])
     certificate = certifier.certify_path(full, max(deadline, time.monotonic() + planner.config.certify_timeout),
                                          margin=margin)  # fmt: skip
     stats.certify_time, stats.min_clearance = certificate.seconds, certificate.min_clearance
