@@ -20,9 +20,10 @@ re-read the last map); a bad value is rejected with the reason. Any planner of
 only when its capabilities ask for them. Poses are in the map frame (an empty frame_id is taken
 as the map's).
 
-Plans run one at a time, in arrival order, on a planning thread (the planners share caches and
-numba workspaces); the service and action callbacks await them, so the executor keeps taking maps,
-feedback timers and cancel requests while a plan runs.
+Plans run one at a time, in arrival order, on a planning thread (a search may take the whole 2 GB
+search budget, and the built planners with their footprint caches are shared); the service and
+action callbacks await them, so the executor keeps taking maps, feedback timers and cancel requests
+while a plan runs.
 """
 
 from __future__ import annotations
