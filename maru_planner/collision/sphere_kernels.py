@@ -123,6 +123,26 @@ def group_vs_obstacle(
     return touched
 
 
+@njit(cache=True, inline="always")
+def _cluster_meets(
+    c, g, k, reach, padding, pair_tag, s_inner, s_radius, c_start, world, cworld,
+    box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact, amb, n_amb, mark,
+):  # fmt: skip
+    """Cluster ``c`` of group ``g`` against obstacle ``k`` for :func:`_scene_by_grid`: -1 when an inner ball hits,
+    else ``n_amb``, plus one when an outer sphere touches and (g, k) is not yet in ``amb`` (``pair_tag``)."""
+    hit = cluster_vs_obstacle(
+        c, k, reach, padding, s_inner, s_radius, c_start, world, cworld,
+        box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact,
+    )  # fmt: skip
+    if hit == 2:
+        return -1
+    if hit == 1 and mark[1, k] != pair_tag and n_amb < amb.shape[0]:
+        mark[1, k] = pair_tag
+        amb[n_amb, 0], amb[n_amb, 1], amb[n_amb, 2] = 0, g, k
+        return n_amb + 1
+    return n_amb
+
+
 @njit(cache=True)
 def _scene_by_grid(
     padding, s_inner, s_radius, c_start, c_radius, g_joint, g_clusters, world, cworld,
@@ -160,27 +180,19 @@ def _scene_by_grid(
                             if mark[0, k] == tag:
                                 continue
                             mark[0, k] = tag
-                            hit = cluster_vs_obstacle(
-                                c, k, reach, padding, s_inner, s_radius, c_start, world, cworld,
-                                box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact,
+                            n_amb = _cluster_meets(
+                                c, g, k, reach, padding, pair_tag, s_inner, s_radius, c_start, world, cworld,
+                                box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact, amb, n_amb, mark,
                             )  # fmt: skip
-                            if hit == 2:
+                            if n_amb < 0:
                                 return -1
-                            if hit == 1 and mark[1, k] != pair_tag and n_amb < amb.shape[0]:
-                                mark[1, k] = pair_tag
-                                amb[n_amb, 0], amb[n_amb, 1], amb[n_amb, 2] = 0, g, k
-                                n_amb += 1
             for k in big:
-                hit = cluster_vs_obstacle(
-                    c, k, reach, padding, s_inner, s_radius, c_start, world, cworld,
-                    box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact,
+                n_amb = _cluster_meets(
+                    c, g, k, reach, padding, pair_tag, s_inner, s_radius, c_start, world, cworld,
+                    box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact, amb, n_amb, mark,
                 )  # fmt: skip
-                if hit == 2:
+                if n_amb < 0:
                     return -1
-                if hit == 1 and mark[1, k] != pair_tag and n_amb < amb.shape[0]:
-                    mark[1, k] = pair_tag
-                    amb[n_amb, 0], amb[n_amb, 1], amb[n_amb, 2] = 0, g, k
-                    n_amb += 1
     return n_amb
 
 
