@@ -34,7 +34,6 @@ from ompl import base as ob
 from ompl import util as ou
 
 from maru_planner import errors
-from maru_planner.collision import CollisionChecker
 from maru_planner.monitor import PlanMonitor
 from maru_planner.planning import postprocess, timing
 from maru_planner.planning.cartesian import CartesianRequest, CartesianResult, compute_cartesian_path
@@ -302,8 +301,7 @@ class MotionPlanner:
                 certify=False,
                 time_parameterization="trapezoid",
             )
-            checker = CollisionChecker(self.robot, self.certifier.checker.scene, padding=margin)
-            local = MotionPlanner(self.robot, checker, config)
+            local = MotionPlanner(self.robot, padded_checker(self.robot, self.certifier.checker, margin), config)
             sub = MotionRequest(
                 request.group, start=dict(zip(names, qa, strict=True)),
                 goal_joints={n: float(qb[names.index(n)]) for n in group}, planner_id="RRTConnect",
@@ -397,7 +395,8 @@ class MotionPlanner:
         stats.validation_time = time.monotonic() - t_val
 
         self._search_checker = self._search_checker_for(req, start_full, goal_full)
-        gs = self._group_setup(names, indices, start_full, resolution).gs
+        setup = self._group_setup(names, indices, start_full, resolution)
+        gs = setup.gs
         start, goal = start_full[indices], goal_full[indices]
         checks0 = self._search_checker.check_count
         try:
@@ -406,7 +405,7 @@ class MotionPlanner:
             stats.raw_waypoints = len(raw)
             stats.raw_path_length = postprocess.path_length(raw)
             monitor.report("simplify", best_cost=stats.raw_path_length)
-            path = self._simplify(req, gs, raw, seed, deadline, stats, resolution)
+            path = self._simplify(req, setup.edges, raw, seed, deadline, stats)
         finally:
             stats.collision_checks = int(self._search_checker.check_count - checks0)
 
@@ -720,11 +719,11 @@ class MotionPlanner:
         return path
 
     # --- post-processing --------------------------------------------------------------------
-    def _simplify(self, req, gs, raw, seed, deadline, stats, resolution) -> np.ndarray:
+    def _simplify(self, req, edges: EdgeChecker, raw, seed, deadline, stats) -> np.ndarray:
+        """``raw`` shortcut on ``edges`` (the search's group, checker and motion resolution)."""
         if not getattr(req, "simplify", True) or len(raw) <= 2:
             return raw
         t_simp = time.monotonic()
-        edges = EdgeChecker(gs, self._search_checker, resolution)
         rng = np.random.default_rng(seed)
         monitor = self._monitor
 
