@@ -21,7 +21,7 @@ from __future__ import annotations
 import threading
 import time
 from collections.abc import Callable, Sequence
-from typing import Any
+from typing import Any, TypeVar
 
 import rclpy
 from action_msgs.msg import GoalStatus
@@ -46,6 +46,8 @@ from maru_planner_interfaces.srv import (
     PlanMotion,
     QueryPlanners,
 )
+
+AnswerT = TypeVar("AnswerT")
 
 
 class PlanningClient:
@@ -294,16 +296,11 @@ def goal_until_answered(client: ActionClient, goal: Any, timeout: float = 60.0) 
     matched the client's readers, and the goal's acceptance or result is lost. Only for goals that
     change nothing.
     """
-    deadline = time.monotonic() + timeout
-    attempt = 1.0
-    while True:
-        left = deadline - time.monotonic()
-        if left <= 0.0:
-            raise TimeoutError(f"no answer to a probe goal within {timeout} s")
-        try:
-            return send_plan_goal(client, goal, timeout=min(attempt, left)).result(min(attempt, left))
-        except TimeoutError:
-            attempt = min(2.0 * attempt, 8.0)  # a slow server gets more time on each try
+    return _until_answered(
+        lambda wait: send_plan_goal(client, goal, timeout=wait).result(wait),
+        timeout,
+        f"no answer to a probe goal within {timeout} s",
+    )
 
 
 def wait_for_future(future: Future, timeout: float, what: str):
@@ -326,12 +323,11 @@ def call_service(client, request, timeout: float = 60.0):
     if not client.wait_for_service(timeout_sec=timeout):
         raise TimeoutError(f"service {client.srv_name} not available after {timeout} s")
     future = client.call_async(request)
-    answered = threading.Event()
-    future.add_done_callback(lambda _future: answered.set())
-    if not answered.wait(timeout):  # blocks without polling: no CPU taken from the node being called
+    try:
+        return wait_for_future(future, timeout, f"response from {client.srv_name}")
+    except TimeoutError:
         client.remove_pending_request(future)
-        raise TimeoutError(f"no response from {client.srv_name} within {timeout} s")
-    return future.result()
+        raise
 
 
 def call_until_answered(client, request, timeout: float = 60.0):
@@ -343,14 +339,20 @@ def call_until_answered(client, request, timeout: float = 60.0):
     that comes back proves both directions, so later calls are safe. Only for requests
     that change nothing (they may be served more than once).
     """
+    failure = f"{client.srv_name} never answered within {timeout} s"
+    return _until_answered(lambda wait: call_service(client, request, wait), timeout, failure)
+
+
+def _until_answered(send: Callable[[float], AnswerT], timeout: float, failure: str) -> AnswerT:
+    """``send(wait)`` again and again, each try waiting longer, until one returns; after ``timeout``: TimeoutError."""
     deadline = time.monotonic() + timeout
     attempt = 1.0
     while True:
         left = deadline - time.monotonic()
         if left <= 0.0:
-            raise TimeoutError(f"{client.srv_name} never answered within {timeout} s")
+            raise TimeoutError(failure)
         try:
-            return call_service(client, request, min(attempt, left))
+            return send(min(attempt, left))
         except TimeoutError:
             attempt = min(2.0 * attempt, 8.0)  # a slow server gets more time on each try
 
