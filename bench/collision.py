@@ -41,7 +41,7 @@ import pinocchio as pin
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from maru_planner.collision import CollisionChecker, obstacle_geometry  # noqa: E402
+from maru_planner.collision import CollisionChecker  # noqa: E402
 from maru_planner.paths import config_path  # noqa: E402
 from maru_planner.robot import RobotModel, load_example_robot  # noqa: E402
 from maru_planner.scene import Obstacle, Scene  # noqa: E402
@@ -70,7 +70,7 @@ class NaiveChecker:
         n_robot = gm.ngeoms
         for o in scene.obstacles.values():
             placement = pin.SE3(o.pose[:3, :3].copy(), o.pose[:3, 3].copy())
-            gm.addGeometryObject(pin.GeometryObject(o.name, 0, 0, placement, obstacle_geometry(o)))
+            gm.addGeometryObject(pin.GeometryObject(o.name, 0, 0, placement, o.geometry()))
         gm.addAllCollisionPairs()
         links = [robot.model.frames[g.parentFrame].name for g in gm.geometryObjects[:n_robot]]
         for k in reversed(range(len(gm.collisionPairs))):

@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from maru_planner.collision import obstacle_geometry, self_collision_pairs
+from maru_planner.collision import self_collision_pairs
 from maru_planner.moveit_scene import PANDA_FINGERS_OPEN, iter_mbm_problems
 from maru_planner.paths import benchmarks_dir
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig
@@ -119,7 +119,7 @@ def peer_geometry(robot, scene, locked: dict | None):
     n_robot = geom.ngeoms
     for ob in scene.obstacles.values():
         placement = pin.SE3(ob.pose[:3, :3].copy(), ob.pose[:3, 3].copy())
-        geom.addGeometryObject(pin.GeometryObject(f"scene/{ob.name}", 0, 0, placement, obstacle_geometry(ob)))
+        geom.addGeometryObject(pin.GeometryObject(f"scene/{ob.name}", 0, 0, placement, ob.geometry()))
     moving = [i for i in range(n_robot) if geom.geometryObjects[i].parentJoint != 0]
     pairs = [(i, k) for k in range(n_robot, geom.ngeoms) for i in moving] + self_collision_pairs(robot)
     for i, j in pairs:

@@ -7,11 +7,11 @@ not pay numba's import.
 
 import importlib
 
-from maru_planner.collision.checker import CollisionChecker, obstacle_geometry, self_collision_pairs
+from maru_planner.collision.checker import CollisionChecker, self_collision_pairs
 
 _SPHERE_NAMES = ("PathVerification", "SphereCollisionChecker", "densify", "verify_path")
 
-__all__ = ["CollisionChecker", "obstacle_geometry", "self_collision_pairs", *_SPHERE_NAMES]
+__all__ = ["CollisionChecker", "self_collision_pairs", *_SPHERE_NAMES]
 
 
 def __getattr__(name: str):

@@ -37,11 +37,6 @@ from maru_planner.scene import BuildClock, Obstacle, Scene
 PAIR_LIST_LIMIT = 64  # reachable obstacles kept as pairs; beyond, the tree's per-check cost is lower
 
 
-def obstacle_geometry(obstacle: Obstacle) -> coal.CollisionGeometry:
-    """The coal shape of an obstacle, from its shape's table entry (``maru_planner/shapes.py``)."""
-    return obstacle.geometry()
-
-
 BROADPHASES = {
     "none": None,
     "naive": pin.BroadPhaseManager_NaiveCollisionManager,
