@@ -165,7 +165,6 @@ class SphereCollisionChecker:
         self._packed_robot = _kernels.pack_robot(*self._robot_args, *clusters) if self.use_numba else None
         self._robot_geoms = list(robot.collision_model.geometryObjects)
         self._exact_shapes = [obj.geometry for obj in self._robot_geoms]  # the exact checker's own shapes
-        self._amb = np.zeros((sm.n_groups * 8 + len(self.self_pairs), 3), dtype=np.int64)
         self._rot = np.empty((self.tree.njoints, 3, 3))
         self._pos = np.empty((self.tree.njoints, 3))
         self._sphere_pairs = self._expand_pairs()
