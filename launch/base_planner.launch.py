@@ -6,57 +6,30 @@ from ``/clock``), ``autostart`` (``false``: the node waits unconfigured for a li
 ``rviz`` (``true``: rviz2 with config/rviz/base_planner.rviz).
 """
 
-import os
-
-from ament_index_python.packages import get_package_share_directory
 from launch.actions import DeclareLaunchArgument
-from launch.conditions import IfCondition
 from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import Node
 
 from launch import LaunchDescription
+from maru_planner.ros.launch_args import common_arguments, common_overrides, rviz_node
 
 
 def generate_launch_description():
-    share = get_package_share_directory("maru_planner")
-    namespace = LaunchConfiguration("namespace")
-    use_sim_time = LaunchConfiguration("use_sim_time")
-    overrides = {
-        "map_topic": LaunchConfiguration("map_topic"),
-        "use_sim_time": use_sim_time,
-        "autostart": LaunchConfiguration("autostart"),
-    }
     return LaunchDescription(
         [
-            DeclareLaunchArgument(
-                "params_file",
-                default_value=os.path.join(share, "config", "base_planner.yaml"),
-                description="base_planner_node parameters",
-            ),
-            DeclareLaunchArgument("namespace", default_value="", description="namespace of the node"),
+            *common_arguments("base_planner_node", "base_planner.yaml", "base_planner.rviz"),
             DeclareLaunchArgument("map_topic", default_value="map", description="occupancy grid topic"),
-            DeclareLaunchArgument("use_sim_time", default_value="false", description="time from /clock"),
-            DeclareLaunchArgument(
-                "autostart", default_value="true", description="configure and activate at once (false: lifecycle)"
-            ),
-            DeclareLaunchArgument("rviz", default_value="false", description="start rviz2 with base_planner.rviz"),
             Node(
                 package="maru_planner",
                 executable="base_planner_node",
                 name="base_planner_node",
-                namespace=namespace,
+                namespace=LaunchConfiguration("namespace"),
                 output="screen",
-                parameters=[LaunchConfiguration("params_file"), overrides],
+                parameters=[
+                    LaunchConfiguration("params_file"),
+                    {**common_overrides(), "map_topic": LaunchConfiguration("map_topic")},
+                ],
             ),
-            Node(
-                package="rviz2",
-                executable="rviz2",
-                name="rviz2",
-                namespace=namespace,
-                arguments=["-d", os.path.join(share, "config", "rviz", "base_planner.rviz")],
-                parameters=[{"use_sim_time": use_sim_time}],
-                condition=IfCondition(LaunchConfiguration("rviz")),
-                output="screen",
-            ),
+            rviz_node("base_planner.rviz"),
         ]
     )

@@ -1,7 +1,8 @@
 """The three launch files: use_sim_time, namespace, params_file, autostart and rviz reach the nodes.
 
-``launch`` / ``launch_ros`` are not installed here: stand-ins record what each launch file asks for
-(arguments with their defaults, the nodes with their parameters, namespace and condition).
+``launch`` / ``launch_ros`` are not installed here: stand-ins record what each launch file (and
+``maru_planner.ros.launch_args``, which they share) asks for (arguments with their defaults, the nodes
+with their parameters, namespace and condition).
 """
 
 from __future__ import annotations
@@ -55,6 +56,7 @@ def launch_items(name: str, monkeypatch) -> tuple[dict[str, str], list[NodeActio
     }
     for module_name, module in fakes.items():
         monkeypatch.setitem(sys.modules, module_name, module)
+    monkeypatch.delitem(sys.modules, "maru_planner.ros.launch_args", raising=False)  # rebuilt on the stand-ins
     spec = importlib.util.spec_from_file_location(f"{name}_launch", REPO_ROOT / "launch" / f"{name}.launch.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
