@@ -29,7 +29,7 @@ import pinocchio as pin
 from maru_planner import errors
 from maru_planner.planning import timing
 from maru_planner.planning.links import check_link
-from maru_planner.planning.types import PlanStatus, Trajectory, status_of_error
+from maru_planner.planning.types import PlanStatus, Trajectory, answer_json, status_of_error
 from maru_planner.robot.ik import DampedLeastSquares
 
 ROTATION_STEP_RADIUS = 0.1  # m: a rotation step of max_step / this radius moves a point this far as much as max_step
@@ -83,15 +83,10 @@ class CartesianResult:
 
     def to_json_dict(self) -> dict:
         return {
-            "success": self.success,
-            "status": self.status.value,
-            "message": self.message,
+            **answer_json(self),
             "fraction": self.fraction,
             "stop_reason": self.stop_reason,
             "link": self.link,
-            "joint_names": list(self.joint_names),
-            "path": [] if self.path is None else self.path.tolist(),
-            "trajectory": None if self.trajectory is None else self.trajectory.to_dict(),
             "certified": self.certified,
             "min_clearance": self.min_clearance if math.isfinite(self.min_clearance) else None,
             "seconds": self.seconds,

@@ -5,7 +5,7 @@ from __future__ import annotations
 import enum
 import math
 from dataclasses import asdict, dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
@@ -191,13 +191,26 @@ class MotionResult:
 
     def to_json_dict(self) -> dict:
         """The ``maru-plan`` JSON shape."""
-        return {
-            "success": self.success,
-            "status": self.status.value,
-            "message": self.message,
-            "joint_names": list(self.joint_names),
-            "path": [] if self.path is None else self.path.tolist(),
-            "trajectory": None if self.trajectory is None else self.trajectory.to_dict(),
-            "stats": self.stats.to_dict(),
-            "seed": self.stats.seed,
-        }
+        return {**answer_json(self), "stats": self.stats.to_dict(), "seed": self.stats.seed}
+
+
+class PlanAnswer(Protocol):
+    """What every planning answer (:class:`MotionResult`, a Cartesian path's result) carries."""
+
+    status: PlanStatus
+    message: str
+    joint_names: list[str]
+    path: np.ndarray | None
+    trajectory: Trajectory | None
+
+
+def answer_json(answer: PlanAnswer) -> dict:
+    """The JSON fields every planning answer shares: success, status, message, joint names, path, trajectory."""
+    return {
+        "success": answer.status is PlanStatus.SUCCESS,
+        "status": answer.status.value,
+        "message": answer.message,
+        "joint_names": list(answer.joint_names),
+        "path": [] if answer.path is None else answer.path.tolist(),
+        "trajectory": None if answer.trajectory is None else answer.trajectory.to_dict(),
+    }
