@@ -84,13 +84,7 @@ def pose_from_msg(pose: Mapping | None, where: str) -> np.ndarray:
 def _vector(value: Any, keys: str, where: str, name: str) -> np.ndarray:
     if isinstance(value, Mapping):
         value = [value.get(k, 1.0 if k == "w" else 0.0) for k in keys]
-    try:
-        arr = np.asarray(value, dtype=float).reshape(-1)
-    except (TypeError, ValueError):
-        raise InvalidScene(f"{where}: {name} must be {len(keys)} numbers, got {value!r}") from None
-    if arr.size != len(keys) or not np.all(np.isfinite(arr)):
-        raise InvalidScene(f"{where}: {name} must be {len(keys)} finite numbers, got {value!r}")
-    return arr
+    return shapes.numbers(where, name, value, len(keys))
 
 
 def _load_yaml(source: str | Path | Mapping, kind: str) -> dict:
