@@ -19,10 +19,16 @@ from pathlib import Path
 
 import pytest
 
+from maru_planner.paths import config_path
+from maru_planner.planning.problems import PROBLEMS
 from maru_planner.robot import RobotModel, load_example_robot
 from maru_planner.ros.env import configure_loopback_dds
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
+# planning_node's default group (upper_body) and paper 000's 13-DOF problem over it
+GROUP_JOINTS = ["waist_yaw"] + [f"r_arm_j{i}" for i in range(1, 7)] + [f"l_arm_j{i}" for i in range(1, 7)]
+PAPER_START = PROBLEMS["maru13"].start_dict(GROUP_JOINTS)
+PAPER_GOAL = PROBLEMS["maru13"].goal_dict(GROUP_JOINTS)
 
 
 def _domain_in_use(domain: int, participants: int = 4) -> bool:
@@ -181,3 +187,63 @@ def node_process(tmp_path_factory):
         proc.stop()
         if died:
             print(f"--- log of {proc.proc.args}:\n{proc.log()}")
+
+
+@pytest.fixture(scope="module")
+def planner_node(node_process, rclpy_session):
+    """planning_node with the default config (Maru-1 upper body, desk + box scene), one per test module."""
+    proc = node_process(
+        "maru_planner.ros.planning_node", ["--ros-args", "--params-file", str(config_path("planner.yaml"))]
+    )
+    yield proc
+    assert proc.alive(), "planning_node died:\n" + proc.log()
+
+
+@pytest.fixture(scope="module")
+def tester(rclpy_session, request):
+    """One spinning client node per test module (discovery happens once, not per test)."""
+    spinning = SpinningNode(f"{request.module.__name__}_client")
+    yield spinning
+    spinning.destroy()
+
+
+def connected_planning_client(tester: SpinningNode, proc: NodeProcess, namespace: str = ""):
+    """A PlanningClient on ``tester`` once the node at ``proc`` serves plan_motion and has matched it."""
+    from maru_planner.ros.planning_client import PlanningClient
+
+    planning = PlanningClient(node=tester.node, namespace=namespace)
+    assert planning.plan_client.wait_for_service(timeout_sec=120.0), "plan_motion never appeared:\n" + proc.log()
+    planning.wait_until_ready(timeout=120.0)  # the node has matched us too: no first answer gets lost
+    return planning
+
+
+class BaseNodeClient:
+    """base_planner_node's plan_base_path service client and a latched map publisher on a spinning test node."""
+
+    def __init__(self, spinning: SpinningNode, proc: NodeProcess, namespace: str = ""):
+        from nav_msgs.msg import OccupancyGrid
+        from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+
+        from maru_planner_interfaces.srv import PlanBasePath
+
+        self.spinning, self.proc = spinning, proc
+        self.latched = QoSProfile(
+            depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL, reliability=ReliabilityPolicy.RELIABLE
+        )
+        self.map_pub = spinning.node.create_publisher(OccupancyGrid, f"{namespace}/map", self.latched)
+        self.plan_client = spinning.node.create_client(PlanBasePath, f"{namespace}/plan_base_path")
+
+    def publish_map(self, msg, expect_log: str, timeout: float = 20.0) -> None:
+        """Publish ``msg`` and wait until the node's log says ``expect_log`` once more."""
+        before = self.proc.log().count(expect_log)
+        self.map_pub.publish(msg)
+        logged = self.spinning.wait_for(lambda: self.proc.log().count(expect_log) > before, timeout=timeout)
+        assert logged, self.proc.log()
+
+    def publish_grid(self, grid, expect_log: str, timeout: float = 20.0) -> None:
+        """Publish a core OccupancyGrid as the map (see ``publish_map``)."""
+        from builtin_interfaces.msg import Time
+
+        from maru_planner.ros.base_conversions import grid_to_msg
+
+        self.publish_map(grid_to_msg(grid, grid.occupied, Time(), "map"), expect_log, timeout)

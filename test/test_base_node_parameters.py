@@ -3,15 +3,16 @@
 from __future__ import annotations
 
 import json
-import math
 import subprocess
 import sys
 
 import pytest
 import yaml
+from conftest import BaseNodeClient
 
 from maru_planner.base.scenes import table1
 from maru_planner.paths import config_path
+from maru_planner.ros.reactive_conversions import pose_stamped_msg
 
 pytestmark = pytest.mark.ros
 
@@ -30,34 +31,22 @@ def node(node_process, tmp_path_factory):
     return node_process(NODE_MODULE, ["--ros-args", "-r", f"__ns:={NS}", "--params-file", str(path)])
 
 
-class Client:
+class Client(BaseNodeClient):
     def __init__(self, spinning, proc):
-        from nav_msgs.msg import OccupancyGrid
         from rcl_interfaces.srv import DescribeParameters, SetParameters
-        from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
-        from maru_planner_interfaces.srv import PlanBasePath
-
-        self.spinning, self.proc = spinning, proc
-        node = spinning.node
-        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL,
-                             reliability=ReliabilityPolicy.RELIABLE)
-        self.map_pub = node.create_publisher(OccupancyGrid, f"{NS}/map", latched)
-        self.plan_client = node.create_client(PlanBasePath, f"{NS}/plan_base_path")
-        self.set_client = node.create_client(SetParameters, f"{NS}/base_planner_node/set_parameters")
-        self.describe_client = node.create_client(DescribeParameters, f"{NS}/base_planner_node/describe_parameters")
-
-    def publish_map(self, msg, expect_log: str):
-        before = self.proc.log().count(expect_log)
-        self.map_pub.publish(msg)
-        assert self.spinning.wait_for(lambda: self.proc.log().count(expect_log) > before, timeout=20), self.proc.log()
+        super().__init__(spinning, proc, namespace=NS)
+        self.set_client = spinning.node.create_client(SetParameters, f"{NS}/base_planner_node/set_parameters")
+        self.describe_client = spinning.node.create_client(
+            DescribeParameters, f"{NS}/base_planner_node/describe_parameters"
+        )
 
     def request(self, planner_id="", time_limit=0.0, goal=GOAL):
         from maru_planner_interfaces.srv import PlanBasePath
 
         req = PlanBasePath.Request()
         req.planner_id = planner_id
-        req.start, req.goal = _pose(START), _pose(goal)
+        req.start, req.goal = pose_stamped_msg(START, "map", 0.0), pose_stamped_msg(goal, "map", 0.0)
         req.allowed_planning_time = time_limit
         return self.spinning.call(self.plan_client, req, timeout=60)
 
@@ -75,16 +64,6 @@ class Client:
 
         request = DescribeParameters.Request(names=[name])
         return self.spinning.call(self.describe_client, request, timeout=30).descriptors[0]
-
-
-def _pose(pose):
-    from geometry_msgs.msg import PoseStamped
-
-    msg = PoseStamped()
-    msg.header.frame_id = "map"
-    msg.pose.position.x, msg.pose.position.y = float(pose[0]), float(pose[1])
-    msg.pose.orientation.z, msg.pose.orientation.w = math.sin(pose[2] / 2), math.cos(pose[2] / 2)
-    return msg
 
 
 def _map_with_soft_wall():

@@ -7,10 +7,12 @@ import math
 
 import pytest
 import yaml
+from conftest import BaseNodeClient
 
 from maru_planner.base.biped import load_world, map_3d_to_2d
 from maru_planner.base.grid import OccupancyGrid
 from maru_planner.paths import config_path
+from maru_planner.ros.reactive_conversions import pose_stamped_msg
 
 pytestmark = pytest.mark.ros
 
@@ -29,28 +31,7 @@ def node(node_process, tmp_path_factory):
     return node_process(NODE_MODULE, ["--ros-args", "--params-file", str(path)])
 
 
-class Client:
-    def __init__(self, spinning, proc):
-        from nav_msgs.msg import OccupancyGrid as OccupancyGridMsg
-        from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-
-        from maru_planner_interfaces.srv import PlanBasePath
-
-        self.spinning, self.proc = spinning, proc
-        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL,
-                             reliability=ReliabilityPolicy.RELIABLE)
-        self.map_pub = spinning.node.create_publisher(OccupancyGridMsg, "/map", latched)
-        self.plan_client = spinning.node.create_client(PlanBasePath, "/plan_base_path")
-
-    def publish_map(self, grid: OccupancyGrid, expect_log: str):
-        from builtin_interfaces.msg import Time
-
-        from maru_planner.ros.base_conversions import grid_to_msg
-
-        before = self.proc.log().count(expect_log)
-        self.map_pub.publish(grid_to_msg(grid, grid.occupied, Time(), "map"))
-        assert self.spinning.wait_for(lambda: self.proc.log().count(expect_log) > before, timeout=20), self.proc.log()
-
+class Client(BaseNodeClient):
     def request(self, planner_id, start, goal, footprint=()):
         from geometry_msgs.msg import Point32
 
@@ -59,18 +40,8 @@ class Client:
         req = PlanBasePath.Request()
         req.planner_id = planner_id
         req.footprint = [Point32(x=float(x), y=float(y)) for x, y in footprint]
-        req.start, req.goal = _pose(start), _pose(goal)
+        req.start, req.goal = pose_stamped_msg(start, "map", 0.0), pose_stamped_msg(goal, "map", 0.0)
         return self.spinning.call(self.plan_client, req, timeout=60)
-
-
-def _pose(pose):
-    from geometry_msgs.msg import PoseStamped
-
-    msg = PoseStamped()
-    msg.header.frame_id = "map"
-    msg.pose.position.x, msg.pose.position.y = float(pose[0]), float(pose[1])
-    msg.pose.orientation.z, msg.pose.orientation.w = math.sin(pose[2] / 2), math.cos(pose[2] / 2)
-    return msg
 
 
 @pytest.fixture
@@ -82,7 +53,7 @@ def test_tunnel_on_the_house_map(client):
     from maru_planner_interfaces.srv import PlanBasePath
 
     house = OccupancyGrid.from_yaml(config_path("maps", "house_250.yaml"))
-    client.publish_map(house, "map 250 x 250 cells")
+    client.publish_grid(house, "map 250 x 250 cells")
     response = client.request("tunnel", HOUSE_START, HOUSE_GOAL, DISC_025)
     assert response.error_code == PlanBasePath.Response.NONE, response.error_msg
     assert response.deciding_stage.startswith("tunnel b=") and response.expansions > 0
@@ -102,7 +73,7 @@ def test_biped_planners_on_the_world_parameter(client):
 
     world = load_world(config_path(WORLD))
     grid = map_3d_to_2d(world).to_occupancy_grid()
-    client.publish_map(grid, f"map {grid.width} x {grid.height} cells")
+    client.publish_grid(grid, f"map {grid.width} x {grid.height} cells")
     track = client.request("biped_track", world.start, world.goal)
     assert track.error_code == PlanBasePath.Response.NO_VALID_PATH
     assert "K =" in track.error_msg  # K > L: the turning rule refuses

@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import json
-import math
 import time
 
 import pytest
+from conftest import BaseNodeClient
 
 from maru_planner.base.scenes import table1
 from maru_planner.paths import config_path
+from maru_planner.ros.reactive_conversions import pose_stamped_msg
 
 pytestmark = pytest.mark.ros
 
@@ -23,29 +24,17 @@ def node(node_process):
     return proc
 
 
-class Client:
+class Client(BaseNodeClient):
     def __init__(self, spinning, proc):
         from nav_msgs.msg import OccupancyGrid, Path
         from nav_msgs.srv import GetPlan
-        from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
-        from maru_planner_interfaces.srv import PlanBasePath
-
-        self.spinning, self.proc = spinning, proc
+        super().__init__(spinning, proc)
         node = spinning.node
-        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL,
-                             reliability=ReliabilityPolicy.RELIABLE)
-        self.map_pub = node.create_publisher(OccupancyGrid, "/map", latched)
-        self.plan_client = node.create_client(PlanBasePath, "/plan_base_path")
         self.get_plan_client = node.create_client(GetPlan, "/make_plan")
         self.paths, self.eca_maps = [], []
-        node.create_subscription(Path, "/plan", self.paths.append, latched)
-        node.create_subscription(OccupancyGrid, "/base_planner_node/eca_map", self.eca_maps.append, latched)
-
-    def publish_map(self, msg, expect_log: str):
-        before = self.proc.log().count(expect_log)
-        self.map_pub.publish(msg)
-        assert self.spinning.wait_for(lambda: self.proc.log().count(expect_log) > before, timeout=20), self.proc.log()
+        node.create_subscription(Path, "/plan", self.paths.append, self.latched)
+        node.create_subscription(OccupancyGrid, "/base_planner_node/eca_map", self.eca_maps.append, self.latched)
 
     def request(self, start=START, goal=GOAL, planner_id="", footprint=None, frame="map", time_limit=0.0):
         from geometry_msgs.msg import Point32
@@ -55,19 +44,9 @@ class Client:
         req = PlanBasePath.Request()
         req.planner_id = planner_id
         req.footprint = [Point32(x=float(x), y=float(y)) for x, y in (footprint or [])]
-        req.start, req.goal = pose_msg(start, frame), pose_msg(goal, frame)
+        req.start, req.goal = pose_stamped_msg(start, frame, 0.0), pose_stamped_msg(goal, frame, 0.0)
         req.allowed_planning_time = time_limit
         return self.spinning.call(self.plan_client, req, timeout=60)
-
-
-def pose_msg(pose, frame="map"):
-    from geometry_msgs.msg import PoseStamped
-
-    msg = PoseStamped()
-    msg.header.frame_id = frame
-    msg.pose.position.x, msg.pose.position.y = float(pose[0]), float(pose[1])
-    msg.pose.orientation.z, msg.pose.orientation.w = math.sin(pose[2] / 2), math.cos(pose[2] / 2)
-    return msg
 
 
 def map_msg(grid, *, width=None, height=None, data=None):
@@ -125,10 +104,10 @@ def test_plan_on_medium_map_through_both_services(client):
     assert sum(v == 100 for v in client.eca_maps[-1].data) > sum(v == 100 for v in map_msg(table1("medium")).data)
 
     req = GetPlan.Request()
-    req.start, req.goal = pose_msg(START), pose_msg(GOAL)
+    req.start, req.goal = pose_stamped_msg(START, "map", 0.0), pose_stamped_msg(GOAL, "map", 0.0)
     plan = client.spinning.call(client.get_plan_client, req, timeout=60).plan
     assert len(plan.poses) == len(poses)
-    req.goal = pose_msg((float("nan"), 2.0, 0.0))
+    req.goal = pose_stamped_msg((float("nan"), 2.0, 0.0), "map", 0.0)
     assert len(client.spinning.call(client.get_plan_client, req, timeout=60).plan.poses) == 0
 
 

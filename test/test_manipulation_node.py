@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 import pytest
+from conftest import connected_planning_client
 
 pytestmark = pytest.mark.ros
 
@@ -16,28 +17,8 @@ Q_FREE = (-0.9, 0.25, 1.75, 1.66, 1.9, 0.0, -2.55, -0.8, 1.57, 2.0, 0.7, -1.9, -
 
 
 @pytest.fixture(scope="module")
-def node(node_process, rclpy_session):
-    from maru_planner.paths import config_path
-
-    proc = node_process(
-        "maru_planner.ros.planning_node", ["--ros-args", "--params-file", str(config_path("planner.yaml"))]
-    )
-    yield proc
-    assert proc.alive(), "planning_node died:\n" + proc.log()
-
-
-@pytest.fixture(scope="module")
-def client(node, rclpy_session):
-    from conftest import SpinningNode
-
-    from maru_planner.ros.planning_client import PlanningClient
-
-    spinning = SpinningNode("manipulation_node_tests")
-    planning = PlanningClient(node=spinning.node)
-    assert planning.plan_client.wait_for_service(timeout_sec=120.0), "planning_node never appeared:\n" + node.log()
-    planning.wait_until_ready(timeout=120.0)
-    yield planning
-    spinning.destroy()
+def client(planner_node, tester):
+    return connected_planning_client(tester, planner_node)
 
 
 @pytest.fixture(scope="module")

@@ -15,12 +15,12 @@ import time
 
 import numpy as np
 import pytest
+from conftest import PAPER_GOAL, PAPER_START, BaseNodeClient, connected_planning_client
+
+from maru_planner.ros.reactive_conversions import pose_stamped_msg
 
 pytestmark = pytest.mark.ros
 
-GROUP_JOINTS = ["waist_yaw"] + [f"r_arm_j{i}" for i in range(1, 7)] + [f"l_arm_j{i}" for i in range(1, 7)]
-PAPER_START = dict(zip(GROUP_JOINTS, (-0.9, -0.7, 1.57, 0.7, 0.7, -0.9, -0.9, -0.8, 1.57, 2.0, 0.7, -1.9, -1.25)))
-PAPER_GOAL = dict(zip(GROUP_JOINTS, (0.9, -0.8, 1.57, 1.14, 0.7, -1.24, -1.9, -0.7, 1.57, 2.44, 0.7, -2.24, -1.25)))
 # Plain RRT (no goal bias) does not solve the 13-DOF paper problem: it searches for its whole budget.
 HARD = dict(start=PAPER_START, planner_id="RRT", time_budget=10.0)
 FEEDBACK_WINDOW = 3.0  # s of a running goal over which feedback is counted
@@ -28,34 +28,8 @@ CANCELS = 20
 
 
 @pytest.fixture(scope="module")
-def planner_node(node_process, rclpy_session):
-    from maru_planner.paths import config_path
-
-    proc = node_process(
-        "maru_planner.ros.planning_node", ["--ros-args", "--params-file", str(config_path("planner.yaml"))]
-    )
-    yield proc
-    assert proc.alive(), "planning_node died:\n" + proc.log()
-
-
-@pytest.fixture(scope="module")
-def tester(planner_node, rclpy_session):
-    from conftest import SpinningNode
-
-    spinning = SpinningNode("plan_action_tests")
-    yield spinning
-    spinning.destroy()
-
-
-@pytest.fixture(scope="module")
 def client(planner_node, tester):
-    from maru_planner.ros.planning_client import PlanningClient
-
-    planning = PlanningClient(node=tester.node)
-    assert planning.plan_client.wait_for_service(timeout_sec=120.0), (
-        "plan_motion never appeared:\n" + planner_node.log()
-    )
-    planning.wait_until_ready(timeout=120.0)
+    planning = connected_planning_client(tester, planner_node)
     assert planning.plan_action_client.wait_for_server(timeout_sec=60.0)
     return planning
 
@@ -231,43 +205,26 @@ def base_node(node_process, rclpy_session):
     assert proc.alive(), "base_planner_node died:\n" + proc.log()
 
 
-class BaseClient:
+class BaseClient(BaseNodeClient):
     """The base node's service and action clients and a latched /map publisher (on the module's tester)."""
 
     def __init__(self, tester, proc):
-        from nav_msgs.msg import OccupancyGrid
         from rclpy.action import ActionClient
-        from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
         from maru_planner_interfaces.action import PlanBasePath as PlanBasePathAction
-        from maru_planner_interfaces.srv import PlanBasePath
 
-        self.tester, self.proc = tester, proc
-        latched = QoSProfile(
-            depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL, reliability=ReliabilityPolicy.RELIABLE
-        )
-        self.map_pub = tester.node.create_publisher(OccupancyGrid, "/map", latched)
-        self.service = tester.node.create_client(PlanBasePath, "/plan_base_path")
+        super().__init__(tester, proc)
         self.action = ActionClient(tester.node, PlanBasePathAction, "/plan_base_path")
-
-    def publish_map(self, grid, expect_log: str) -> None:
-        from builtin_interfaces.msg import Time
-
-        from maru_planner.ros.base_conversions import grid_to_msg
-
-        before = self.proc.log().count(expect_log)
-        self.map_pub.publish(grid_to_msg(grid, grid.occupied, Time(), "map"))
-        assert self.tester.wait_for(lambda: self.proc.log().count(expect_log) > before, timeout=60), self.proc.log()
 
     def request(self, start=BASE_START, goal=BASE_GOAL, planner_id="", time_limit=0.0):
         from maru_planner_interfaces.srv import PlanBasePath
 
         request = PlanBasePath.Request(planner_id=planner_id, allowed_planning_time=float(time_limit))
-        request.start, request.goal = _pose_msg(start), _pose_msg(goal)
+        request.start, request.goal = pose_stamped_msg(start, "map", 0.0), pose_stamped_msg(goal, "map", 0.0)
         return request
 
     def call(self, request):
-        return self.tester.call(self.service, request, timeout=60.0)
+        return self.spinning.call(self.plan_client, request, timeout=60.0)
 
     def send(self, request, feedback_callback=None):
         """Send ``request`` as a goal; (goal handle, result future) once accepted."""
@@ -293,18 +250,6 @@ class BaseClient:
         return response.status, response.result
 
 
-def _pose_msg(pose):
-    import math
-
-    from geometry_msgs.msg import PoseStamped
-
-    msg = PoseStamped()
-    msg.header.frame_id = "map"
-    msg.pose.position.x, msg.pose.position.y = float(pose[0]), float(pose[1])
-    msg.pose.orientation.z, msg.pose.orientation.w = math.sin(pose[2] / 2), math.cos(pose[2] / 2)
-    return msg
-
-
 @pytest.fixture(scope="module")
 def base(base_node, tester):
     from maru_planner.base.scenes import table1
@@ -312,11 +257,11 @@ def base(base_node, tester):
     from maru_planner_interfaces.action import PlanBasePath as PlanBasePathAction
 
     client = BaseClient(tester, base_node)
-    assert client.service.wait_for_service(timeout_sec=120.0), "plan_base_path never appeared:\n" + base_node.log()
+    assert client.plan_client.wait_for_service(timeout_sec=120.0), "plan_base_path never appeared:\n" + base_node.log()
     # both answered NO_MAP: the service and the action have matched this client both ways
-    call_until_answered(client.service, client.request(), timeout=120.0)
+    call_until_answered(client.plan_client, client.request(), timeout=120.0)
     goal_until_answered(client.action, PlanBasePathAction.Goal(), timeout=120.0)
-    client.publish_map(table1("medium"), "map 60 x 40 cells")
+    client.publish_grid(table1("medium"), "map 60 x 40 cells", 60)
     return client
 
 
@@ -363,7 +308,7 @@ def test_a_cancelled_base_goal_stops_and_the_node_keeps_serving(base):
     from maru_planner.base.scenes import table1
     from maru_planner.ros.planning_client import wait_for_future
 
-    base.publish_map(OccupancyGrid(np.random.default_rng(0).random((2000, 2000)) < 0.001, 0.05), "map 2000 x 2000")
+    base.publish_grid(OccupancyGrid(np.random.default_rng(0).random((2000, 2000)) < 0.001, 0.05), "map 2000 x 2000", 60)
     stages = Stages()
     request = base.request(start=(10.0, 10.0, 0.0), goal=(90.0, 90.0, 0.0), planner_id="biped_wall", time_limit=10.0)
     handle, result_future = base.send(request, stages)
@@ -375,5 +320,5 @@ def test_a_cancelled_base_goal_stops_and_the_node_keeps_serving(base):
 
     assert response.status == _status().STATUS_CANCELED, response.result.error_msg
     assert "cancelled" in response.result.error_msg
-    base.publish_map(table1("medium"), "map 60 x 40 cells")
+    base.publish_grid(table1("medium"), "map 60 x 40 cells", 60)
     assert base.call(base.request()).error_code == 0

@@ -14,13 +14,11 @@ import time
 
 import numpy as np
 import pytest
+from conftest import GROUP_JOINTS, PAPER_GOAL, PAPER_START, connected_planning_client
 
 pytestmark = pytest.mark.ros
 
 NODE = "/planning_node"
-GROUP_JOINTS = ["waist_yaw"] + [f"r_arm_j{i}" for i in range(1, 7)] + [f"l_arm_j{i}" for i in range(1, 7)]
-PAPER_START = dict(zip(GROUP_JOINTS, (-0.9, -0.7, 1.57, 0.7, 0.7, -0.9, -0.9, -0.8, 1.57, 2.0, 0.7, -1.9, -1.25)))
-PAPER_GOAL = dict(zip(GROUP_JOINTS, (0.9, -0.8, 1.57, 1.14, 0.7, -1.24, -1.9, -0.7, 1.57, 2.44, 0.7, -2.24, -1.25)))
 # Fixed seeds keep the test quick and repeatable (the core is deterministic per seed); the
 # spread over seeds is the planning benchmark's business. Plain RRT: see below.
 PAPER_SEEDS = {"RRTConnect": 3, "PRM": 3, "GoalBiasedRRT": 4, "RCRRT": 3}
@@ -29,18 +27,6 @@ FINE_RESOLUTION = 0.005  # rad, finer than the node's 0.02
 
 
 # ---------------------------------------------------------------- fixtures and helpers
-
-
-@pytest.fixture(scope="module")
-def planner_node(node_process, rclpy_session):
-    """The planning node (default config: Maru-1 upper body, desk + box scene)."""
-    from maru_planner.paths import config_path
-
-    proc = node_process(
-        "maru_planner.ros.planning_node", ["--ros-args", "--params-file", str(config_path("planner.yaml"))]
-    )
-    yield proc
-    assert proc.alive(), "planning_node died:\n" + proc.log()
 
 
 @pytest.fixture(scope="module")
@@ -57,24 +43,8 @@ def core():
 
 
 @pytest.fixture(scope="module")
-def tester(planner_node, rclpy_session):
-    """One spinning client node for the module (discovery happens once, not per test)."""
-    from conftest import SpinningNode
-
-    spinning = SpinningNode("planning_node_tests")
-    yield spinning
-    spinning.destroy()
-
-
-@pytest.fixture(scope="module")
 def client(planner_node, tester):
-    from maru_planner.ros.planning_client import PlanningClient
-
-    planning = PlanningClient(node=tester.node)
-    appeared = planning.plan_client.wait_for_service(timeout_sec=120.0)
-    assert appeared, "plan_motion never appeared:\n" + planner_node.log()
-    planning.wait_until_ready(timeout=120.0)  # the node has matched us too: no first answer gets lost
-    return planning
+    return connected_planning_client(tester, planner_node)
 
 
 @pytest.fixture(scope="module")

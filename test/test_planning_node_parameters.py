@@ -14,14 +14,12 @@ import subprocess
 import sys
 
 import pytest
+from conftest import PAPER_GOAL, PAPER_START, connected_planning_client
 
 pytestmark = pytest.mark.ros
 
 NAMESPACE = "/arm"
 NODE = f"{NAMESPACE}/planning_node"
-GROUP_JOINTS = ["waist_yaw"] + [f"r_arm_j{i}" for i in range(1, 7)] + [f"l_arm_j{i}" for i in range(1, 7)]
-START = dict(zip(GROUP_JOINTS, (-0.9, -0.7, 1.57, 0.7, 0.7, -0.9, -0.9, -0.8, 1.57, 2.0, 0.7, -1.9, -1.25)))
-PAPER_GOAL = dict(zip(GROUP_JOINTS, (0.9, -0.8, 1.57, 1.14, 0.7, -1.24, -1.9, -0.7, 1.57, 2.44, 0.7, -2.24, -1.25)))
 OVERRIDES = """\
 /**/planning_node:
   ros__parameters:
@@ -35,7 +33,7 @@ OVERRIDES = """\
 
 
 def _goal(delta: float = 0.3) -> dict[str, float]:
-    goal = dict(START)
+    goal = dict(PAPER_START)
     goal["r_arm_j4"] += delta
     return goal
 
@@ -70,22 +68,8 @@ def arm_node(node_process, rclpy_session, tmp_path_factory, user_profile):
 
 
 @pytest.fixture(scope="module")
-def tester(arm_node, rclpy_session):
-    from conftest import SpinningNode
-
-    spinning = SpinningNode("planning_node_parameter_tests")
-    yield spinning
-    spinning.destroy()
-
-
-@pytest.fixture(scope="module")
 def client(arm_node, tester):
-    from maru_planner.ros.planning_client import PlanningClient
-
-    planning = PlanningClient(node=tester.node, namespace=NAMESPACE)
-    assert planning.plan_client.wait_for_service(timeout_sec=120.0), "no plan_motion:\n" + arm_node.log()
-    planning.wait_until_ready(timeout=120.0)
-    return planning
+    return connected_planning_client(tester, arm_node, namespace=NAMESPACE)
 
 
 @pytest.fixture(scope="module")
@@ -245,33 +229,33 @@ def changed(params, **values):
 
 def test_default_planner_and_group_changes_show_in_the_next_plan(params, client):
     with changed(params, default_planner="GoalBiasedRRT"):
-        response = client.plan(_goal(), start=START, planner_id="", time_budget=5.0, seed=3)
+        response = client.plan(_goal(), start=PAPER_START, planner_id="", time_budget=5.0, seed=3)
         _assert_success(response)
         assert response.stats.planner_id == "GoalBiasedRRT"
-    right_goal = {f"r_arm_j{i}": START[f"r_arm_j{i}"] for i in range(1, 7)}
+    right_goal = {f"r_arm_j{i}": PAPER_START[f"r_arm_j{i}"] for i in range(1, 7)}
     right_goal["r_arm_j4"] += 0.3
     with changed(params, default_group="right_arm"):
-        response = client.plan(right_goal, start=START, group="", time_budget=5.0, seed=3)
+        response = client.plan(right_goal, start=PAPER_START, group="", time_budget=5.0, seed=3)
         _assert_success(response)
         assert list(response.trajectory.joint_names) == [f"r_arm_j{i}" for i in range(1, 7)]
 
 
 def test_resolution_and_budget_changes_show_in_the_next_plan(params, client):
-    coarse = client.plan(_goal(), start=START, time_budget=5.0, seed=3)
+    coarse = client.plan(_goal(), start=PAPER_START, time_budget=5.0, seed=3)
     with changed(params, resolution=0.003):
-        fine = client.plan(_goal(), start=START, time_budget=10.0, seed=3)
+        fine = client.plan(_goal(), start=PAPER_START, time_budget=10.0, seed=3)
     _assert_success(coarse)
     _assert_success(fine)
     assert fine.stats.collision_checks > 3 * coarse.stats.collision_checks
     with changed(params, max_planning_time=2.0):
-        response = client.plan(_goal(), start=START, time_budget=3.0)
+        response = client.plan(_goal(), start=PAPER_START, time_budget=3.0)
     assert response.error.code == _codes().INVALID_REQUEST and "max_planning_time 2.0" in response.error.message
 
 
 def test_a_planner_parameter_change_shows_in_the_next_plan(params, client):
-    default = client.plan(_goal(), start=START, planner_id="RRTConnect", time_budget=5.0, seed=3)
+    default = client.plan(_goal(), start=PAPER_START, planner_id="RRTConnect", time_budget=5.0, seed=3)
     with changed(params, **{"planners.RRTConnect.range": 0.01}):  # 0.3 rad in steps of at most 0.01 rad
-        short_edges = client.plan(_goal(), start=START, planner_id="RRTConnect", time_budget=10.0, seed=3)
+        short_edges = client.plan(_goal(), start=PAPER_START, planner_id="RRTConnect", time_budget=10.0, seed=3)
     _assert_success(default)
     _assert_success(short_edges)
     assert short_edges.stats.nodes >= 30 > default.stats.nodes
@@ -279,7 +263,7 @@ def test_a_planner_parameter_change_shows_in_the_next_plan(params, client):
 
 def test_collision_model_change_rebuilds_the_planning_contexts(params, client, arm_node):
     with changed(params, collision_model="spheres"):
-        _assert_success(client.plan(_goal(0.2), start=START, time_budget=10.0, seed=3))
+        _assert_success(client.plan(_goal(0.2), start=PAPER_START, time_budget=10.0, seed=3))
     assert "planning contexts rebuilt" in arm_node.log() and "on spheres" in arm_node.log()
 
 
@@ -289,18 +273,18 @@ def test_a_full_queue_answers_busy_after_workers_and_queue_size_change(params, c
     with changed(params, workers=1, queue_size=0):
         # plain RRT cannot solve the paper problem: it holds the only worker for its whole budget
         long_plan = client.plan_client.call_async(
-            plan_request(PAPER_GOAL, start=START, planner_id="RRT", time_budget=4.0)
+            plan_request(PAPER_GOAL, start=PAPER_START, planner_id="RRT", time_budget=4.0)
         )
         busy = None
         while not long_plan.done() and busy is None:
-            response = client.plan(_goal(), start=START, time_budget=2.0)
+            response = client.plan(_goal(), start=PAPER_START, time_budget=2.0)
             if response.error.code == _codes().BUSY:
                 busy = response
         assert busy is not None, "never answered BUSY while the only worker was planning"
         assert "queue_size 0" in busy.error.message
         assert tester.wait_for(long_plan.done, timeout=60.0)
         assert long_plan.result().error.code == _codes().TIMED_OUT
-    _assert_success(client.plan(_goal(), start=START, time_budget=5.0))
+    _assert_success(client.plan(_goal(), start=PAPER_START, time_budget=5.0))
 
 
 @pytest.mark.parametrize(
@@ -324,7 +308,7 @@ def test_bad_run_time_values_are_rejected_with_a_reason(params, client, name, va
     for word in words:
         assert word in result.reason, result.reason
     assert params.get(name) == before
-    _assert_success(client.plan(_goal(), start=START, time_budget=5.0))
+    _assert_success(client.plan(_goal(), start=PAPER_START, time_budget=5.0))
 
 
 # ---------------------------------------------------------------- start-up errors
