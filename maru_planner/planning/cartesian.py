@@ -29,7 +29,7 @@ import pinocchio as pin
 from maru_planner import errors
 from maru_planner.planning import timing
 from maru_planner.planning.links import check_link
-from maru_planner.planning.types import PlanStatus, Trajectory, answer_json, status_of_error
+from maru_planner.planning.types import PlanStatus, Trajectory, answer_json, set_failure
 from maru_planner.robot.ik import DampedLeastSquares
 
 ROTATION_STEP_RADIUS = 0.1  # m: a rotation step of max_step / this radius moves a point this far as much as max_step
@@ -160,7 +160,7 @@ def compute_cartesian_path(planner, request: CartesianRequest) -> CartesianResul
     try:
         _compute(planner, request, result, t0)
     except errors.MaruError as exc:
-        result.status, result.message, result.error = status_of_error(exc), exc.message, exc
+        set_failure(result, exc)
         result.path = result.trajectory = None
     result.seconds = time.monotonic() - t0
     return result

@@ -28,7 +28,7 @@ from maru_planner.planning import postprocess
 from maru_planner.planning.cartesian import end_margin, time_dense_path
 from maru_planner.planning.constraints import PathConstraints
 from maru_planner.planning.space import edge_states
-from maru_planner.planning.types import MotionRequest, MotionResult, PlanStats, PlanStatus, status_of_error
+from maru_planner.planning.types import MotionRequest, MotionResult, PlanStats, PlanStatus, set_failure
 
 if TYPE_CHECKING:  # the facade imports this module to hand constrained requests over
     from maru_planner.planning.motion_planner import MotionPlanner
@@ -80,7 +80,7 @@ def plan_constrained(planner, request: MotionRequest, constraints: PathConstrain
     try:
         _plan(planner, request, constraints, result, t0)
     except errors.MaruError as exc:
-        result.status, result.message, result.error = status_of_error(exc), exc.message, exc
+        set_failure(result, exc)
         result.path = result.trajectory = None
     stats.total_time = time.monotonic() - t0
     return result

@@ -65,7 +65,7 @@ from maru_planner.planning.types import (
     PlanStats,
     PlanStatus,
     Trajectory,
-    status_of_error,
+    set_failure,
 )
 from maru_planner.scene_attached import attachment_key, robot_with_attached
 
@@ -219,10 +219,8 @@ class MotionPlanner:
         result = MotionResult(status=PlanStatus.PLANNING_FAILED, stats=stats)
         try:
             self._plan(request, result, t0, resolution)
-        except errors.MaruError as exc:
-            _set_error(result, exc)
-        except Exception as exc:  # a bug or a checker failure: report it, keep serving
-            _set_internal_error(result, exc)
+        except Exception as exc:  # a typed error, or a bug or checker failure: reported, the planner keeps serving
+            set_failure(result, exc)
         return result
 
     # --- certification (docs/certification.md) -----------------------------------------------
@@ -242,11 +240,8 @@ class MotionPlanner:
             return result
         try:
             self._certify_path(request, result, t0)
-        except errors.MaruError as exc:
-            _set_error(result, exc)
-            result.path, result.trajectory = None, None
-        except Exception as exc:  # a bug in certification: report it, keep serving
-            _set_internal_error(result, exc)
+        except Exception as exc:  # a typed error, or a bug in certification: reported, the planner keeps serving
+            set_failure(result, exc)
             result.path, result.trajectory = None, None
         return result
 
@@ -345,7 +340,7 @@ class MotionPlanner:
             segment = result.verification.first_invalid_segment
             out_of_time = time.monotonic() >= t0 + float(request.time_budget)
             if replans >= self.config.max_refinements or out_of_time:
-                _set_error(result, errors.PlanningFailed(
+                set_failure(result, errors.PlanningFailed(
                     f"path failed verification on the exact model (segment {segment}) after {replans} re-plan(s)"
                     + (", time budget spent" if out_of_time else ""),
                     source="planner",
@@ -746,12 +741,6 @@ class _CancelsNested:
         self.nested.cancel()
 
 
-def _set_internal_error(result: MotionResult, exc: Exception) -> None:
-    result.status = PlanStatus.PLANNING_FAILED
-    result.message = f"internal error: {type(exc).__name__}: {exc}"
-    result.error = exc
-
-
 def _record_verification(result: MotionResult, certificate, repairs: int) -> None:
     """A sphere plan's exact re-check is its certification: the verification fields report it."""
     from maru_planner.collision.spheres import PathVerification  # lazy: numba; only sphere plans get here
@@ -772,12 +761,6 @@ def _safety_margin(request: MotionRequest, config: PlannerConfig) -> float:
     if not (math.isfinite(margin) and margin >= 0.0):
         raise errors.InvalidRequest(f"safety_margin must be a finite number >= 0 m, got {margin}")
     return margin
-
-
-def _set_error(result: MotionResult, exc: errors.MaruError) -> None:
-    result.status = status_of_error(exc)
-    result.message = exc.message
-    result.error = exc
 
 
 def _graph_size(planner, si) -> tuple[int, int]:

@@ -199,9 +199,19 @@ class PlanAnswer(Protocol):
 
     status: PlanStatus
     message: str
+    error: BaseException | None
     joint_names: list[str]
     path: np.ndarray | None
     trajectory: Trajectory | None
+
+
+def set_failure(answer: PlanAnswer, exc: BaseException) -> None:
+    """Make ``answer`` report ``exc``: a typed error's status and message; anything else is an internal error."""
+    answer.error = exc
+    if isinstance(exc, errors.MaruError):
+        answer.status, answer.message = status_of_error(exc), exc.message
+    else:
+        answer.status, answer.message = PlanStatus.PLANNING_FAILED, f"internal error: {type(exc).__name__}: {exc}"
 
 
 def answer_json(answer: PlanAnswer) -> dict:
