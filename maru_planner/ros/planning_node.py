@@ -65,9 +65,8 @@ from maru_planner import errors
 from maru_planner.monitor import PlanMonitor, Progress
 from maru_planner.params import ParamSpec, dataclass_params, param
 from maru_planner.paths import config_path, urdf_path
-from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig
+from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig, timing
 from maru_planner.planning.config import PLANNER_CONFIG_PARAMS
-from maru_planner.planning.motion_planner import MIN_SCALING
 from maru_planner.planning.process_pool import ProcessPool, RobotSource
 from maru_planner.planning.queries import query_planners
 from maru_planner.planning.registry import PLANNERS
@@ -859,11 +858,8 @@ def _check_group(robot: RobotModel, group: str) -> None:
 
 
 def _scaling(value: float, field: str) -> float:
-    if value == 0.0:
-        return 1.0
-    if not (math.isfinite(value) and MIN_SCALING <= value <= 1.0):
-        raise errors.InvalidRequest(f"{field} must be in [{MIN_SCALING:g}, 1] (0 = 1.0), got {value:.3g}")
-    return float(value)
+    """A request's scaling factor ``field``: 0 means 1.0, else checked as the core checks it."""
+    return 1.0 if value == 0.0 else timing.check_scaling(value, field)
 
 
 def _ik_timeout(value: float, settings: NodeSettings) -> float:
