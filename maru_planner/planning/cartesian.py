@@ -29,6 +29,7 @@ import pinocchio as pin
 from maru_planner import errors
 from maru_planner.planning import timing
 from maru_planner.planning.links import check_link
+from maru_planner.planning.space import full_configurations
 from maru_planner.planning.types import PlanStatus, Trajectory, answer_json, set_failure
 from maru_planner.robot.ik import DampedLeastSquares
 
@@ -293,8 +294,7 @@ def time_dense_path(robot, config, certifier, states: np.ndarray, indices: np.nd
     def curve_free(group_states: np.ndarray, chord_deviation: np.ndarray) -> bool:
         if certifier is None:
             return True
-        full = np.repeat(base[None], len(group_states), axis=0)
-        full[:, indices] = group_states
+        full = full_configurations(base, indices, group_states)
         deviation = np.zeros(robot.nq)
         deviation[indices] = chord_deviation
         return certifier.certify_path(full, deadline, margin=margin, deviation=deviation).valid

@@ -27,7 +27,7 @@ from maru_planner.params import ParamSpec
 from maru_planner.planning import postprocess
 from maru_planner.planning.cartesian import end_margin, time_dense_path
 from maru_planner.planning.constraints import PathConstraints
-from maru_planner.planning.space import edge_states
+from maru_planner.planning.space import edge_states, full_configurations
 from maru_planner.planning.types import MotionRequest, MotionResult, PlanStats, PlanStatus, set_failure
 
 if TYPE_CHECKING:  # the facade imports this module to hand constrained requests over
@@ -64,8 +64,7 @@ class _Problem:
     def edge_valid(self, qa: np.ndarray, qb: np.ndarray) -> bool:
         """Every state of qa -> qb at the motion resolution is free and satisfies the constraints."""
         states = edge_states(qa, qb, self.planner.config.resolution)
-        full = np.repeat(self.base[None], len(states), axis=0)
-        full[:, self.indices] = states
+        full = full_configurations(self.base, self.indices, states)
         robot = self.planner.robot
         if not all(self.constraints.satisfied(robot, q) for q in full):
             return False
@@ -116,8 +115,7 @@ def _plan(planner, request: MotionRequest, constraints: PathConstraints, result:
         t_simp = time.monotonic()
         path, _checks = postprocess.shortcut(raw, problem.edge_valid, rng, t0 + 0.9 * budget, 50)
         stats.simplify_time = time.monotonic() - t_simp
-    full = np.repeat(start[None], len(path), axis=0)
-    full[:, indices] = path
+    full = full_configurations(start, indices, path)
     margin = _certify(planner, full, deadline, stats)
     t_par = time.monotonic()
     method = request.time_parameterization or planner.config.time_parameterization

@@ -57,7 +57,7 @@ from maru_planner.planning.registry import (
     merged_params,
 )
 from maru_planner.planning.roadmap import Roadmap
-from maru_planner.planning.space import EdgeChecker, GroupSetup, GroupSpace
+from maru_planner.planning.space import EdgeChecker, GroupSetup, GroupSpace, full_configurations
 from maru_planner.planning.timing import MIN_SCALING as MIN_SCALING  # re-exported: the planning node reads it here
 from maru_planner.planning.types import (
     MotionRequest,
@@ -357,10 +357,7 @@ class MotionPlanner:
         """The result's waypoints as full configurations (joints outside the group at their start values)."""
         indices = [self.robot.joint_names.index(n) for n in result.joint_names]
         start = self.start_configuration(request.start, indices, request.group)
-        path = np.asarray(result.path, dtype=float)
-        out = np.repeat(start[None], len(path), axis=0)
-        out[:, indices] = path
-        return out
+        return full_configurations(start, indices, np.asarray(result.path, dtype=float))
 
     def _plan(self, req: MotionRequest, result: MotionResult, t0: float, resolution: float) -> None:
         stats = result.stats
@@ -454,12 +451,6 @@ class MotionPlanner:
         chords ``config.resolution`` apart, the margin grown by how far the curve leaves them. Otherwise
         the exact checker at the states alone, :data:`timing.CERTIFY_STEP` apart.
         """
-
-        def full(states: np.ndarray) -> np.ndarray:
-            out = np.repeat(start_full[None], len(states), axis=0)
-            out[:, indices] = states
-            return out
-
         monitor = self._monitor
         if self.certifier is not None:
             margin = _safety_margin(req, self.config)
@@ -468,14 +459,15 @@ class MotionPlanner:
                 monitor.check()
                 deviation = np.zeros(len(start_full))
                 deviation[indices] = chord_deviation
-                return self.certifier.certify_path(full(states), deadline, margin=margin, deviation=deviation).valid
+                full = full_configurations(start_full, indices, states)
+                return self.certifier.certify_path(full, deadline, margin=margin, deviation=deviation).valid
 
             return certified, self.config.resolution
         checker = self.exact_checker or self.checker
 
         def free(states: np.ndarray, _chord_deviation: np.ndarray) -> bool:
             monitor.check()
-            return checker.first_invalid(full(states)) < 0
+            return checker.first_invalid(full_configurations(start_full, indices, states)) < 0
 
         return free, timing.CERTIFY_STEP
 

@@ -67,12 +67,14 @@ class GroupSpace:
             q = self.base.copy()
             q[self.indices] = q_group
             return q
-        if self._whole_robot:
-            return q_group
-        Q = np.empty((len(q_group), len(self.base)))
-        Q[:] = self.base
-        Q[:, self.indices] = q_group
-        return Q
+        return q_group if self._whole_robot else full_configurations(self.base, self.indices, q_group)
+
+
+def full_configurations(base: np.ndarray, indices, group_states: np.ndarray) -> np.ndarray:
+    """One full configuration per row of ``group_states``: ``base`` with its ``indices`` set to that row."""
+    out = np.repeat(np.asarray(base, dtype=float)[None], len(group_states), axis=0)
+    out[:, indices] = group_states
+    return out
 
 
 def edge_states(qa: np.ndarray, qb: np.ndarray, resolution: float) -> np.ndarray:

@@ -17,6 +17,7 @@ import numpy as np
 
 from maru_planner.collision.spheres import PathVerification
 from maru_planner.planning.motion_planner import MotionPlanner
+from maru_planner.planning.space import full_configurations
 from maru_planner.planning.types import MotionRequest, MotionResult
 
 
@@ -40,11 +41,7 @@ def full_path(robot, request: MotionRequest, result: MotionResult) -> np.ndarray
     q = np.asarray(robot.neutral(), dtype=float).copy()
     start = request.start or {}
     q[robot.joint_indices(list(start))] = [float(v) for v in start.values()]
-    idx = robot.joint_indices(list(result.joint_names))
-    path = np.asarray(result.path, dtype=float)
-    out = np.repeat(q[None], len(path), axis=0)
-    out[:, idx] = path
-    return out
+    return full_configurations(q, robot.joint_indices(list(result.joint_names)), np.asarray(result.path, dtype=float))
 
 
 def plan_verified(
