@@ -29,7 +29,6 @@ import pinocchio as pin
 from maru_planner import errors
 from maru_planner.planning import timing
 from maru_planner.planning.links import check_link
-from maru_planner.planning.space import full_configurations
 from maru_planner.planning.types import PlanStatus, Trajectory, answer_json, set_failure
 from maru_planner.robot.ik import DampedLeastSquares
 
@@ -289,16 +288,9 @@ def time_dense_path(robot, config, certifier, states: np.ndarray, indices: np.nd
     """A trajectory through the full configurations ``states`` (only ``indices`` move) that stays within
     :data:`BLEND_DEVIATION` rad of their polyline; blends certified by ``certifier`` (None: unchecked)."""
     limits = timing.Limits.scaled(robot.velocity_limits[indices], robot.acceleration_limits[indices], *scalings)
-    base = states[0]
-
-    def curve_free(group_states: np.ndarray, chord_deviation: np.ndarray) -> bool:
-        if certifier is None:
-            return True
-        full = full_configurations(base, indices, group_states)
-        deviation = np.zeros(robot.nq)
-        deviation[indices] = chord_deviation
-        return certifier.certify_path(full, deadline, margin=margin, deviation=deviation).valid
-
+    curve_free: timing.CurveFree = _unchecked
+    if certifier is not None:
+        curve_free = timing.certified_curve(certifier, states[0], indices, deadline, margin)
     trajectory, _report = timing.parameterize(
         states[:, indices],
         [robot.joint_names[i] for i in indices],
@@ -313,3 +305,8 @@ def time_dense_path(robot, config, certifier, states: np.ndarray, indices: np.nd
         sample_deadline=deadline,
     )
     return trajectory
+
+
+def _unchecked(_states: np.ndarray, _chord_deviation: np.ndarray) -> bool:
+    """The blend check of a path planned without collision avoidance: none."""
+    return True

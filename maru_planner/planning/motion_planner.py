@@ -454,22 +454,21 @@ class MotionPlanner:
         monitor = self._monitor
         if self.certifier is not None:
             margin = _safety_margin(req, self.config)
+            curve_free = timing.certified_curve(self.certifier, start_full, indices, deadline, margin)
+            step = self.config.resolution
+        else:
+            checker = self.exact_checker or self.checker
 
-            def certified(states: np.ndarray, chord_deviation: np.ndarray) -> bool:
-                monitor.check()
-                deviation = np.zeros(len(start_full))
-                deviation[indices] = chord_deviation
-                full = full_configurations(start_full, indices, states)
-                return self.certifier.certify_path(full, deadline, margin=margin, deviation=deviation).valid
+            def curve_free(states: np.ndarray, _chord_deviation: np.ndarray) -> bool:
+                return checker.first_invalid(full_configurations(start_full, indices, states)) < 0
 
-            return certified, self.config.resolution
-        checker = self.exact_checker or self.checker
+            step = timing.CERTIFY_STEP
 
-        def free(states: np.ndarray, _chord_deviation: np.ndarray) -> bool:
+        def watched(states: np.ndarray, chord_deviation: np.ndarray) -> bool:
             monitor.check()
-            return checker.first_invalid(full_configurations(start_full, indices, states)) < 0
+            return curve_free(states, chord_deviation)
 
-        return free, timing.CERTIFY_STEP
+        return watched, step
 
     # --- request validation -----------------------------------------------------------------
     def check_request(self, req: MotionRequest) -> tuple[float, int]:

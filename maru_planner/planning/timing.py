@@ -35,6 +35,7 @@ import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import ruckig
@@ -45,6 +46,7 @@ import toppra.interpolator
 from maru_planner import errors
 from maru_planner.planning import postprocess
 from maru_planner.planning.config import TIME_PARAMETERIZATIONS
+from maru_planner.planning.space import full_configurations
 from maru_planner.planning.types import Trajectory
 
 METHODS = TIME_PARAMETERIZATIONS
@@ -90,6 +92,19 @@ class Limits:
             acc * acceleration_scaling,
             jerk * jerk_scaling,
         )
+
+
+def certified_curve(certifier: Any, base: np.ndarray, indices, deadline: float | None, margin: float) -> CurveFree:
+    """A :data:`CurveFree` proving a group curve clear by ``margin`` on ``certifier`` (a ``PathCertifier``), each
+    joint's margin grown by how far the curve leaves the chords; the joints outside ``indices`` stay at ``base``."""
+
+    def curve_free(states: np.ndarray, chord_deviation: np.ndarray) -> bool:
+        deviation = np.zeros(len(base))
+        deviation[indices] = chord_deviation
+        full = full_configurations(base, indices, states)
+        return bool(certifier.certify_path(full, deadline, margin=margin, deviation=deviation).valid)
+
+    return curve_free
 
 
 def check_scaling(value: object, name: str) -> float:
