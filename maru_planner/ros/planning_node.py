@@ -201,19 +201,17 @@ def planner_config(values: dict[str, Any], base: PlannerConfig | None = None) ->
     return dataclasses.replace(base, **fields, planner_params=planner_params)
 
 
+@dataclass
 class PlanningContext:
-    """Everything one worker thread needs to plan: its own robot, checker and planner.
+    """Everything one worker thread needs to plan: its own planner (robot model, checker) at ``scene_version``.
 
     With ``processes`` (``worker_processes``), plans go to those worker processes; the thread's own
-    robot and checker answer IK.
+    planner answers IK, FK and validity checks.
     """
 
-    def __init__(self, robot, checker, planner, scene_version: int, processes: ProcessPool | None = None):
-        self.robot = robot
-        self.checker = checker
-        self.planner = planner
-        self.scene_version = scene_version
-        self.processes = processes
+    planner: MotionPlanner
+    scene_version: int
+    processes: ProcessPool | None = None
 
 
 class WorkerPool:
@@ -420,10 +418,9 @@ class PlanningNode(ManagedNode):
         return RobotModel.from_urdf(urdf, srdf, package_dirs=package_dirs or None)
 
     def _make_context(self, config: PlannerConfig, processes: ProcessPool | None) -> PlanningContext:
-        robot = self._make_robot()
         scene_dict, version = self._scene.snapshot()
-        planner = MotionPlanner.from_scene(robot, Scene.from_dict(scene_dict), config)
-        return PlanningContext(robot, planner.checker, planner, version, processes)
+        planner = MotionPlanner.from_scene(self._make_robot(), Scene.from_dict(scene_dict), config)
+        return PlanningContext(planner, version, processes)
 
     def _make_pool(self, config: PlannerConfig, settings: NodeSettings) -> WorkerPool:
         processes = self._reconfigured_processes(config, settings)
