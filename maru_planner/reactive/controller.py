@@ -6,6 +6,7 @@ import functools
 import math
 import time
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -127,7 +128,7 @@ class ElasticStripController:
         p = self.params
         self.strip = _make_strip(p)
         self.via = ViaTarget(reach=p.via_reach, blocked_radius=p.robot_radius)
-        self.arm = _make_arm(p) if p.arm_enabled else None
+        self.arm = ArmReactive(**_arm_settings(p)) if p.arm_enabled else None
         self.goal: np.ndarray | None = None
         self._needs_start = True
         self._pairs_seen = 0
@@ -150,10 +151,9 @@ class ElasticStripController:
         if not params.arm_enabled:
             self.arm = None
         elif self.arm is None:
-            self.arm = _make_arm(params)
+            self.arm = ArmReactive(**_arm_settings(params))
         else:
-            self.arm.configure(k_c=params.k_c, k_r=params.k_r, d0=params.arm_d_safe + params.arm_link_radius,
-                               alpha=params.arm_alpha, max_joint_step=params.arm_max_joint_step, strip=params.strip)
+            self.arm.configure(**_arm_settings(params))
 
     # -- inputs -------------------------------------------------------------------------------
     def set_goal(self, goal) -> None:
@@ -301,6 +301,7 @@ def _make_strip(p: StripParams) -> ElasticStrip:
                         p.head_on_ratio, p.suppress_tangential, min_gap=2.0 * p.robot_radius)
 
 
-def _make_arm(p: StripParams) -> ArmReactive:
-    return ArmReactive(k_c=p.k_c, k_r=p.k_r, d0=p.arm_d_safe + p.arm_link_radius, alpha=p.arm_alpha,
-                       max_joint_step=p.arm_max_joint_step, strip=p.strip)
+def _arm_settings(p: StripParams) -> dict[str, Any]:
+    """The keywords of ``ArmReactive`` / ``ArmReactive.configure`` (gains, margin, step, strip kind)."""
+    return {"k_c": p.k_c, "k_r": p.k_r, "d0": p.arm_d_safe + p.arm_link_radius, "alpha": p.arm_alpha,
+            "max_joint_step": p.arm_max_joint_step, "strip": p.strip}
