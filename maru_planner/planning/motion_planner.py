@@ -53,7 +53,6 @@ from maru_planner.planning.registry import (
     ProvesFailure,
     ReportsGraphSize,
     get_spec,
-    make_planner,
     merged_params,
 )
 from maru_planner.planning.roadmap import Roadmap
@@ -635,7 +634,7 @@ class MotionPlanner:
         si = ss.getSpaceInformation()
         with seeded_ompl(seed):
             ss.setStartAndGoalStates(gs.to_state(start), gs.to_state(goal))
-            planner = make_planner(spec.id, si, params, edge_checker=edges)
+            planner = spec.factory(si, params, edges)  # params: merged and checked once per request (_search)
             ss.setPlanner(planner)
             ptc = ob.timedPlannerTerminationCondition(max(0.0, search_deadline - time.monotonic()))
             with self._monitor.attach(ptc):
