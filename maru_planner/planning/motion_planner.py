@@ -115,20 +115,12 @@ class MotionPlanner:
     """
 
     def __init__(self, robot, checker, config: PlannerConfig | None = None, scene=None, exact_checker=None):
-        self.robot = robot
-        self.checker = checker
         self.config = config or PlannerConfig()
         if exact_checker is None:
             exact_checker = default_exact_checker(robot, checker)
-        self.exact_checker = exact_checker  # None: the plan's own checker is the exact model
-        self.certifier = self._make_certifier()
+        self._plan_for(robot, checker, exact_checker)
         self._lock = threading.RLock()
         self._scene_epoch = 0
-        self._roadmaps: dict[tuple, Roadmap] = {}
-        self._setups: dict[tuple, GroupSetup] = {}  # per (group's joint indices, checker), reused across requests
-        # (padding, checker padded by it): the search's checker when certifying with a margin
-        self._padded: tuple[float, Any] | None = None
-        self._search_checker = checker  # the checker the running search plans on (_search_checker_for)
         self._monitor = PlanMonitor()  # the running plan's (plan() sets it under the lock); never cancelled idle
         self.last_revalidation = None
         self.scene = None
@@ -167,10 +159,18 @@ class MotionPlanner:
     def _carry(self, robot, scene) -> None:
         """Plan for ``robot`` (the robot with other attached objects): new checkers, certifier and caches."""
         checkers = make_checkers(robot, scene, collision_model_of(self.checker))
-        self.robot, self.checker, self.exact_checker = robot, checkers.checker, checkers.exact
+        self._plan_for(robot, checkers.checker, checkers.exact)
+
+    def _plan_for(self, robot, checker, exact_checker) -> None:
+        """Plan for ``robot`` on ``checker``, verified on ``exact_checker``: its certifier, and empty caches."""
+        self.robot, self.checker = robot, checker
+        self.exact_checker = exact_checker  # None: the plan's own checker is the exact model
         self.certifier = self._make_certifier()
-        self._roadmaps, self._setups = {}, {}
-        self._padded, self._search_checker = None, self.checker
+        self._roadmaps: dict[tuple, Roadmap] = {}
+        self._setups: dict[tuple, GroupSetup] = {}  # per (group's joint indices, checker), reused across requests
+        # (padding, checker padded by it): the search's checker when certifying with a margin
+        self._padded: tuple[float, Any] | None = None
+        self._search_checker = checker  # the checker the running search plans on (_search_checker_for)
 
     def _follow_attachments(self) -> None:
         """Pick up objects attached or detached by editing the scene in place since the last call."""
