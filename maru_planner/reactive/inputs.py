@@ -8,8 +8,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from maru_planner.errors import InvalidRequest
 
 MAX_COORDINATE = 1e5  # m: |x| and |y| of a pose, goal or path point (100 km from the odometry origin)
@@ -52,6 +50,6 @@ def check_path_size(count: int, what: str = "path") -> None:
         raise InputError(f"{what} has {count} poses (at most {MAX_PATH_POSES})")
 
 
-def _excerpt(values) -> str:
-    text = ", ".join(f"{float(v):.4g}" for v in np.asarray(values, dtype=float).reshape(-1)[:4])
-    return text if len(text) <= 60 else text[:57] + "..."
+def _excerpt(values: tuple[float, ...]) -> str:
+    """At most four floats, 4 significant digits each: short whatever their size."""
+    return ", ".join(f"{v:.4g}" for v in values)
