@@ -57,7 +57,6 @@ from maru_planner.planning.registry import (
 )
 from maru_planner.planning.roadmap import Roadmap
 from maru_planner.planning.space import EdgeChecker, GroupSetup, GroupSpace, full_configurations
-from maru_planner.planning.timing import MIN_SCALING as MIN_SCALING  # re-exported: the planning node reads it here
 from maru_planner.planning.types import (
     MotionRequest,
     MotionResult,
