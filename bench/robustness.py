@@ -109,8 +109,7 @@ def run_planning_node(bench: Bench) -> None:
     from maru_planner.robot import RobotModel
 
     log("planning_node")
-    limits = [arg for name, value in hostile.PLANNING_LIMITS.items() for arg in ("-p", f"{name}:={value}")]
-    arguments = ["--ros-args", "--params-file", str(config_path("planner.yaml")), *limits]
+    arguments = hostile.params_file_arguments("planner.yaml", hostile.PLANNING_LIMITS)
     process = node("maru_planner.ros.planning_node", arguments, bench.workdir)
     spinning = SpinningNode("robustness_planning")
     target = hostile.PlanningNodeTarget(spinning, process, RobotModel.maru1())
@@ -141,10 +140,8 @@ def run_planning_node(bench: Bench) -> None:
 
 def run_base_node(bench: Bench) -> None:
     log("base_planner_node")
-    limits = [arg for name, value in hostile.BASE_LIMITS.items() for arg in ("-p", f"{name}:={value}")]
-    process = node("maru_planner.ros.base_planner_node",
-                   ["--ros-args", "--params-file", str(config_path("base_planner.yaml")), *limits],
-                   bench.workdir)  # fmt: skip
+    arguments = hostile.params_file_arguments("base_planner.yaml", hostile.BASE_LIMITS)
+    process = node("maru_planner.ros.base_planner_node", arguments, bench.workdir)
     spinning = SpinningNode("robustness_base")
     target = hostile.BaseNodeTarget(spinning, process)
     try:

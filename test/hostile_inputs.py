@@ -20,7 +20,7 @@ import itertools
 import math
 import re
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import asdict, dataclass, field
 from pathlib import Path as FilePath
 
@@ -35,6 +35,8 @@ from shape_msgs.msg import SolidPrimitive
 from test_reactive_node import OBSTACLE, ReactiveClient, _odom, reactive_params_file, shipped_params, synthetic_scan
 from test_reactive_properties import laser_scans
 
+from maru_planner.paths import config_path
+from maru_planner.planning.problems import PROBLEMS
 from maru_planner.ros.planning_client import PlanningClient
 from maru_planner.ros.planning_conversions import joint_state_msg, trajectory_positions
 from maru_planner_interfaces.msg import PlanningError, SceneObstacle
@@ -773,8 +775,6 @@ def maru_plan_argv(tmp: FilePath) -> st.SearchStrategy:
 
 
 def maru_base_plan_argv(tmp: FilePath) -> st.SearchStrategy:
-    from maru_planner.paths import config_path
-
     files = Files(tmp)
     base = {"--map": [str(config_path("maps", "paper002_medium.yaml"))], "--start": ["1", "2", "0"],
             "--goal": ["5", "2", "0"], "--time-limit": ["0.5"]}  # fmt: skip
@@ -884,11 +884,16 @@ def service_outcome(process, watch: LogWatch, response, elapsed: float, budget: 
     return outcome
 
 
+def params_file_arguments(config_file: str, limits: dict[str, float]) -> list[str]:
+    """``--ros-args`` of a node on a shipped params file with ``limits`` set on top."""
+    overrides = [arg for name, value in limits.items() for arg in ("-p", f"{name}:={value}")]
+    return ["--ros-args", "--params-file", str(config_path(config_file)), *overrides]
+
+
 # ---------------------------------------------------------------- planning_node
 
 GROUP_JOINTS = ["waist_yaw"] + [f"r_arm_j{i}" for i in range(1, 7)] + [f"l_arm_j{i}" for i in range(1, 7)]
-PAPER_START = dict(zip(GROUP_JOINTS, (-0.9, -0.7, 1.57, 0.7, 0.7, -0.9, -0.9, -0.8, 1.57, 2.0, 0.7, -1.9, -1.25),
-                       strict=True))  # fmt: skip
+PAPER_START = PROBLEMS["maru13"].start_dict(GROUP_JOINTS)
 EASY_GOAL = {**PAPER_START, "r_arm_j4": PAPER_START["r_arm_j4"] + 0.3}  # a right-arm move clear of the desk
 PLANNING_LIMITS = {"max_planning_time": 2.0, "ik_timeout": 0.5}  # node parameters the budgets are checked against
 
@@ -1203,3 +1208,12 @@ def report_counts(request, targets: list[str], extra: list[str] = ()) -> None:
         for line in [*summary_lines(targets), *extra]:
             print("\n" + line, end="")
         print()
+
+
+def serve_module(target, request, measured: list[str]) -> Iterator:
+    """A module fixture's body: ``target`` connected; after the module, its counts printed, its node alive."""
+    target.connect()
+    yield target
+    report_counts(request, [target.name], measured)
+    target.spinning.destroy()
+    assert target.process.alive(), target.process.log()[-3000:]

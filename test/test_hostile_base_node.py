@@ -15,9 +15,10 @@ from hostile_inputs import (
     SUITE_EXAMPLES,
     BaseNodeTarget,
     occupancy_grids,
-    report_counts,
+    params_file_arguments,
     rss_mb,
     run_batch,
+    serve_module,
     tally,
 )
 
@@ -34,18 +35,10 @@ MEASURED: list[str] = []  # lines printed with the counts
 def node(node_process, rclpy_session, request):
     from conftest import SpinningNode
 
-    from maru_planner.paths import config_path
-
-    limits = [arg for name, value in BASE_LIMITS.items() for arg in ("-p", f"{name}:={value}")]
-    process = node_process("maru_planner.ros.base_planner_node",
-                           ["--ros-args", "--params-file", str(config_path("base_planner.yaml")), *limits])  # fmt: skip
-    spinning = SpinningNode("hostile_base_client")
-    target = BaseNodeTarget(spinning, process)
-    target.connect()
-    yield target
-    report_counts(request, [TARGET], MEASURED)
-    spinning.destroy()
-    assert process.alive(), process.log()[-3000:]
+    process = node_process(
+        "maru_planner.ros.base_planner_node", params_file_arguments("base_planner.yaml", BASE_LIMITS)
+    )
+    yield from serve_module(BaseNodeTarget(SpinningNode("hostile_base_client"), process), request, MEASURED)
 
 
 def _still_serving(node) -> None:

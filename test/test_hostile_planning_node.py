@@ -19,10 +19,11 @@ from hostile_inputs import (
     SUITE_EXAMPLES,
     PlanningNodeTarget,
     apply_scene_requests,
-    report_counts,
+    params_file_arguments,
     rss_mb,
     run_batch,
     scene_obstacles,
+    serve_module,
     tally,
 )
 
@@ -42,19 +43,11 @@ MEASURED: list[str] = []  # lines printed with the counts
 def node(node_process, rclpy_session, request):
     from conftest import SpinningNode
 
-    from maru_planner.paths import config_path
     from maru_planner.robot import RobotModel
 
-    limits = [arg for name, value in PLANNING_LIMITS.items() for arg in ("-p", f"{name}:={value}")]
-    process = node_process("maru_planner.ros.planning_node",
-                           ["--ros-args", "--params-file", str(config_path("planner.yaml")), *limits])  # fmt: skip
-    spinning = SpinningNode("hostile_planning_client")
-    target = PlanningNodeTarget(spinning, process, RobotModel.maru1())
-    target.connect()
-    yield target
-    report_counts(request, [TARGET], MEASURED)
-    spinning.destroy()
-    assert process.alive(), process.log()[-3000:]
+    process = node_process("maru_planner.ros.planning_node", params_file_arguments("planner.yaml", PLANNING_LIMITS))
+    target = PlanningNodeTarget(SpinningNode("hostile_planning_client"), process, RobotModel.maru1())
+    yield from serve_module(target, request, MEASURED)
 
 
 def _still_serving(node) -> None:

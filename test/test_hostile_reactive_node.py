@@ -14,9 +14,9 @@ from hostile_inputs import (
     SUITE_EXAMPLES,
     ReactiveNodeTarget,
     reactive_messages,
-    report_counts,
     rss_mb,
     run_batch,
+    serve_module,
     tally,
 )
 
@@ -35,13 +35,7 @@ def node(node_process, rclpy_session, tmp_path_factory, request):
 
     process = node_process("maru_planner.ros.reactive_node",
                            ReactiveNodeTarget.node_arguments(tmp_path_factory.mktemp("hostile_reactive")))  # fmt: skip
-    spinning = SpinningNode("hostile_reactive_client")
-    target = ReactiveNodeTarget(spinning, process)
-    target.connect()
-    yield target
-    report_counts(request, [TARGET], MEASURED)
-    spinning.destroy()
-    assert process.alive(), process.log()[-3000:]
+    yield from serve_module(ReactiveNodeTarget(SpinningNode("hostile_reactive_client"), process), request, MEASURED)
 
 
 @pytest.mark.filterwarnings("ignore::RuntimeWarning")  # building hostile messages from inf values
