@@ -102,6 +102,29 @@ def test_cbirrt_keeps_the_hand_in_a_box(panda):
     assert _violation_along(robot, q0, idx, result.trajectory, constraints)[1] <= 1e-6
 
 
+def test_cbirrt_certifies_by_the_requests_safety_margin(panda):
+    robot, q0, idx = panda
+    constraints = _upright(robot, q0)
+    goal = _tilting_goal(robot, q0, idx, constraints)
+    planner = MotionPlanner.from_scene(robot, Scene())
+    margins: list[float] = []
+    certify_path = planner.certifier.certify_path
+
+    def recording(path, deadline, margin=None, **kwargs):
+        margins.append(margin)
+        return certify_path(path, deadline, margin=margin, **kwargs)
+
+    planner.certifier.certify_path = recording
+    result = planner.plan(MotionRequest(
+        "arm", start=dict(zip(robot.joint_names, q0.tolist(), strict=True)),
+        goal_joints={robot.joint_names[i]: float(goal[i]) for i in idx}, seed=2, time_budget=30,
+        path_constraints=constraints, safety_margin=0.003,
+    ))  # fmt: skip
+    assert result.success, result.message
+    ends = min(planner.certifier.clearance(q0), planner.certifier.clearance(goal))
+    assert margins[0] == pytest.approx(min(0.003, 0.5 * ends)) and margins[0] < planner.config.safety_margin
+
+
 def test_constraint_impossible_at_the_start_unknown_link_and_unsupported_planner(panda):
     robot, q0, idx = panda
     tilted = robot.frame_pose(q0, LINK)[:3, :3] @ np.array([[1, 0, 0], [0, 0, -1], [0, 1, 0]])

@@ -186,7 +186,7 @@ def _compute(planner, request: CartesianRequest, result: CartesianResult, t0: fl
     poses = interpolate_poses(robot.frame_pose(start, link), waypoints, max_step)
     states, reason = _follow(robot, link, indices, start, poses, deadline)
     states, reason = _jump_cut(states, reason, jump)
-    margin = end_margin(planner, start) if request.avoid_collisions else 0.0
+    margin = end_margin(planner, planner.config.safety_margin, start) if request.avoid_collisions else 0.0
     if request.avoid_collisions:
         states, reason = _collision_cut(planner, states, reason, deadline, margin, result)
     if len(states) < 2:
@@ -245,13 +245,13 @@ def _jump_cut(states: np.ndarray, reason: str, threshold: float) -> tuple[np.nda
     return states[: k + 1], f"joint-space jump of {steps[k]:.3f} rad at step {k + 1} (mean step {steps.mean():.4f})"
 
 
-def end_margin(planner, *ends: np.ndarray) -> float:
-    """The planner's safety margin, lowered to half the ``ends``' smallest clearance when that is closer (as plans
-    do); 0 without a certifier."""
+def end_margin(planner, margin: float, *ends: np.ndarray) -> float:
+    """``margin`` (m), lowered to half the ``ends``' smallest clearance when that is closer; 0 without a
+    certifier."""
     if planner.certifier is None:
         return 0.0
     clearance = min(planner.certifier.clearance(q) for q in ends)
-    return min(planner.config.safety_margin, 0.5 * max(clearance, 0.0))
+    return min(margin, 0.5 * max(clearance, 0.0))
 
 
 def _collision_cut(planner, states, reason: str, deadline: float, margin: float, result) -> tuple[np.ndarray, str]:

@@ -78,7 +78,7 @@ def plan_constrained(planner, request: MotionRequest, constraints: PathConstrain
     result = MotionResult(status=PlanStatus.PLANNING_FAILED, stats=stats)
     try:
         _plan(planner, request, constraints, result, t0)
-    except errors.MaruError as exc:
+    except Exception as exc:  # a typed error, or a bug: reported as the facade does, the planner keeps serving
         set_failure(result, exc)
         result.path = result.trajectory = None
     stats.total_time = time.monotonic() - t0
@@ -116,7 +116,7 @@ def _plan(planner, request: MotionRequest, constraints: PathConstraints, result:
         path, _checks = postprocess.shortcut(raw, problem.edge_valid, rng, t0 + 0.9 * budget, 50)
         stats.simplify_time = time.monotonic() - t_simp
     full = full_configurations(start, indices, path)
-    margin = _certify(planner, full, deadline, stats)
+    margin = _certify(planner, full, planner.safety_margin(request), deadline, stats)
     t_par = time.monotonic()
     method = request.time_parameterization or planner.config.time_parameterization
     scalings = (float(request.velocity_scaling), float(request.acceleration_scaling))
@@ -139,12 +139,13 @@ def _check_end(robot, constraints: PathConstraints, q: np.ndarray, what: str, er
         )
 
 
-def _certify(planner, full: np.ndarray, deadline: float, stats: PlanStats) -> float:
-    """Certify the path (no repairs); the margin used (lowered to half the ends' clearance, as plans do)."""
+def _certify(planner, full: np.ndarray, margin: float, deadline: float, stats: PlanStats) -> float:
+    """Certify the path (no repairs) by the request's ``margin``, lowered to half the ends' clearance when they are
+    closer; the margin used."""
     certifier = planner.certifier
     if certifier is None:
         return 0.0
-    margin = end_margin(planner, full[0], full[-1])
+    margin = end_margin(planner, margin, full[0], full[-1])
     certificate = certifier.certify_path(full, max(deadline, time.monotonic() + planner.config.certify_timeout),
                                          margin=margin)  # fmt: skip
     stats.certify_time, stats.min_clearance = certificate.seconds, certificate.min_clearance

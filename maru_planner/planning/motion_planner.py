@@ -254,7 +254,7 @@ class MotionPlanner:
             self._full_path(request, result),
             self._repair_planner(request, stats.seed or 0),
             t0 + float(request.time_budget),
-            margin=_safety_margin(request, self.config),
+            margin=self.safety_margin(request),
             max_repairs=self.config.max_refinements,
             certify_deadline=certify_deadline,
         )
@@ -451,7 +451,7 @@ class MotionPlanner:
         """
         monitor = self._monitor
         if self.certifier is not None:
-            margin = _safety_margin(req, self.config)
+            margin = self.safety_margin(req)
             curve_free = timing.certified_curve(self.certifier, start_full, indices, deadline, margin)
             step = self.config.resolution
         else:
@@ -469,6 +469,10 @@ class MotionPlanner:
         return watched, step
 
     # --- request validation -----------------------------------------------------------------
+    def safety_margin(self, req: MotionRequest) -> float:
+        """The clearance (m) ``req``'s certified path keeps: its own ``safety_margin``, else the configuration's."""
+        return _safety_margin(req, self.config)
+
     def check_request(self, req: MotionRequest) -> tuple[float, int]:
         """``req``'s time budget and seed (its own, or a random one); InvalidRequest naming the first bad field
         among time_budget, attempts, the scalings, time_parameterization, safety_margin and seed."""
@@ -478,7 +482,7 @@ class MotionPlanner:
         for name in ("velocity_scaling", "acceleration_scaling", "jerk_scaling"):
             timing.check_scaling(getattr(req, name), name)
         timing.check_method(req.time_parameterization or self.config.time_parameterization)
-        _safety_margin(req, self.config)
+        self.safety_margin(req)
         seed = int(req.seed) if req.seed is not None else secrets.randbelow(2**31 - 1)
         if not 0 <= seed < 2**63:
             raise errors.InvalidRequest(f"seed must be in [0, 2^63), got {seed}")
@@ -606,7 +610,7 @@ class MotionPlanner:
         search's paths rarely pass closer than certification accepts. A start or goal closer than the margin
         (certification then lowers it below their clearance) is searched unpadded, as without a margin.
         """
-        margin = _safety_margin(req, self.config) if self.certifier is not None else 0.0
+        margin = self.safety_margin(req) if self.certifier is not None else 0.0
         if margin <= 0.0:
             return self.checker
         if self._padded is None or self._padded[0] != margin:
