@@ -154,15 +154,23 @@ class NodeProcess:
     def alive(self) -> bool:
         return self.proc.poll() is None
 
-    def stop(self):
+    def terminate(self) -> None:
+        """Ask the node to shut down (SIGTERM) without waiting for it."""
         if self.alive():
             self.proc.terminate()
-            try:
-                self.proc.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait(timeout=5)
+
+    def wait_stopped(self) -> None:
+        """Wait for the node to end after :meth:`terminate` (killed after 10 s) and close its log."""
+        try:
+            self.proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            self.proc.wait(timeout=5)
         self._log.close()
+
+    def stop(self) -> None:
+        self.terminate()
+        self.wait_stopped()
 
 
 @pytest.fixture(scope="module")
@@ -182,11 +190,13 @@ def node_process(tmp_path_factory):
         return proc
 
     yield start
+    died = [proc for proc in started if not proc.alive()]
     for proc in started:
-        died = not proc.alive()
-        proc.stop()
-        if died:
-            print(f"--- log of {proc.proc.args}:\n{proc.log()}")
+        proc.terminate()  # all first: the nodes' shutdowns overlap
+    for proc in started:
+        proc.wait_stopped()
+    for proc in died:
+        print(f"--- log of {proc.proc.args}:\n{proc.log()}")
 
 
 @pytest.fixture(scope="module")

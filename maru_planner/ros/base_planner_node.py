@@ -114,9 +114,7 @@ class BasePlannerNode(ManagedNode):
 
     def configure(self) -> None:
         """Check the parameters, warm the planners up, follow the map, offer the services."""
-        self.config = BaseNodeConfig(
-            **{name: parameters.read_parameter(self, name, spec) for name, spec in NODE_SPECS.items()}
-        )
+        self.config = BaseNodeConfig(**parameters.read_parameters(self, NODE_SPECS))
         check_config(self.config)
         registry.warm_up()
         self.map_error = "no map received yet on " + self.config.map_topic
