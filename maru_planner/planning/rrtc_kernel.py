@@ -169,7 +169,7 @@ def _norm(dx, dy, dz):
     return np.sqrt(dx * dx + dy * dy + dz * dz)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _group_vs_scene(g, robot, scene, rot, pos, stop_at_touch):
     """0: group ``g``'s outer spheres clear every obstacle; 1: some touch one; 2: an inner ball hits an exact one
     (or, with ``stop_at_touch``, an outer sphere touches one: the answer is then decided)."""
@@ -195,7 +195,7 @@ def _group_vs_scene(g, robot, scene, rot, pos, stop_at_touch):
     return touched
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _pair_vs_pair(ga, gb, robot, rot, pos, stop_at_touch):
     """Self-collision pair (ga, gb) as _group_vs_scene answers: 0 clear, 1 outer spheres touch, 2 inner balls hit
     (or outer spheres touch, with ``stop_at_touch``)."""
