@@ -301,3 +301,43 @@ def test_clearance_is_the_exact_checkers():
     rng = np.random.default_rng(5)
     for q in (robot.random_configuration(rng) for _ in range(10)):
         assert certifier.clearance(q) == pytest.approx(checker.clearance(q), abs=1e-5)
+
+
+def panda_shelf_and_clutter() -> tuple[RobotModel, CollisionChecker]:
+    """The shelf plus 120 one-centimetre balls on its boards and in the air around the arm (a point cloud)."""
+    robot, shelf = panda_shelf()
+    rng = np.random.default_rng(3)
+    on_boards = np.c_[rng.uniform(0.42, 0.68, 80), rng.uniform(-0.4, 0.4, 80), np.repeat([0.22, 0.62], 40)]
+    in_air = rng.uniform([-0.6, -0.6, 0.0], [0.6, 0.6, 1.0], (40, 3))
+    points = np.concatenate([on_boards, in_air])
+    balls = [Obstacle(f"pt{k}", "sphere", radius=0.01, pose=p) for k, p in enumerate(points.tolist())]
+    return robot, CollisionChecker(robot, Scene([*shelf.scene.obstacles.values(), *balls]))
+
+
+def test_a_large_scene_certifies_like_its_full_pair_table(monkeypatch):
+    """Past NEAR_PATH_MIN_OBSTACLES reachable obstacles each certification only proves the pairs of obstacles
+    near its path: the same answers as proving every pair."""
+    from maru_planner.collision import certify
+
+    robot, checker = panda_shelf_and_clutter()
+    assert len(checker.reachable_obstacles) >= certify.NEAR_PATH_MIN_OBSTACLES
+    near = PathCertifier(robot, checker, safety_margin=0.005)
+    full = PathCertifier(robot, checker, safety_margin=0.005)
+    rng = np.random.default_rng(11)
+    outcomes = {True: 0, False: 0}
+    while min(outcomes.values()) < 4:
+        q0 = robot.random_configuration(rng)
+        q1 = np.clip(q0 + rng.normal(0.0, 1.0, robot.nq), robot.lower_limits, robot.upper_limits)
+        if not (checker.is_valid(q0) and checker.is_valid(q1)):
+            continue
+        got = near.certify_segment(q0, q1)
+        with monkeypatch.context() as patch:
+            patch.setattr(certify, "NEAR_PATH_MIN_OBSTACLES", 10**9)
+            want = full.certify_segment(q0, q1)
+            assert near.clearance(q0) == pytest.approx(full.clearance(q0), abs=1e-9)
+        assert (got.valid, got.first_failing_segment, got.reason) == (want.valid, want.first_failing_segment,
+                                                                      want.reason)  # fmt: skip
+        assert near.clearance(q0) == pytest.approx(checker.clearance(q0), abs=1e-5)
+        outcomes[got.valid] += 1
+    tables = near._near_tables.values()  # what the large-scene path proved: fewer obstacles than the scene's
+    assert any(len(table.obstacles) < len(checker.reachable_obstacles) for table in tables)

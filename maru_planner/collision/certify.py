@@ -18,6 +18,11 @@ On ``q(t) = q0 + t (q1 - q0)``, a pair whose distance at ``t_m`` is ``d`` keeps 
 ``margin`` of clearance for ``|t - t_m| < (d - margin) / M``. Each segment is bisected until those
 intervals cover it (a proof) or the exact distance at a checked configuration is within the margin
 (a counter-example). Bounding volumes only ever prove; exact geometry decides every failure.
+
+Large scenes (``NEAR_PATH_MIN_OBSTACLES`` reachable obstacles or more, e.g. a point cloud as 1 cm
+balls): each certification first keeps the obstacles some moving geometry may come within its margin
+of -- on each segment, the geometry's bounding sphere at the middle grown by half the segment's motion
+times its levers -- and proves only their pairs; obstacle pairs are measured by coal directly.
 :func:`certify_and_repair` re-plans a failing segment locally. See ``docs/certification.md``.
 """
 
@@ -35,14 +40,17 @@ from numba import njit
 
 from maru_planner import errors
 from maru_planner.collision.batch_fk import KinematicTree, joint_poses_nb, sphere_centers_nb, tree_arrays
-from maru_planner.collision.checker import CollisionChecker
+from maru_planner.collision.checker import CollisionChecker, self_collision_pairs
 from maru_planner.robot.model import RobotModel
-from maru_planner.scene import Scene
+from maru_planner.scene import Obstacle, Scene
 
 DEFAULT_SAFETY_MARGIN = 0.01  # m (PlannerConfig.safety_margin's default too)
 DISTANCE_TOLERANCE = 1e-6  # m: coal's GJK tolerance, taken off every exact distance
 UNBOUNDED = 1e6  # m: an obstacle bounding box this large is treated as infinite
 MIN_INTERVAL = 1e-9  # rad: a piece of segment this short that is still unproven fails as "unproven"
+NEAR_PATH_MIN_OBSTACLES = 64  # reachable obstacles from which a certification only builds pairs for those near its path
+NEAR_TABLES = 4  # pair tables of near obstacles kept (blends and repairs certify around the same path)
+CLEARANCE_WINDOW = 0.05  # m: clearance() measures the obstacles whose bound is this close to the nearest one first
 REVOLUTE = ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned")
 PRISMATIC = ("JointModelPX", "JointModelPY", "JointModelPZ", "JointModelPrismaticUnaligned")
 
@@ -156,12 +164,14 @@ def chord_deviation(times: np.ndarray, acceleration_bound: np.ndarray) -> np.nda
 
 @dataclass
 class _Pairs:
-    """The checker's pairs as arrays, for one geometry model (rebuilt when the scene changes)."""
+    """The pairs to prove as arrays: (moving geometry, obstacle) for a list of obstacles, then the self pairs.
 
-    geom_model: pin.GeometryModel
-    geom_data: pin.GeometryData
-    hull_model: pin.GeometryModel  # the same with every mesh replaced by its convex hull
-    hull_data: pin.GeometryData
+    Obstacle pairs are measured by coal directly (a Pinocchio geometry model of thousands of obstacles takes
+    minutes to build: each added object resizes its pair matrix), self pairs through the robot's own model.
+    """
+
+    obstacles: list  # per obstacle: (geometry, its convex hull or itself, placement)
+    self_pair: np.ndarray  # (P,) index into the robot model's collision pairs (-1 for an obstacle pair)
     has_hull: np.ndarray  # (P,) bool: a mesh in the pair (its hull distance is a cheaper lower bound)
     first: np.ndarray  # (P,) robot geometry
     second: np.ndarray  # (P,) robot geometry, or obstacle index (into the box arrays) for obstacle pairs
@@ -261,7 +271,15 @@ class PathCertifier:
         self._q_joint = np.array([_joint_of_q(robot.model, i) for i in range(robot.nq)], dtype=np.int64)
         self._prismatic = np.array([robot.model.joints[int(j)].shortname() in PRISMATIC for j in self._q_joint])
         self._downstream = _downstream(robot, self._levers)
+        self._robot_pairs = self_collision_pairs(robot)
+        self._geoms = self._robot_geometry(lambda g: geometries[g].geometry)
+        self._hull_geoms = self._robot_geometry(lambda g: self._hulls.get(g, geometries[g].geometry))
         self._pairs: _Pairs | None = None
+        self._pairs_owner: list | None = None  # the reachable-obstacle list _pairs was built from
+        self._near_tables: dict[bytes, _Pairs] = {}  # by the near obstacles' indices into _near_owner
+        self._near_owner: list | None = None
+        self._boxes: tuple[list, tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
+        self._moving = self._joint != 0
         # Compile (or load from numba's cache) the kernel now: inside the first request it took ~1.5 s of its budget.
         self._frames(np.asarray(robot.neutral(), dtype=float)[None])
 
@@ -290,10 +308,9 @@ class PathCertifier:
         t0 = time.monotonic()
         path = np.atleast_2d(np.asarray(path, dtype=float))
         margin = self.safety_margin if margin is None else float(margin)
-        pairs = self._pair_table()
-        pair_margin = np.full(len(pairs.first), margin)
-        if deviation is not None:
-            pair_margin += pairs.rate @ np.abs(np.asarray(deviation, dtype=float))
+        deviation = np.zeros(self._model.nq) if deviation is None else np.abs(np.asarray(deviation, dtype=float))
+        pairs = self._pair_table(self._swept_reach(path, margin, deviation))
+        pair_margin = margin + pairs.rate @ deviation
         cert = Certificate(valid=True, margin=margin)
         run = _Run(path, pairs, pair_margin, math.inf if deadline is None else deadline, self._downstream)
         while len(run.seg):
@@ -312,16 +329,29 @@ class PathCertifier:
         Every pair is measured on the convex hulls first; the exact geometry only for the pairs whose hull
         distance is below the smallest exact distance found so far (nearest first: usually one or two).
         """
-        pairs = self._pair_table()
+        q = np.asarray(q, dtype=float)
+        bounds = self._box_bounds(q)
+        window = math.inf if bounds is None else float(bounds.min(initial=math.inf)) + CLEARANCE_WINDOW
+        best = self._clearance_among(q, None if bounds is None else bounds < window)
+        if bounds is not None and best > window:  # farther than the window: the obstacles it left out may be nearer
+            best = self._clearance_among(q, bounds < best)
+        return best
+
+    def _clearance_among(self, q: np.ndarray, near: np.ndarray | None) -> float:
+        """:meth:`clearance` over the self pairs and the reachable obstacles ``near`` selects (None: all)."""
+        pairs = self._pair_table(near)
         if not len(pairs.first):
             return math.inf
-        pin.computeDistances(self._model, self._data, pairs.hull_model, pairs.hull_data, np.asarray(q, dtype=float))
-        lower = np.array([r.min_distance for r in pairs.hull_data.distanceResults]) - DISTANCE_TOLERANCE
+        centers, _ = self._frames(q[None])
+        lower = self._bounds(centers, pairs, np.zeros(len(pairs.first), dtype=int), np.arange(len(pairs.first)))
+        pin.forwardKinematics(self._model, self._data, q)
         best, placed = math.inf, set[int]()
         for p in np.argsort(lower):
             if lower[p] >= best:
                 break
-            best = min(best, self._distance(pairs.geom_model, pairs.geom_data, int(p), placed))
+            if pairs.has_hull[p] and self._distance(pairs, int(p), True, placed) >= best:
+                continue
+            best = min(best, self._distance(pairs, int(p), False, placed))
         return best
 
     # ------------------------------------------------------------ internals --
@@ -424,73 +454,163 @@ class PathCertifier:
             p = int(pair[row])
             if pairs.has_hull[p]:
                 cert.hull_queries += 1
-                bound[row] = self._distance(pairs.hull_model, pairs.hull_data, p, placed)
+                bound[row] = self._distance(pairs, p, True, placed)
                 if bound[row] > margin[row]:
                     continue
             cert.exact_queries += 1
-            bound[row] = self._distance(pairs.geom_model, pairs.geom_data, p, placed)
+            bound[row] = self._distance(pairs, p, False, placed)
             exact[row] = True
         return exact
 
-    def _distance(self, model: pin.GeometryModel, data: pin.GeometryData, pair: int, placed: set[int]) -> float:
-        """Coal distance of ``pair`` at the last forward kinematics (placements updated once per model)."""
+    def _distance(self, pairs: _Pairs, pair: int, hull: bool, placed: set[int]) -> float:
+        """Coal distance of ``pair`` at the last forward kinematics, on the convex hulls if ``hull`` (a lower bound)
+        or the exact geometry; the robot's placements are updated once per model (``placed``)."""
+        model, data = self._hull_geoms if hull else self._geoms
         if id(model) not in placed:
             pin.updateGeometryPlacements(self._model, self._data, model, data)
             placed.add(id(model))
-        return pin.computeDistance(model, data, pair).min_distance - DISTANCE_TOLERANCE
+        if pairs.self_pair[pair] >= 0:
+            return pin.computeDistance(model, data, int(pairs.self_pair[pair])).min_distance - DISTANCE_TOLERANCE
+        g = int(pairs.first[pair])
+        geometry, hull_geometry, placement = pairs.obstacles[pairs.second[pair]]
+        distance = coal.distance(model.geometryObjects[g].geometry, data.oMg[g], hull_geometry if hull else geometry,
+                                 placement, coal.DistanceRequest(), coal.DistanceResult())  # fmt: skip
+        return distance - DISTANCE_TOLERANCE
 
-    def _pair_table(self) -> _Pairs:
-        geom_model = self.checker.geometry_model
-        if self._pairs is None or self._pairs.geom_model is not geom_model:
-            self._pairs = self._build_pairs(geom_model)
-        return self._pairs
+    def _robot_geometry(self, shape_of: Callable[[int], coal.CollisionGeometry]):
+        """(model, data): the robot's geometry with ``shape_of(g)`` for each geometry and the self pairs."""
+        model = self.robot.collision_model.copy()
+        for g, obj in enumerate(model.geometryObjects):
+            obj.geometry = shape_of(g)
+        model.removeAllCollisionPairs()
+        for i, j in self._robot_pairs:
+            model.addCollisionPair(pin.CollisionPair(i, j))
+        return model, pin.GeometryData(model)
 
-    def _build_pairs(self, geom_model: pin.GeometryModel) -> _Pairs:
-        n = self._n_robot
-        objects = geom_model.geometryObjects
-        boxes = [_bounding_box(objects[k]) for k in range(n, geom_model.ngeoms)]
-        box_center = np.array([c for c, _, _, _ in boxes], dtype=float).reshape(-1, 3)
+    def _pair_table(self, near: np.ndarray | None = None) -> _Pairs:
+        """The pairs to prove: every pair of the checker in a small scene (or ``near`` None), else the self pairs
+        and the pairs of the reachable obstacles ``near`` selects (a bool mask from :meth:`_swept_reach`)."""
+        obstacles = self.checker.reachable_obstacles
+        if near is None or len(obstacles) < NEAR_PATH_MIN_OBSTACLES:
+            if self._pairs is None or self._pairs_owner is not obstacles:
+                self._pairs, self._pairs_owner = self._build_pairs(obstacles), obstacles
+            return self._pairs
+        if self._near_owner is not obstacles:  # the scene changed: tables of the old obstacles are stale
+            self._near_owner, self._near_tables = obstacles, {}
+        keep = np.flatnonzero(near)
+        key = keep.tobytes()
+        table = self._near_tables.pop(key, None)
+        if table is None:
+            table = self._build_pairs([obstacles[k] for k in keep])
+        self._near_tables[key] = table  # most recent last
+        while len(self._near_tables) > NEAR_TABLES:
+            del self._near_tables[next(iter(self._near_tables))]
+        return table
+
+    def _swept_reach(self, path: np.ndarray, margin: float, deviation: np.ndarray) -> np.ndarray | None:
+        """In a large scene (None otherwise), which reachable obstacles some pair of ``path`` may come within its
+        margin of: on each segment, a moving geometry stays within its bounding radius plus half the segment's
+        motion times its levers of the bounding-sphere centre at the segment's middle."""
+        boxes = self._obstacle_boxes()
+        if boxes is None:
+            return None
+        mids = 0.5 * (path[:-1] + path[1:]) if len(path) > 1 else path
+        travel = 0.5 * np.abs(np.diff(path, axis=0)) @ self._levers.T if len(path) > 1 else np.zeros((1, self._n_robot))
+        reach = (self._radius + travel + margin + self._levers @ deviation)[:, self._moving]  # (segments, geometries)
+        centers = self._frames(mids)[0][:, self._moving]
+        box_center, box_rot, box_half = boxes
+        lo, hi = (centers - reach[..., None]).min(axis=0), (centers + reach[..., None]).max(axis=0)
+        unbounded = ~np.isfinite(box_half).all(axis=1)
+        extent = np.einsum("kab,kb->ka", np.abs(box_rot), np.where(unbounded[:, None], 0.0, box_half))  # world AABB
+        swept = unbounded | ((box_center - extent <= hi.max(axis=0)) & (box_center + extent >= lo.min(axis=0))).all(1)
+        near = np.zeros(len(box_center), dtype=bool)
+        near[unbounded] = True  # half-spaces: always
+        candidates = np.flatnonzero(swept & ~unbounded)
+        subset = (box_center[candidates], box_rot[candidates], box_half[candidates])
+        for s in range(len(mids)):  # segments one at a time: (geometries, candidates) arrays stay small
+            hit = (_box_distances(centers[s], *subset) <= reach[s, :, None]).any(axis=0)
+            near[candidates[hit]] = True
+        return near
+
+    def _box_bounds(self, q: np.ndarray) -> np.ndarray | None:
+        """In a large scene (None otherwise), a lower bound of each reachable obstacle's distance to the robot at
+        ``q`` (-inf for a half-space)."""
+        boxes = self._obstacle_boxes()
+        if boxes is None:
+            return None
+        centers, _ = self._frames(q[None])
+        gaps = _box_distances(centers[0, self._moving], *boxes) - self._radius[self._moving, None]
+        return np.where(np.isfinite(boxes[2]).all(axis=1), gaps.min(axis=0, initial=math.inf), -math.inf)
+
+    def _obstacle_boxes(self) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """(centres, rotations, half extents) of the reachable obstacles' bounding boxes in a large scene, else None."""
+        obstacles = self.checker.reachable_obstacles
+        if len(obstacles) < NEAR_PATH_MIN_OBSTACLES:
+            return None
+        if self._boxes is None or self._boxes[0] is not obstacles:
+            boxes = [_bounding_box(ob.geometry(), pin.SE3(ob.pose[:3, :3].copy(), ob.pose[:3, 3].copy()))
+                     for ob in obstacles]  # fmt: skip
+            centers, rotations, halves = (np.array([box[i] for box in boxes], dtype=float) for i in range(3))
+            self._boxes = (obstacles, (centers, rotations, halves))
+        return self._boxes[1]
+
+    def _build_pairs(self, obstacles: list[Obstacle]) -> _Pairs:
+        """The table of ``obstacles`` (each against every moving geometry, in the exact checker's order) and the
+        self pairs."""
+        shapes = []
+        for ob in obstacles:
+            geometry = ob.geometry()
+            hull = convex_hull(geometry) if isinstance(geometry, coal.BVHModelBase) else geometry
+            shapes.append((geometry, hull, pin.SE3(ob.pose[:3, :3].copy(), ob.pose[:3, 3].copy())))
+        boxes = [_bounding_box(geometry, placement) for geometry, _, placement in shapes]
         box_half = np.array([h for _, _, h, _ in boxes], dtype=float).reshape(-1, 3)
         box_slack = np.array([0.0 if exact else 2.0 * np.linalg.norm(h) for _, _, h, exact in boxes])
-        ends = np.array([(p.first, p.second) for p in geom_model.collisionPairs], dtype=int).reshape(-1, 2)
-        first, second = ends.min(axis=1), ends.max(axis=1)
-        obstacle = second >= n
+        moving = np.flatnonzero(self._moving)
+        n_env = len(moving) * len(obstacles)
+        self_ends = np.array(self._robot_pairs, dtype=int).reshape(-1, 2)
+        first = np.concatenate([np.tile(moving, len(obstacles)), self_ends.min(axis=1)]).astype(int)
+        second = np.concatenate([np.repeat(np.arange(len(obstacles)), len(moving)), self_ends.max(axis=1)]).astype(int)
+        obstacle = np.arange(len(first)) < n_env
         other = np.where(obstacle, first, second)
         chain_first, chain_other = self._chain[first], self._chain[other] & ~obstacle[:, None]
         moves_first, moves_other = chain_first & ~chain_other, chain_other & ~chain_first
         radius = self._radius
         gap = np.where(obstacle, 2.0 * radius[first], 2.0 * (radius[first] + radius[other]))
-        gap[obstacle] += box_slack[second[obstacle] - n]
-        meshes = [k for k, obj in enumerate(objects) if isinstance(obj.geometry, coal.BVHModelBase)]
-        hull_model = geom_model.copy()
-        for k in meshes:
-            hull_model.geometryObjects[k].geometry = self._hulls[k] if k < n else convex_hull(objects[k].geometry)
+        gap[:n_env] += box_slack[second[:n_env]]
+        robot_mesh = np.array([isinstance(obj.geometry, coal.BVHModelBase)
+                               for obj in self.robot.collision_model.geometryObjects])  # fmt: skip
+        obstacle_mesh = np.array([geometry is not hull for geometry, hull, _ in shapes], dtype=bool)
         return _Pairs(
-            geom_model=geom_model,
-            geom_data=pin.GeometryData(geom_model),
-            hull_model=hull_model,
-            hull_data=pin.GeometryData(hull_model),
-            has_hull=np.isin(first, meshes) | np.isin(second, meshes),
+            obstacles=shapes,
+            self_pair=np.concatenate([np.full(n_env, -1), np.arange(len(self_ends))]).astype(int),
+            has_hull=robot_mesh[first] | np.concatenate([obstacle_mesh[second[:n_env]], robot_mesh[second[n_env:]]]),
             first=first,
-            second=np.where(obstacle, second - n, second),
+            second=second,
             obstacle=obstacle,
             other=other,
             moves_first=moves_first,
             moves_other=moves_other,
             rate=moves_first * self._levers[first] + moves_other * self._levers[other],
             gap=gap,
-            box_center=box_center,
+            box_center=np.array([c for c, _, _, _ in boxes], dtype=float).reshape(-1, 3),
             box_rot=np.array([r for _, r, _, _ in boxes], dtype=float).reshape(-1, 3, 3),
             box_half=box_half,
         )
 
 
-def _bounding_box(obj: pin.GeometryObject) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
+def _box_distances(centers: np.ndarray, box_center: np.ndarray, box_rot: np.ndarray, box_half: np.ndarray
+                   ) -> np.ndarray:  # fmt: skip
+    """(points, boxes): distance from each of ``centers`` (n, 3) to each box (0 inside)."""
+    offset = centers[:, None, :] - box_center[None]  # (points, boxes, 3)
+    local = sum(offset[..., b, None] * box_rot[:, b] for b in range(3))  # R^T offset (5x faster than einsum here)
+    return np.linalg.norm(np.maximum(np.abs(local) - box_half, 0.0), axis=2)
+
+
+def _bounding_box(geometry: coal.CollisionGeometry, placement: pin.SE3
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:  # fmt: skip
     """World centre, rotation and half extents of a fixed obstacle's bounding box; True if it is the obstacle."""
-    geometry = obj.geometry
     geometry.computeLocalAABB()
     lo, hi = np.asarray(geometry.aabb_local.min_, dtype=float), np.asarray(geometry.aabb_local.max_, dtype=float)
-    placement = obj.placement
     if not (np.abs(lo).max() < UNBOUNDED and np.abs(hi).max() < UNBOUNDED):  # a half-space: coal decides each query
         return placement.translation.copy(), placement.rotation.copy(), np.full(3, np.inf), False
     return placement.act(0.5 * (lo + hi)), placement.rotation.copy(), 0.5 * (hi - lo), isinstance(geometry, coal.Box)

@@ -207,11 +207,18 @@ class CollisionChecker:
     @property
     def geometry_model(self) -> pin.GeometryModel:
         """Robot + every reachable obstacle, its ``collisionPairs`` the checked pairs (current scene; do not
-        modify). With a scene tree this pair list is built on first use (obstacles x moving links)."""
+        modify). With a scene tree this pair list is built on first use (obstacles x moving links; each object
+        Pinocchio adds resizes its pair matrix: thousands of obstacles take minutes)."""
         self._sync()
         if self._full_model is None:
             self._full_model = self._pair_model(self._reachable)[0]
         return self._full_model
+
+    @property
+    def reachable_obstacles(self) -> list[Obstacle]:
+        """The scene's obstacles the robot can reach, the only ones checked (a new list after each rebuild)."""
+        self._sync()
+        return self._reachable
 
     # ------------------------------------------------------------- checks --
     def is_valid(self, q: np.ndarray) -> bool:

@@ -225,7 +225,7 @@ class MotionPlanner:
     def _make_certifier(self):
         """A PathCertifier on the exact model, or None (certification off, or no pinocchio geometry to prove on)."""
         exact = self.exact_checker or self.checker
-        if not self.config.certify or not hasattr(exact, "geometry_model"):
+        if not self.config.certify or not hasattr(type(exact), "reachable_obstacles"):
             return None
         # lazy: certification loads numba (batched kinematics); planners on toy checkers never need it
         from maru_planner.collision.certify import PathCertifier
