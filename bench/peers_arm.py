@@ -299,6 +299,11 @@ def main(argv=None) -> int:
     unknown = sorted(set(args.solvers) - set(SOLVERS))
     if unknown:
         ap.error(f"unknown solver(s) {', '.join(unknown)}; known: {', '.join(SOLVERS)}")
+    if "pyroboplan" in args.solvers:
+        try:
+            import pyroboplan  # noqa: F401
+        except ImportError:
+            ap.error("pyroboplan is not installed: run `make bench-deps`, or leave it out with --solvers")
     per_set = 3 if args.quick else args.per_set
     pyro_per_set = 2 if args.quick else args.pyroboplan_per_set
     maru_seeds = list(range(3 if args.quick else args.maru_seeds))
