@@ -84,44 +84,6 @@ def _dist(a, b):
 VALID, COLLIDING, AMBIGUOUS = 0, 1, 2
 
 
-@njit(cache=True, inline="always")
-def cluster_vs_obstacle(
-    c, k, reach, padding, s_inner, s_radius, c_start, world, cworld,
-    box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact,
-):  # fmt: skip
-    """0: cluster ``c`` (bound + ``reach``) clears obstacle ``k``; 1: an outer sphere touches it; 2: an inner ball."""
-    if point_obstacle_distance(cworld[c], k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r) >= reach:
-        return 0
-    touched = 0
-    for s in range(c_start[c], c_start[c + 1]):
-        d = point_obstacle_distance(world[s], k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r)
-        if exact[k] and d < s_inner[s] + padding:
-            return 2
-        if d < s_radius[s] + padding:
-            touched = 1
-    return touched
-
-
-@njit(cache=True, inline="always")
-def _cluster_meets(
-    c, g, k, reach, padding, pair_tag, s_inner, s_radius, c_start, world, cworld,
-    box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact, amb, n_amb, mark,
-):  # fmt: skip
-    """Cluster ``c`` of group ``g`` against obstacle ``k`` for :func:`_scene_by_grid`: -1 when an inner ball hits,
-    else ``n_amb``, plus one when an outer sphere touches and (g, k) is not yet in ``amb`` (``pair_tag``)."""
-    hit = cluster_vs_obstacle(
-        c, k, reach, padding, s_inner, s_radius, c_start, world, cworld,
-        box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact,
-    )  # fmt: skip
-    if hit == 2:
-        return -1
-    if hit == 1 and mark[1, k] != pair_tag and n_amb < amb.shape[0]:
-        mark[1, k] = pair_tag
-        amb[n_amb, 0], amb[n_amb, 1], amb[n_amb, 2] = 0, g, k
-        return n_amb + 1
-    return n_amb
-
-
 @njit(cache=True)
 def _scene_by_grid(
     padding, s_inner, s_radius, c_start, c_radius, g_joint, g_clusters, world, cworld,
@@ -137,6 +99,7 @@ def _scene_by_grid(
     nx, ny, nz = grid_i[0], grid_i[1], grid_i[2]
     cell_start, items, big = unpack_grid(grid_i)
     h, ox, oy, oz = grid_f[0], grid_f[1], grid_f[2], grid_f[3]
+    near = np.empty(n_obs, dtype=np.int64)  # one cluster's obstacles, each once
     n_amb = 0
     for g in range(g_joint.shape[0]):
         if g_joint[g] == 0:  # fixed to the world: like the exact checker, never tested against the scene
@@ -150,28 +113,38 @@ def _scene_by_grid(
             i0, i1 = _cell_range(cworld[c, 0] - reach, cworld[c, 0] + reach, ox, h, nx)
             j0, j1 = _cell_range(cworld[c, 1] - reach, cworld[c, 1] + reach, oy, h, ny)
             l0, l1 = _cell_range(cworld[c, 2] - reach, cworld[c, 2] + reach, oz, h, nz)
+            n_near = 0
             for i in range(i0, i1 + 1):
                 for j in range(j0, j1 + 1):
                     for l in range(l0, l1 + 1):
                         cell = (i * ny + j) * nz + l
                         for idx in range(cell_start[cell], cell_start[cell + 1]):
                             k = items[idx]
-                            if mark[0, k] == tag:
-                                continue
-                            mark[0, k] = tag
-                            n_amb = _cluster_meets(
-                                c, g, k, reach, padding, pair_tag, s_inner, s_radius, c_start, world, cworld,
-                                box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact, amb, n_amb, mark,
-                            )  # fmt: skip
-                            if n_amb < 0:
-                                return -1
-            for k in big:
-                n_amb = _cluster_meets(
-                    c, g, k, reach, padding, pair_tag, s_inner, s_radius, c_start, world, cworld,
-                    box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact, amb, n_amb, mark,
-                )  # fmt: skip
-                if n_amb < 0:
-                    return -1
+                            if mark[0, k] != tag:
+                                mark[0, k] = tag
+                                near[n_near] = k
+                                n_near += 1
+            for k in big:  # never listed in a cell
+                near[n_near] = k
+                n_near += 1
+            # The cluster test written out, as in _scene_by_loop.
+            for t in range(n_near):
+                k = near[t]
+                if point_obstacle_distance(cworld[c], k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h,
+                                           cyl_r) >= reach:  # fmt: skip
+                    continue
+                touched = False
+                for s in range(c_start[c], c_start[c + 1]):
+                    d = point_obstacle_distance(world[s], k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h,
+                                                cyl_r)  # fmt: skip
+                    if exact[k] and d < s_inner[s] + padding:
+                        return -1
+                    if d < s_radius[s] + padding:
+                        touched = True
+                if touched and mark[1, k] != pair_tag and n_amb < amb.shape[0]:
+                    mark[1, k] = pair_tag  # (g, k) once, whichever of g's clusters touch k
+                    amb[n_amb, 0], amb[n_amb, 1], amb[n_amb, 2] = 0, g, k
+                    n_amb += 1
     return n_amb
 
 
@@ -183,8 +156,9 @@ def _scene_by_loop(
     """Robot-vs-scene part of :func:`classify_state` without a grid (a small scene): every obstacle against every
     moving group, through the group's and its clusters' bounds. Returns like :func:`_scene_by_grid`.
 
-    The group and cluster tests are written out here: as a helper called per (obstacle, group) with twenty
-    array arguments they made a state 3 to 6 times slower on MotionBenchMaker scenes (numba keeps the calls).
+    The group and cluster tests are written out here and in :func:`_scene_by_grid`: as helpers called per
+    (obstacle, group) with twenty array arguments they made a state 3 to 6 times slower on MotionBenchMaker
+    scenes (numba keeps the calls).
     """
     n_amb = 0
     for k in range(box_c.shape[0] + sph_c.shape[0] + cyl_c.shape[0]):
