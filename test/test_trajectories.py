@@ -332,3 +332,15 @@ def test_on_a_certifying_planner_the_returned_trajectory_itself_certifies(method
     acceleration[indices] = robot.acceleration_limits[indices]
     certificate = planner.certifier.certify_path(full, margin=0.0, deviation=chord_deviation(traj.times, acceleration))
     assert certificate.valid, certificate.reason
+
+
+def test_one_straight_segment_is_timed_in_closed_form_as_toppra_would():
+    """toppra on a single segment returns the trapezoid of the limiting joint: TOPP-RA's own optimum (its
+    discretised profile may only be slower), with no blend to certify."""
+    path = np.array([[0.0, 0.0, 0.0], [1.2, -0.4, 2.5]])
+    trajectory, report = parameterize(path, "toppra")
+    assert report.method == "toppra" and report.certify_checks == 0
+    solver = timing._toppra_section(timing.BlendedPath(path, np.zeros(2)), LIMITS3)
+    assert trajectory.duration <= solver.duration + 1e-9
+    assert trajectory.duration == pytest.approx(solver.duration, rel=0.02)
+    assert np.allclose(trajectory.positions[-1], path[-1])

@@ -16,7 +16,8 @@ Past an optional deadline no blend is certified any more, so the corners left st
 ``velocity × scaling`` and ``acceleration × scaling`` (TOPP-RA, constant path acceleration
 between grid points, which include every blend boundary). The result is then evaluated on a dense
 grid and, if toppra's discretisation let a limit be exceeded, uniformly slowed down until every
-limit holds at every sample it returns.
+limit holds at every sample it returns. A path of one straight segment skips the solver: its
+time-optimal profile is the bang-coast-bang trapezoid of the limiting joint, in closed form.
 
 ``ruckig`` is jerk-limited: it passes through the blend boundaries with toppra's speed there
 and zero acceleration, one Ruckig trajectory per piece (straight pieces are phase-synchronised
@@ -296,6 +297,8 @@ def parameterize(
     waypoints = _distinct(np.asarray(path, float))
     if method == "trapezoid" or len(waypoints) < 2:
         return _trapezoid(waypoints, joint_names, limits, dt, max_points), TimingReport("trapezoid")
+    if method == "toppra" and len(waypoints) == 2:  # one straight segment: TOPP-RA's optimum is this trapezoid
+        return _trapezoid(waypoints, joint_names, limits, dt, max_points), TimingReport("toppra")
     try:
         build = _toppra if method == "toppra" else _ruckig
         sections, report = build(waypoints, limits, _Check(curve_free, certify_step, deadline), max_deviation)
