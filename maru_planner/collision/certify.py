@@ -326,8 +326,8 @@ class PathCertifier:
     def clearance(self, q: np.ndarray) -> float:
         """Exact smallest distance over all checked pairs at ``q`` (m; <= 0 in collision, inf without pairs).
 
-        Every pair is measured on the convex hulls first; the exact geometry only for the pairs whose hull
-        distance is below the smallest exact distance found so far (nearest first: usually one or two).
+        Pairs are taken nearest bounding-volume bound first; each is measured on the convex hulls, then on the
+        exact geometry only if that is below the smallest exact distance found so far (usually one or two).
         """
         q = np.asarray(q, dtype=float)
         bounds = self._box_bounds(q)
