@@ -341,3 +341,63 @@ def test_a_large_scene_certifies_like_its_full_pair_table(monkeypatch):
         outcomes[got.valid] += 1
     tables = near._near_tables.values()  # what the large-scene path proved: fewer obstacles than the scene's
     assert any(len(table.obstacles) < len(checker.reachable_obstacles) for table in tables)
+
+
+def panda_sphere_model(robot: RobotModel):
+    from maru_planner.collision.sphere_model import load_or_fit
+
+    return load_or_fit(robot.model, robot.collision_model)
+
+
+def test_the_sphere_cover_contains_every_mesh_triangle():
+    """The premise of the cover bound: each triangle of a mesh geometry lies inside one sphere of its group
+    (its vertices and centroid are inside the union of the group's spheres)."""
+    robot, _ = panda_shelf()
+    spheres = panda_sphere_model(robot)
+    meshes = 0
+    for g, obj in enumerate(robot.collision_model.geometryObjects):
+        if not hasattr(obj.geometry, "vertices"):
+            continue
+        meshes += 1
+        vertices = np.asarray(obj.geometry.vertices(), dtype=float)
+        triangles = np.array([[t[i] for i in range(3)] for t in (obj.geometry.tri_indices(k)
+                              for k in range(obj.geometry.num_tris))])  # fmt: skip
+        points = np.concatenate([vertices, vertices[triangles].mean(axis=1)]) @ obj.placement.rotation.T
+        points += obj.placement.translation  # in the parent joint's frame, like the spheres
+        mine = slice(spheres.group_start[g], spheres.group_start[g + 1])
+        gaps = np.linalg.norm(points[:, None] - spheres.center[mine][None], axis=2) - spheres.radius[mine]
+        assert gaps.min(axis=1).max() <= 1e-9, obj.name
+    assert meshes >= 9
+
+
+def test_the_sphere_cover_certifies_like_the_bounding_spheres_with_fewer_coal_queries():
+    robot, checker = panda_shelf()
+    plain = PathCertifier(robot, checker, safety_margin=0.005)
+    covered = PathCertifier(robot, checker, safety_margin=0.005, spheres=panda_sphere_model(robot))
+    rng = np.random.default_rng(13)
+    outcomes, queries = {True: 0, False: 0}, {"plain": 0, "covered": 0}
+    while min(outcomes.values()) < 5:
+        q0 = robot.random_configuration(rng)
+        q1 = np.clip(q0 + rng.normal(0.0, 1.0, robot.nq), robot.lower_limits, robot.upper_limits)
+        if not (checker.is_valid(q0) and checker.is_valid(q1)):
+            continue
+        want, got = plain.certify_segment(q0, q1), covered.certify_segment(q0, q1)
+        assert (got.valid, got.reason) == (want.valid, want.reason)
+        outcomes[got.valid] += 1
+        queries["plain"] += want.exact_queries + want.hull_queries
+        queries["covered"] += got.exact_queries + got.hull_queries
+    assert queries["covered"] < 0.6 * queries["plain"]  # ~0.5 here; ~0.5 on MotionBenchMaker paths too
+
+
+def test_a_sphere_model_of_another_robot_is_not_used():
+    robot, checker = panda_shelf()
+    arm = RobotModel.maru1()
+    other = load_or_fit_of(arm)
+    assert PathCertifier(robot, checker, spheres=other)._cover is None
+    assert PathCertifier(robot, checker, spheres=panda_sphere_model(robot))._cover is not None
+
+
+def load_or_fit_of(robot: RobotModel):
+    from maru_planner.collision.sphere_model import load_or_fit
+
+    return load_or_fit(robot.model, robot.collision_model)

@@ -74,6 +74,11 @@ class ScenePrimitives:
         """Convert a :class:`~maru_planner.scene.Scene` (``None`` = empty), keeping the obstacles whose
         bounding sphere comes within ``reach`` of the root origin."""
         obstacles = scene.obstacles_within(reach, clock) if scene is not None else []
+        return cls.from_obstacles(obstacles, clock)
+
+    @classmethod
+    def from_obstacles(cls, obstacles: list[Obstacle], clock: BuildClock | None = None) -> ScenePrimitives:
+        """Convert ``obstacles`` (``clock`` ticks once per obstacle)."""
         clock = clock or BuildClock(None, len(obstacles))
         by_kind: dict[str, list[tuple[Obstacle, KernelPrimitive]]] = {kind: [] for kind in KERNEL_KINDS}
         for k, obstacle in enumerate(obstacles):

@@ -230,7 +230,8 @@ class MotionPlanner:
         # lazy: certification loads numba (batched kinematics); planners on toy checkers never need it
         from maru_planner.collision.certify import PathCertifier
 
-        return PathCertifier(self.robot, exact, self.config.safety_margin)
+        spheres = self.checker.spheres if is_sphere_checker(self.checker) else None  # tighter bounds on meshes
+        return PathCertifier(self.robot, exact, self.config.safety_margin, spheres=spheres)
 
     def _certify(self, request: MotionRequest, result: MotionResult, t0: float) -> MotionResult:
         """Certify ``result``'s path; repair failing segments locally in the time left, else fail the request."""
