@@ -107,6 +107,20 @@ def test_chord_deviation_widens_the_margin(arm):
     assert not certifier.certify_path(path, deviation=[0.03, 0.03]).valid
 
 
+def test_curves_certified_together_get_each_their_own_answer(arm):
+    """certify_curves: one pass, one answer per curve, each as certify_path alone gives it (the straight steps
+    between curves are not certified: the last curve ends right of the plate, the next starts left of it)."""
+    certifier = PathCertifier(arm, Scene([plate_at(0.03)]), safety_margin=0.0)
+    through = np.array([[0.0, 0.0], [0.1, 0.0], [0.2, 0.0]])  # sweeps across the plate
+    left, right = np.array([[-0.3, 0.0], [-0.1, 0.0]]), np.array([[0.1, 0.0], [0.3, 0.0]])
+    none = np.zeros(2)
+    curves = [(right, none), (left, none), (through, none), (right, [0.01, 0.01]), (right, [0.2, 0.2])]
+    want = [certifier.certify_path(c, deviation=d).valid for c, d in curves]
+    assert want == [True, True, False, True, False]
+    assert certifier.certify_curves(curves) == want
+    assert certifier.certify_curves([]) == []
+
+
 def test_scene_edits_are_followed(arm):
     scene = Scene()
     certifier = PathCertifier(arm, CollisionChecker(arm, scene), safety_margin=0.0)

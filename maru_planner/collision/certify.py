@@ -294,8 +294,12 @@ class _SphereCover:
 class _Run:
     """The state of one :meth:`PathCertifier.certify_path` call."""
 
-    def __init__(self, path: np.ndarray, pairs: _Pairs, pair_margin: np.ndarray, deadline: float, downstream):
+    def __init__(self, path: np.ndarray, pairs: _Pairs, pair_margin: np.ndarray, deadline: float, downstream,
+                 curve: np.ndarray):  # fmt: skip
+        """``pair_margin`` (segments, pairs); ``curve`` (segments,): the curve each segment belongs to, -1 for a
+        segment not to certify (between two curves)."""
         self.path, self.pairs, self.pair_margin, self.deadline = path, pairs, pair_margin, deadline
+        self.curve = curve
         self.n_segments = len(path) - 1
         self.delta = np.diff(path, axis=0)
         self.motion = np.abs(self.delta)  # (segments, nq)
@@ -305,17 +309,28 @@ class _Run:
         self.downstream = np.einsum("gjk,sk->sgj", downstream, self.motion)
         self.clearance = np.full(self.n_segments, math.inf)
         self.failed = self.n_segments  # first failing segment so far (n_segments: none)
+        self.alive = curve >= 0  # segments still worth proving: not after a failure on their curve
         self.reason = ""
         self.witness: np.ndarray | None = None
         n_pairs = len(pairs.first)
         # Pending work, one row per (segment, pair, piece [a, b] of the segment not yet proven for the pair).
-        self.seg = np.repeat(np.arange(self.n_segments), n_pairs)
-        self.pair = np.tile(np.arange(n_pairs), self.n_segments)
+        live = np.flatnonzero(self.alive)
+        self.seg = np.repeat(live, n_pairs)
+        self.pair = np.tile(np.arange(n_pairs), len(live))
         self.a, self.b = np.zeros(len(self.seg)), np.ones(len(self.seg))
 
     def fail(self, segment: int, reason: str, q: np.ndarray) -> None:
+        """Segment ``segment`` fails: the rest of its curve needs no more proof (its first failure is reported)."""
+        self.alive[segment:][self.curve[segment:] == self.curve[segment]] = False
         if segment < self.failed:
             self.failed, self.reason, self.witness = segment, reason, q.copy()
+
+    def failed_curves(self, n_curves: int) -> np.ndarray:
+        """(n_curves,) bool: whether each curve has a failing segment."""
+        out = np.zeros(n_curves, dtype=bool)
+        done = (self.curve >= 0) & ~self.alive
+        out[self.curve[done]] = True
+        return out
 
 
 class PathCertifier:
@@ -397,12 +412,9 @@ class PathCertifier:
         path = np.atleast_2d(np.asarray(path, dtype=float))
         margin = self.safety_margin if margin is None else float(margin)
         deviation = np.zeros(self._model.nq) if deviation is None else np.abs(np.asarray(deviation, dtype=float))
-        pairs = self._pair_table(self._swept_reach(path, margin, deviation))
-        pair_margin = margin + pairs.rate @ deviation
-        cert = Certificate(valid=True, margin=margin)
-        run = _Run(path, pairs, pair_margin, math.inf if deadline is None else deadline, self._downstream)
-        while len(run.seg):
-            self._check_rows(run, cert)
+        n_segments = max(len(path) - 1, 0)
+        cert, run = self._certify(path, np.tile(deviation, (n_segments, 1)), np.zeros(n_segments, int), margin,
+                                  deadline)  # fmt: skip
         if run.failed < run.n_segments:
             cert.valid, cert.first_failing_segment = False, run.failed
             cert.reason, cert.witness = run.reason, run.witness
@@ -410,6 +422,45 @@ class PathCertifier:
         cert.min_clearance = float(run.clearance[: run.failed + 1].min(initial=math.inf))
         cert.seconds = time.monotonic() - t0
         return cert
+
+    def certify_curves(
+        self, curves: list[tuple[np.ndarray, np.ndarray]], deadline: float | None = None, *, margin: float | None = None
+    ) -> list[bool]:
+        """Whether each curve is certified, all in one pass (their pairs share the work).
+
+        ``curves``: (configurations (n, nq), deviation (nq,)) as :meth:`certify_path` takes them. A curve
+        still unproven at ``deadline`` counts as not certified.
+        """
+        margin = self.safety_margin if margin is None else float(margin)
+        nq = self._model.nq
+        points: list[np.ndarray] = []
+        deviation: list[np.ndarray] = []
+        curve: list[int] = []
+        for c, (configs, dev) in enumerate(curves):
+            configs = np.atleast_2d(np.asarray(configs, dtype=float))
+            if points:  # the straight step from the last curve's end to this curve's start is not certified
+                deviation.append(np.zeros(nq))
+                curve.append(-1)
+            points.append(configs)
+            deviation += [np.abs(np.asarray(dev, dtype=float))] * (len(configs) - 1)
+            curve += [c] * (len(configs) - 1)
+        if not points:
+            return []
+        path = np.concatenate(points)
+        _, run = self._certify(path, np.array(deviation).reshape(-1, nq), np.array(curve, dtype=int), margin, deadline)
+        return (~run.failed_curves(len(curves))).tolist()
+
+    def _certify(
+        self, path: np.ndarray, deviation: np.ndarray, curve: np.ndarray, margin: float, deadline: float | None
+    ) -> tuple[Certificate, _Run]:
+        """Prove the segments of ``path`` (deviation (segments, nq), ``curve`` as :class:`_Run` takes it)."""
+        pairs = self._pair_table(self._swept_reach(path, margin, deviation))
+        pair_margin = margin + deviation @ pairs.rate.T  # (segments, pairs)
+        cert = Certificate(valid=True, margin=margin)
+        run = _Run(path, pairs, pair_margin, math.inf if deadline is None else deadline, self._downstream, curve)
+        while len(run.seg):
+            self._check_rows(run, cert)
+        return cert, run
 
     def clearance(self, q: np.ndarray) -> float:
         """Exact smallest distance over all checked pairs at ``q`` (m; <= 0 in collision, inf without pairs).
@@ -455,7 +506,7 @@ class PathCertifier:
         keys, first_row, config_of = np.unique(seg + 0.5 * mid, return_index=True, return_inverse=True)
         configs = run.path[seg[first_row]] + mid[first_row, None] * run.delta[seg[first_row]]
         cert.checks += len(keys)
-        margin = run.pair_margin[pair]
+        margin = run.pair_margin[seg, pair]
         centers, to_axis = self._frames(configs)
         volume_bound = self._bounds(centers, run.pairs, config_of, pair)
         rate = run.rate[seg, pair]  # configuration-free; tightened only where the bound falls short of it
@@ -463,10 +514,11 @@ class PathCertifier:
         short = np.flatnonzero(bound < margin + half * rate)
         rate[short] = self._rates(to_axis[config_of[short]], run, short, half[short])
         need = margin + half * rate
-        # coal where it may prove the row; on a sphere-covered pair only once the cover leaves no slack (bisecting
-        # on the cover's bound is cheaper than a coal query, and exact geometry still decides every failure)
-        refine = (bound < need) & (volume_bound + run.pairs.gap[pair] >= need)
-        refine &= ~run.pairs.covered[pair] | (bound <= margin)
+        # coal where it may prove the row, and wherever the bounds leave no slack (exact geometry decides every
+        # failure); on a sphere-covered pair only then (bisecting on its bound is cheaper than a coal query)
+        no_slack = bound <= margin
+        refine = (bound < need) & ((volume_bound + run.pairs.gap[pair] >= need) | no_slack)
+        refine &= ~run.pairs.covered[pair] | no_slack
         exact = self._refine(configs, run.pairs, config_of, pair, refine, margin, bound, cert)
         np.minimum.at(run.clearance, seg, np.where(refine | (bound >= need), bound, math.inf))
         slack = bound - margin
@@ -475,12 +527,12 @@ class PathCertifier:
             run.fail(int(seg[row]), reason, configs[config_of[row]])
         with np.errstate(divide="ignore", invalid="ignore"):
             reach = np.where(rate > 0.0, np.maximum(slack, 0.0) / rate, math.inf)
-        open_ = (reach < half) & (seg < run.failed)
+        open_ = (reach < half) & run.alive[seg]
         stuck = open_ & ((half * run.span[seg] < MIN_INTERVAL) | (time.monotonic() > run.deadline))
         for row in np.flatnonzero(stuck):
             reason = "unproven" if half[row] * run.span[seg[row]] < MIN_INTERVAL else "timeout"
             run.fail(int(seg[row]), reason, configs[config_of[row]])
-        keep = np.flatnonzero(open_ & (seg < run.failed))
+        keep = np.flatnonzero(open_ & run.alive[seg])
         run.seg, run.pair = np.tile(seg[keep], 2), np.tile(pair[keep], 2)
         # The unproven ends [a, m - reach] and [m + reach, b], each widened to the dyadic piece that holds it: the
         # pieces of all pairs then share their middles, hence their forward kinematics (4x fewer configurations).
@@ -624,7 +676,8 @@ class PathCertifier:
             return None
         mids = 0.5 * (path[:-1] + path[1:]) if len(path) > 1 else path
         travel = 0.5 * np.abs(np.diff(path, axis=0)) @ self._levers.T if len(path) > 1 else np.zeros((1, self._n_robot))
-        reach = (self._radius + travel + margin + self._levers @ deviation)[:, self._moving]  # (segments, geometries)
+        grown = deviation @ self._levers.T if len(deviation) else 0.0  # deviation: (segments, nq)
+        reach = (self._radius + travel + margin + grown)[:, self._moving]  # (segments, geometries)
         centers = self._frames(mids)[0][:, self._moving]
         box_center, box_rot, box_half = boxes
         lo, hi = (centers - reach[..., None]).min(axis=0), (centers + reach[..., None]).max(axis=0)

@@ -463,11 +463,7 @@ class MotionPlanner:
 
             step = timing.CERTIFY_STEP
 
-        def watched(states: np.ndarray, chord_deviation: np.ndarray) -> bool:
-            monitor.check()
-            return curve_free(states, chord_deviation)
-
-        return watched, step
+        return timing.WatchedCurve(curve_free, monitor.check), step
 
     # --- request validation -----------------------------------------------------------------
     def safety_margin(self, req: MotionRequest) -> float:

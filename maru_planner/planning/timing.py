@@ -65,6 +65,7 @@ RUCKIG_DURATION = 100.0  # s: longer sections are computed sped up and played ba
 MIN_SCALING = 1e-4
 
 CurveFree = Callable[[np.ndarray, np.ndarray], bool]  # (states, chord deviation per joint) -> collision-free
+Curve = tuple[np.ndarray, np.ndarray]  # (states, chord deviation per joint)
 
 
 @dataclass(frozen=True)
@@ -95,17 +96,58 @@ class Limits:
         )
 
 
-def certified_curve(certifier: Any, base: np.ndarray, indices, deadline: float | None, margin: float) -> CurveFree:
+@dataclass(frozen=True)
+class CertifiedCurve:
     """A :data:`CurveFree` proving a group curve clear by ``margin`` on ``certifier`` (a ``PathCertifier``), each
-    joint's margin grown by how far the curve leaves the chords; the joints outside ``indices`` stay at ``base``."""
+    joint's margin grown by how far the curve leaves the chords; the joints outside ``indices`` stay at ``base``.
+    ``many`` proves several curves in one certification pass (the blends of a path)."""
 
-    def curve_free(states: np.ndarray, chord_deviation: np.ndarray) -> bool:
-        deviation = np.zeros(len(base))
-        deviation[indices] = chord_deviation
-        full = full_configurations(base, indices, states)
-        return bool(certifier.certify_path(full, deadline, margin=margin, deviation=deviation).valid)
+    certifier: Any
+    base: np.ndarray
+    indices: Sequence[int]
+    deadline: float | None
+    margin: float
 
-    return curve_free
+    def __call__(self, states: np.ndarray, chord_deviation: np.ndarray) -> bool:
+        return self.many([(states, chord_deviation)])[0]
+
+    def many(self, curves: Sequence[Curve]) -> list[bool]:
+        full = []
+        for states, chord_deviation in curves:
+            deviation = np.zeros(len(self.base))
+            deviation[self.indices] = chord_deviation
+            full.append((full_configurations(self.base, self.indices, states), deviation))
+        return self.certifier.certify_curves(full, self.deadline, margin=self.margin)
+
+
+def certified_curve(certifier: Any, base: np.ndarray, indices, deadline: float | None, margin: float) -> CurveFree:
+    """:class:`CertifiedCurve` of these arguments."""
+    return CertifiedCurve(certifier, base, indices, deadline, margin)
+
+
+@dataclass(frozen=True)
+class WatchedCurve:
+    """``curve_free`` with ``before()`` called ahead of every check (a monitor's cancellation point); keeps
+    ``curve_free``'s ``many``."""
+
+    curve_free: CurveFree
+    before: Callable[[], None]
+
+    def __call__(self, states: np.ndarray, chord_deviation: np.ndarray) -> bool:
+        self.before()
+        return self.curve_free(states, chord_deviation)
+
+    def many(self, curves: Sequence[Curve]) -> list[bool]:
+        self.before()
+        return curves_free(self.curve_free, curves)
+
+
+def curves_free(curve_free: CurveFree, curves: Sequence[Curve]) -> list[bool]:
+    """``curve_free`` of each curve: in one call when it has ``many``, else one by one."""
+    many = getattr(curve_free, "many", None)
+    if many is not None:
+        return list(many(curves))
+    return [curve_free(states, deviation) for states, deviation in curves]
 
 
 def check_scaling(value: object, name: str) -> float:
@@ -317,9 +359,12 @@ class _Check:
     deadline: float | None
 
     def __call__(self, states: np.ndarray, deviation: np.ndarray) -> bool:
+        return self.many([(states, deviation)])[0]
+
+    def many(self, curves: Sequence[Curve]) -> list[bool]:
         if self.deadline is not None and time.monotonic() >= self.deadline:
-            return False
-        return self.curve_free(states, deviation)
+            return [False] * len(curves)
+        return curves_free(self.curve_free, curves)
 
 
 def _distinct(path: np.ndarray) -> np.ndarray:
@@ -350,19 +395,20 @@ def _certified_half_lengths(
     """Blend size per waypoint (0 at the ends and at stops), every blend re-checked (module doc)."""
     half = np.zeros(len(waypoints))
     t0 = time.monotonic()
-    for k in range(1, len(waypoints) - 1):
-        deviation = max_deviation
-        for attempt in range(BLEND_RETRIES + 1):
-            half[k] = blend_half_length(waypoints, k, deviation)
-            if half[k] == 0.0:
-                break
-            samples, chords = _single_blend(waypoints, k, half[k]).blend_chords(1, check.step)
-            report.certify_checks += len(samples)
-            if check(samples, chords):
-                break
-            report.fallbacks.append(f"blend at waypoint {k} not certified at deviation {deviation:.3g} rad")
+    deviation = np.full(len(waypoints), float(max_deviation))
+    pending = list(range(1, len(waypoints) - 1))
+    for _ in range(BLEND_RETRIES + 1):  # all pending corners in one check: they share the certification's work
+        for k in pending:
+            half[k] = blend_half_length(waypoints, k, deviation[k])
+        pending = [k for k in pending if half[k] > 0.0]
+        curves = [_single_blend(waypoints, k, half[k]).blend_chords(1, check.step) for k in pending]
+        report.certify_checks += sum(len(samples) for samples, _ in curves)
+        failed = [k for k, free in zip(pending, check.many(curves), strict=True) if not free]
+        for k in failed:
+            report.fallbacks.append(f"blend at waypoint {k} not certified at deviation {deviation[k]:.3g} rad")
             half[k] = 0.0
-            deviation /= BLEND_SHRINK if attempt < BLEND_RETRIES else 1.0
+            deviation[k] /= BLEND_SHRINK
+        pending = failed
     report.certify_time += time.monotonic() - t0
     _count_corners(waypoints, half, report)
     return half
