@@ -11,6 +11,7 @@ from ompl import geometric as og
 
 from maru_planner.collision import CollisionChecker
 from maru_planner.collision.checker import bisection_order
+from maru_planner.collision.sphere_kernels import scan_nb, unpack_robot, unpack_scene
 from maru_planner.collision.spheres import SphereCollisionChecker, verify_path
 from maru_planner.planning import PLANNERS, MotionPlanner, MotionRequest, PlannerConfig, PlanStatus
 from maru_planner.planning import rrtc_kernel as kernel
@@ -122,6 +123,28 @@ def test_away_from_the_start_and_goal_ambiguous_states_collide(panda):
     for qa, qb in random_edges(gs, 80, 6):
         status = kernel_edge(confirmed, gs, qa, qb, exact_near=0.0)[0]
         assert status != kernel.AMBIGUOUS and (status == kernel.VALID) == pure.edge_valid(qa, qb)
+
+
+@pytest.mark.parametrize("robot_name", ["panda", "maru1"])
+def test_classify_answers_each_state_like_the_sphere_checker(robot_name, request):
+    """VALID / COLLIDING / AMBIGUOUS of every state equal the checker's own scan of it (classify_state), with
+    AMBIGUOUS as COLLIDING when the first touch decides, and the numpy path's answers on the pure sphere model."""
+    robot = request.getfixturevalue(robot_name)
+    checker = SphereCollisionChecker(robot, clutter(9), confirm=False)
+    ri, rf, sf, grid_i, grid_f, amb, mark = checker.kernel_inputs()
+    assert not checker.uses_grid  # classify is the grid-less path
+    robot_arrays, scene_arrays = unpack_robot(ri, rf), unpack_scene(sf)
+    work = kernel.work_arrays(robot_arrays, scene_arrays)
+    rng = np.random.default_rng(10)
+    states = np.array([robot.random_configuration(rng) for _ in range(2000)])
+    expected = [scan_nb(q[None], 0, ri, rf, sf, grid_i, grid_f, amb, mark, True)[1] for q in states]
+    answers = [kernel.classify(q, robot_arrays, scene_arrays, work, False) for q in states]
+    assert answers == expected
+    first_touch = [kernel.classify(q, robot_arrays, scene_arrays, work, True) for q in states]
+    assert first_touch == [kernel.VALID if e == kernel.VALID else kernel.COLLIDING for e in expected]
+    numpy_path = SphereCollisionChecker(robot, clutter(9), confirm=False, use_numba=False)  # slow: fewer states
+    assert numpy_path.are_valid(states[:150]).tolist() == [e == kernel.VALID for e in expected[:150]]
+    assert set(expected) == {kernel.VALID, kernel.COLLIDING, kernel.AMBIGUOUS}
 
 
 def test_edge_states_are_checked_in_bisection_order():
