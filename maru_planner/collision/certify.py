@@ -383,8 +383,12 @@ class PathCertifier:
         self._boxes: tuple[list, tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
         self._moving = self._joint != 0
         self._cover = _SphereCover.of(robot, spheres)
-        # Compile (or load from numba's cache) the kernel now: inside the first request it took ~1.5 s of its budget.
+        # Compile (or load from numba's cache) the kernels now: inside the first request it took ~1.5 s of its budget.
         self._frames(np.asarray(robot.neutral(), dtype=float)[None])
+        if self._cover is not None:
+            none, no_rows = np.zeros(0, dtype=np.int64), np.zeros(0, dtype=bool)
+            _cover_bounds_nb(np.zeros((1, robot.nq)), none, none, none, none, no_rows, *self._tree, *self._cover.arrays,
+                             *_kernel_primitives([]), self._rot, self._pos, np.zeros(0))  # fmt: skip
 
     # ---------------------------------------------------------------- public --
     def certify_segment(
