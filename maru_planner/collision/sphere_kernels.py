@@ -84,9 +84,24 @@ def _dist(a, b):
 VALID, COLLIDING, AMBIGUOUS = 0, 1, 2
 
 
+@njit(cache=True, inline="always")
+def _place_spheres(c, c_start, placement, world):
+    """World centres of cluster ``c``'s spheres into ``world``, unless they are for this state: ``placement`` is
+    (sphere joints, local centres, joint rotations, joint positions, placed flags per cluster)."""
+    s_joint, s_center, rot, pos, placed = placement
+    if placed[c]:
+        return
+    placed[c] = True
+    for s in range(c_start[c], c_start[c + 1]):
+        j = s_joint[s]
+        for a in range(3):
+            world[s, a] = (pos[j, a] + rot[j, a, 0] * s_center[s, 0] + rot[j, a, 1] * s_center[s, 1]
+                           + rot[j, a, 2] * s_center[s, 2])  # fmt: skip
+
+
 @njit(cache=True)
 def _scene_by_grid(
-    padding, s_inner, s_radius, c_start, c_radius, g_joint, g_clusters, world, cworld,
+    padding, s_inner, s_radius, c_start, c_radius, g_joint, g_clusters, world, cworld, placement,
     box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact, grid_i, grid_f, amb, mark,
 ):  # fmt: skip
     """Robot-vs-scene part of :func:`classify_state` through the grid: the number of (group, obstacle) pairs
@@ -133,6 +148,7 @@ def _scene_by_grid(
                 if point_obstacle_distance(cworld[c], k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h,
                                            cyl_r) >= reach:  # fmt: skip
                     continue
+                _place_spheres(c, c_start, placement, world)
                 touched = False
                 for s in range(c_start[c], c_start[c + 1]):
                     d = point_obstacle_distance(world[s], k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h,
@@ -150,7 +166,7 @@ def _scene_by_grid(
 
 @njit(cache=True)
 def _scene_by_loop(
-    padding, s_inner, s_radius, c_start, c_radius, g_joint, g_radius, g_clusters, world, gworld, cworld,
+    padding, s_inner, s_radius, c_start, c_radius, g_joint, g_radius, g_clusters, world, gworld, cworld, placement,
     box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact, amb,
 ):  # fmt: skip
     """Robot-vs-scene part of :func:`classify_state` without a grid (a small scene): every obstacle against every
@@ -174,6 +190,7 @@ def _scene_by_loop(
                                              cyl_r)  # fmt: skip
                 if cd >= c_radius[c] + padding:
                     continue
+                _place_spheres(c, c_start, placement, world)
                 for s in range(c_start[c], c_start[c + 1]):
                     d = point_obstacle_distance(world[s], k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h,
                                                 cyl_r)  # fmt: skip
@@ -193,12 +210,14 @@ def classify_state(
     s_joint, s_center, s_radius, s_inner, g_start, g_joint, g_center, g_radius, self_pairs, padding,
     c_start, c_joint, c_center, c_radius, g_clusters,
     box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact, grid_i, grid_f,
-    rot, pos, world, gworld, cworld, amb, mark,
+    rot, pos, world, gworld, cworld, placed, amb, mark,
 ):  # fmt: skip
     """VALID, COLLIDING or AMBIGUOUS for one configuration, and the number of ambiguous pairs.
 
     With a grid (:func:`build_grid`) each moving cluster of spheres meets the obstacles listed in the cells
     its bounding sphere overlaps (:func:`_scene_by_grid`); without, each moving group meets every obstacle.
+    A cluster's spheres are placed (in ``world``) only once its bound reaches an obstacle or a cluster of
+    the other group of a self-collision pair, at most once per state (``placed``: a flag per cluster).
 
     COLLIDING: an *inner* ball (contained in the link) is within ``padding`` of an obstacle (whose primitive
     is ``exact``, not just a bound) or of an
@@ -209,16 +228,17 @@ def classify_state(
     joint_poses_nb(q, parent, kind, axis, prot, ppos, idx_q, rot, pos)
     sphere_centers_nb(rot, pos, g_joint, g_center, gworld)
     sphere_centers_nb(rot, pos, c_joint, c_center, cworld)
-    sphere_centers_nb(rot, pos, s_joint, s_center, world)
+    placed[:] = False
+    placement = (s_joint, s_center, rot, pos, placed)
     if grid_i[0] > 0:
         n_amb = _scene_by_grid(
-            padding, s_inner, s_radius, c_start, c_radius, g_joint, g_clusters, world, cworld,
+            padding, s_inner, s_radius, c_start, c_radius, g_joint, g_clusters, world, cworld, placement,
             box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact, grid_i, grid_f, amb, mark,
         )  # fmt: skip
     else:
         n_amb = _scene_by_loop(
             padding, s_inner, s_radius, c_start, c_radius, g_joint, g_radius, g_clusters, world, gworld, cworld,
-            box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact, amb,
+            placement, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact, amb,
         )  # fmt: skip
     if n_amb < 0:
         return COLLIDING, 0
@@ -233,6 +253,8 @@ def classify_state(
             for cb in range(g_clusters[gb], g_clusters[gb + 1]):
                 if _dist(cworld[ca], cworld[cb]) >= c_radius[ca] + c_radius[cb] + padding:
                     continue
+                _place_spheres(ca, c_start, placement, world)
+                _place_spheres(cb, c_start, placement, world)
                 for sa in range(c_start[ca], c_start[ca + 1]):
                     if _dist(world[sa], cworld[cb]) >= s_radius[sa] + c_radius[cb] + padding:
                         continue
@@ -358,13 +380,14 @@ def scan_nb(Q, start, ri, rf, sf, grid_i, grid_f, amb, mark, stop_at_ambiguous):
     world = np.empty((s_joint.shape[0], 3))
     gworld = np.empty((g_joint.shape[0], 3))
     cworld = np.empty((c_joint.shape[0], 3))
+    placed = np.empty(c_joint.shape[0], dtype=np.bool_)
     for i in range(start, Q.shape[0]):
         status, n_amb = classify_state(
             Q[i], parent, kind, axis, prot, ppos, idx_q,
             s_joint, s_center, s_radius, s_inner, g_start, g_joint, g_center, g_radius, self_pairs, padding,
             c_start, c_joint, c_center, c_radius, g_clusters,
             box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact, grid_i, grid_f,
-            rot, pos, world, gworld, cworld, amb, mark,
+            rot, pos, world, gworld, cworld, placed, amb, mark,
         )  # fmt: skip
         if status == COLLIDING:
             return i, COLLIDING, 0
