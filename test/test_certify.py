@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 
+import coal
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -415,3 +416,23 @@ def load_or_fit_of(robot: RobotModel):
     from maru_planner.collision.sphere_model import load_or_fit
 
     return load_or_fit(robot.model, robot.collision_model)
+
+
+def test_a_solid_counts_as_covered_only_when_its_whole_volume_is_in_the_balls():
+    from maru_planner.collision.certify import solid_inside_spheres
+
+    box, here = coal.Box(0.2, 0.1, 0.1), pin.SE3.Identity()
+    assert solid_inside_spheres(box, here, np.zeros((1, 3)), [np.linalg.norm([0.1, 0.05, 0.05])])
+    corners = np.array([[x, y, z] for x in (-0.1, 0.1) for y in (-0.05, 0.05) for z in (-0.05, 0.05)])
+    assert not solid_inside_spheres(box, here, corners, np.full(8, 0.06))  # the surface's corners, not its middle
+    two = np.array([[-0.05, 0.0, 0.0], [0.05, 0.0, 0.0]])
+    assert solid_inside_spheres(box, here, two, np.full(2, 0.1))  # two balls, each holding one half
+    assert not solid_inside_spheres(box, here, two, np.full(2, 0.085))  # each half's far corners stick out
+    moved = pin.SE3(np.eye(3), np.array([1.0, 0.0, 0.0]))
+    assert solid_inside_spheres(box, moved, two + [1.0, 0.0, 0.0], np.full(2, 0.1))
+    assert not solid_inside_spheres(box, moved, two, np.full(2, 0.1))
+    cylinder = coal.Cylinder(0.05, 0.2)  # radius, length: its bounding box's corners are off the disc
+    assert solid_inside_spheres(cylinder, here, np.zeros((1, 3)), [0.12])  # hypot(0.05, 0.1) = 0.112: cells need slack
+    assert not solid_inside_spheres(cylinder, here, np.zeros((1, 3)), [0.1])
+    assert solid_inside_spheres(coal.Sphere(0.1), here, np.array([[0.01, 0.0, 0.0]]), [0.11])
+    assert not solid_inside_spheres(coal.Sphere(0.1), here, np.array([[0.02, 0.0, 0.0]]), [0.11])

@@ -263,16 +263,48 @@ def _gap(a, b):
     return np.sqrt((a[0] - b[0]) ** 2 + (a[1] - b[1]) ** 2 + (a[2] - b[2]) ** 2)
 
 
+def solid_inside_spheres(geometry: coal.CollisionGeometry, placement: pin.SE3, centers: np.ndarray,
+                         radii: np.ndarray, cells: tuple[int, ...] = (4, 8, 16, 32)) -> bool:  # fmt: skip
+    """Whether a box, sphere or cylinder (placed by ``placement`` in the spheres' frame) lies inside the union of
+    the balls (``centers``, ``radii``): its bounding box is cut into n^3 cells (n from ``cells``, finest last) and
+    each cell meeting the solid must have its 8 corners, hence the whole cell, in one ball."""
+    local = (np.asarray(centers, dtype=float) - placement.translation) @ placement.rotation  # in the solid's frame
+    radii = np.asarray(radii, dtype=float) + 1e-9  # rounding; the cover bound takes DISTANCE_TOLERANCE off anyway
+    if isinstance(geometry, coal.Sphere):
+        return bool((np.linalg.norm(local, axis=1) + geometry.radius <= radii).any())
+    if isinstance(geometry, coal.Box):
+        half = np.asarray(geometry.halfSide, dtype=float)
+    elif isinstance(geometry, coal.Cylinder):
+        half = np.array([geometry.radius, geometry.radius, geometry.halfLength])
+    else:
+        return False
+    for n in cells:
+        axes = [np.linspace(-h, h, n + 1) for h in half]
+        grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1)  # (n+1, n+1, n+1, 3) corners
+        inside = np.linalg.norm(grid[..., None, :] - local, axis=-1) <= radii  # (..., balls)
+        corners = [inside[i : i + n, j : j + n, k : k + n] for i in (0, 1) for j in (0, 1) for k in (0, 1)]
+        cell_covered = np.logical_and.reduce(corners).any(axis=-1)  # (n, n, n)
+        if isinstance(geometry, coal.Cylinder):  # a cell whose nearest point is off the disc needs no ball
+            lo = np.maximum(np.minimum(np.abs(grid[:-1, :-1, :-1, :2]), np.abs(grid[1:, 1:, 1:, :2])), 0.0)
+            across = np.sign(grid[:-1, :-1, :-1, :2]) != np.sign(grid[1:, 1:, 1:, :2])
+            nearest = np.linalg.norm(np.where(across, 0.0, lo), axis=-1)
+            cell_covered |= nearest >= geometry.radius
+        if cell_covered.all():
+            return True
+    return False
+
+
 @dataclass(frozen=True)
 class _SphereCover:
     """The search's sphere model (:mod:`~maru_planner.collision.sphere_model`) as a lower bound on distances.
 
     Every triangle of a mesh geometry lies inside one of its spheres, so the spheres' distance to an obstacle
-    primitive (which contains the obstacle) or to another mesh's spheres never exceeds coal's distance on the
-    triangles. Only meshes: the fit covers a primitive's surface, not its solid interior.
+    primitive (which contains the obstacle) or to another covered geometry's spheres never exceeds coal's
+    distance on the triangles. The fit covers a solid primitive's surface only: a box, sphere or cylinder is
+    covered when :func:`solid_inside_spheres` proves its whole volume lies in the spheres.
     """
 
-    covered: np.ndarray  # (robot geometries,) bool: a triangle mesh
+    covered: np.ndarray  # (robot geometries,) bool: a triangle mesh, or a solid proven inside its spheres
     arrays: tuple  # the sphere and cluster arrays _cover_bounds_nb takes, in its order
 
     @classmethod
@@ -281,7 +313,11 @@ class _SphereCover:
         geometries = robot.collision_model.geometryObjects
         if spheres is None or tuple(spheres.group_names) != tuple(obj.name for obj in geometries):
             return None
-        covered = np.array([isinstance(obj.geometry, coal.BVHModelBase) for obj in geometries], dtype=bool)
+        covered = np.zeros(len(geometries), dtype=bool)
+        for g, obj in enumerate(geometries):
+            mine = slice(spheres.group_start[g], spheres.group_start[g + 1])
+            covered[g] = isinstance(obj.geometry, coal.BVHModelBase) or solid_inside_spheres(
+                obj.geometry, obj.placement, spheres.center[mine], spheres.radius[mine])  # fmt: skip
         if not covered.any():
             return None
         arrays = (spheres.joint, spheres.center, spheres.radius, spheres.cluster_start, spheres.cluster_joint,
