@@ -8,7 +8,7 @@ import pytest
 
 from maru_planner.collision import CollisionChecker
 from maru_planner.collision.batch_fk import KinematicTree, batch_joint_poses, joint_poses_nb
-from maru_planner.collision.sphere_model import SphereFitOptions, fit_geometry, subdivide, surface_of
+from maru_planner.collision.sphere_model import SphereFitOptions, subdivide, surface_of
 from maru_planner.collision.spheres import SphereCollisionChecker, densify, verify_path
 from maru_planner.scene import Obstacle, Scene
 
@@ -78,11 +78,11 @@ def test_spheres_cover_every_surface_point_and_inner_balls_lie_inside(robot_name
         gap = np.linalg.norm(points[:, None] - centers[None], axis=2) - radii
         assert gap.min(axis=1).max() <= 1e-9, f"{obj.name}: a surface point lies outside every sphere"
         assert np.all(inner <= radii + 1e-12) and np.all(inner >= 0.0)
-        # a point on each inner ball must not be outside the (convex) geometry: check via its own spheres' fit
-        c_local, _, r_in = fit_geometry(obj.geometry, options)
+        # a point on each inner ball must not be outside the (convex) geometry, in the geometry's own frame
+        c_local = (centers - obj.placement.translation) @ obj.placement.rotation
         direction = rng.normal(size=(len(c_local), 3))
         direction /= np.linalg.norm(direction, axis=1, keepdims=True)
-        probe = c_local + 0.999 * r_in[:, None] * direction
+        probe = c_local + 0.999 * inner[:, None] * direction
         assert _inside(obj.geometry, vertices, probe).all(), f"{obj.name}: an inner ball leaves the geometry"
 
 
