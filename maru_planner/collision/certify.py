@@ -216,6 +216,26 @@ def _frames_nb(configs, parent, kind, axis, prot, ppos, idx_q, joint, local, q_j
 
 
 @njit(cache=True)
+def _volume_bounds_nb(centers, config_of, pair, first, second, obstacle, box_center, box_rot, box_half, radius, out):
+    """Per row: its pair's bounding sphere(s) against the obstacle's bounding box or the other bounding sphere."""
+    for r in range(pair.shape[0]):
+        p, c = pair[r], config_of[r]
+        g, h = first[p], second[p]
+        if obstacle[p]:
+            outside = 0.0
+            for a in range(3):
+                local = 0.0
+                for b in range(3):
+                    local += box_rot[h, b, a] * (centers[c, g, b] - box_center[h, b])
+                excess = abs(local) - box_half[h, a]
+                if excess > 0.0:
+                    outside += excess * excess
+            out[r] = np.sqrt(outside) - radius[g]
+        else:
+            out[r] = _gap(centers[c, g], centers[c, h]) - radius[g] - radius[h]
+
+
+@njit(cache=True)
 def _cover_bounds_nb(configs, rows, config_of, first, second, obstacle, parent, kind, axis, prot, ppos, idx_q,
                      s_joint, s_center, s_radius, c_start, c_joint, c_center, c_radius, g_clusters, primitive,
                      box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, rot, pos, bound):  # fmt: skip
@@ -421,8 +441,10 @@ class PathCertifier:
         self._cover = _SphereCover.of(robot, spheres)
         # Compile (or load from numba's cache) the kernels now: inside the first request it took ~1.5 s of its budget.
         self._frames(np.asarray(robot.neutral(), dtype=float)[None])
+        none, no_rows = np.zeros(0, dtype=np.int64), np.zeros(0, dtype=bool)
+        _volume_bounds_nb(np.zeros((1, self._n_robot, 3)), none, none, none, none, no_rows, np.zeros((0, 3)),
+                          np.zeros((0, 3, 3)), np.zeros((0, 3)), self._radius, np.zeros(0))  # fmt: skip
         if self._cover is not None:
-            none, no_rows = np.zeros(0, dtype=np.int64), np.zeros(0, dtype=bool)
             _cover_bounds_nb(np.zeros((1, robot.nq)), none, none, none, none, no_rows, *self._tree, *self._cover.arrays,
                              *_kernel_primitives([]), self._rot, self._pos, np.zeros(0))  # fmt: skip
 
@@ -609,19 +631,9 @@ class PathCertifier:
 
     def _bounds(self, centers: np.ndarray, pairs: _Pairs, config_of: np.ndarray, pair: np.ndarray) -> np.ndarray:
         """Bounding-volume lower bound of each row's pair distance at its configuration."""
-        first, second, obstacle = pairs.first[pair], pairs.second[pair], pairs.obstacle[pair]
         bound = np.empty(len(pair))
-        env = np.flatnonzero(obstacle)
-        if len(env):
-            g, k = first[env], second[env]
-            local = np.einsum("rba,rb->ra", pairs.box_rot[k], centers[config_of[env], g] - pairs.box_center[k])
-            outside = np.linalg.norm(np.maximum(np.abs(local) - pairs.box_half[k], 0.0), axis=1)
-            bound[env] = outside - self._radius[g]
-        own = np.flatnonzero(~obstacle)
-        if len(own):
-            c, g, h = config_of[own], first[own], second[own]
-            gap = np.linalg.norm(centers[c, g] - centers[c, h], axis=1)
-            bound[own] = gap - self._radius[g] - self._radius[h]
+        _volume_bounds_nb(centers, config_of, pair, pairs.first, pairs.second, pairs.obstacle, pairs.box_center,
+                          pairs.box_rot, pairs.box_half, self._radius, bound)  # fmt: skip
         return bound
 
     def _tighten(self, configs, pairs: _Pairs, config_of, pair, bound, need) -> np.ndarray:
