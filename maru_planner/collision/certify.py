@@ -362,7 +362,8 @@ class _Run:
         self.span = self.motion.max(axis=1, initial=0.0)
         self.rate = self.motion @ pairs.rate.T  # (segments, pairs): configuration-free bound on distance change
         # (segments, geometries, nq): how fast a geometry can move relative to each joint's axis (joints below it)
-        self.downstream = np.einsum("gjk,sk->sgj", downstream, self.motion)
+        g, nq = downstream.shape[:2]
+        self.downstream = (downstream.reshape(g * nq, nq) @ self.motion.T).T.reshape(-1, g, nq)  # einsum: 20x slower
         self.clearance = np.full(self.n_segments, math.inf)
         self.failed = self.n_segments  # first failing segment so far (n_segments: none)
         self.alive = curve >= 0  # segments still worth proving: not after a failure on their curve

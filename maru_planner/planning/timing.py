@@ -401,6 +401,8 @@ def _certified_half_lengths(
         for k in pending:
             half[k] = blend_half_length(waypoints, k, deviation[k])
         pending = [k for k in pending if half[k] > 0.0]
+        if not pending:
+            break
         curves = [_single_blend(waypoints, k, half[k]).blend_chords(1, check.step) for k in pending]
         report.certify_checks += sum(len(samples) for samples, _ in curves)
         failed = [k for k, free in zip(pending, check.many(curves), strict=True) if not free]
