@@ -44,7 +44,7 @@ from numba import njit
 
 from maru_planner import errors
 from maru_planner.collision.batch_fk import KinematicTree, joint_poses_nb, sphere_centers_nb, tree_arrays
-from maru_planner.collision.checker import CollisionChecker, self_collision_pairs
+from maru_planner.collision.checker import CollisionChecker, convex_hull, self_collision_pairs
 from maru_planner.collision.sphere_kernels import obstacle_distance
 from maru_planner.collision.sphere_model import SphereModel
 from maru_planner.collision.spheres import ScenePrimitives
@@ -97,14 +97,6 @@ def bounding_sphere(geometry: coal.CollisionGeometry) -> tuple[np.ndarray, float
         return np.zeros(3), float(math.hypot(geometry.radius, geometry.halfLength))
     geometry.computeLocalAABB()
     return np.asarray(geometry.aabb_center, dtype=float).copy(), float(geometry.aabb_radius)
-
-
-def convex_hull(mesh: coal.BVHModelBase) -> coal.ConvexBase:
-    """The convex hull of a mesh's vertices: contains the mesh, so its distances are lower bounds."""
-    points = coal.StdVec_Vec3s()
-    for vertex in np.asarray(mesh.vertices(), dtype=float):
-        points.append(vertex)
-    return coal.Convex.convexHull(points, False, "Qt")
 
 
 def joint_levers(robot: RobotModel) -> np.ndarray:

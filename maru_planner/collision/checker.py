@@ -295,3 +295,11 @@ class CollisionChecker:
 
     def reset_count(self) -> None:
         self.check_count = 0
+
+
+def convex_hull(mesh: coal.BVHModelBase) -> coal.ConvexBase:
+    """The convex hull of a mesh's vertices: contains the mesh, so its distances are lower bounds."""
+    points = coal.StdVec_Vec3s()
+    for vertex in np.asarray(mesh.vertices(), dtype=float):
+        points.append(vertex)
+    return coal.Convex.convexHull(points, False, "Qt")

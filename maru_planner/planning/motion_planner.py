@@ -69,6 +69,8 @@ from maru_planner.scene_attached import attachment_key, robot_with_attached
 
 OMPL_LOCK = threading.RLock()
 REPAIR_RESOLUTION = 0.02  # rad: the coarsest motion step of a repair's local search
+PADDING_STEP = 1e-3  # m: a search padded below the margin (an end nearer than it) is padded by a multiple of this
+PADDED_CHECKERS = 4  # padded search checkers kept (the margin's, and a few for ends nearer than it)
 REPAIR_SHORTCUT_TRIES = 10  # a repair's local path is short: few failed shortcuts end its simplification
 ou.setLogLevel(ou.LOG_WARN)  # OMPL's INFO chatter would mix into CLI output
 
@@ -150,8 +152,8 @@ class MotionPlanner:
                 self.checker.set_scene(scene)
                 if self.exact_checker is not None:
                     self.exact_checker.set_scene(scene)
-                if self._padded is not None:
-                    self._padded[1].set_scene(scene)
+                for padded in self._padded.values():
+                    padded.set_scene(scene)
             self.scene = scene
             self._scene_epoch += 1
 
@@ -168,7 +170,7 @@ class MotionPlanner:
         self._roadmaps: dict[tuple, Roadmap] = {}
         self._setups: dict[tuple, GroupSetup] = {}  # per (group's joint indices, checker), reused across requests
         # (padding, checker padded by it): the search's checker when certifying with a margin
-        self._padded: tuple[float, Any] | None = None
+        self._padded: dict[float, Any] = {}  # padding -> the checker padded by it, oldest first
         self._search_checker = checker  # the checker the running search plans on (_search_checker_for)
 
     def _follow_attachments(self) -> None:
@@ -605,16 +607,27 @@ class MotionPlanner:
 
         When its path will be certified with a safety margin: ``self.checker`` padded by that margin, so the
         search's paths rarely pass closer than certification accepts. A start or goal closer than the margin
-        (certification then lowers it below their clearance) is searched unpadded, as without a margin.
+        (certification then keeps half the nearer one's clearance, :func:`certify_and_repair`) is searched
+        padded by that much, rounded down to :data:`PADDING_STEP`; unpadded if it touches.
         """
         margin = self.safety_margin(req) if self.certifier is not None else 0.0
         if margin <= 0.0:
             return self.checker
-        if self._padded is None or self._padded[0] != margin:
-            self._padded = (margin, padded_checker(self.robot, self.checker, margin))
-            self._setups = {key: setup for key, setup in self._setups.items() if key[1] == id(self.checker)}
-        padded = self._padded[1]
-        return padded if padded.is_valid(start_full) and padded.is_valid(goal_full) else self.checker
+        padded = self._padded_checker(margin)
+        if padded.is_valid(start_full) and padded.is_valid(goal_full):
+            return padded
+        ends = min(self.certifier.clearance(start_full), self.certifier.clearance(goal_full))
+        relaxed = math.floor(0.5 * ends / PADDING_STEP) * PADDING_STEP
+        return self._padded_checker(relaxed) if relaxed > 0.0 else self.checker
+
+    def _padded_checker(self, padding: float):
+        """``self.checker`` padded by ``padding`` (kept for the next requests, with their OMPL setups)."""
+        padded = self._padded.pop(padding, None) or padded_checker(self.robot, self.checker, padding)
+        self._padded[padding] = padded  # most recent last
+        while len(self._padded) > PADDED_CHECKERS:
+            dropped = self._padded.pop(next(iter(self._padded)))
+            self._setups = {key: setup for key, setup in self._setups.items() if key[1] != id(dropped)}
+        return padded
 
     def _group_setup(self, names, indices, base: np.ndarray, resolution: float) -> GroupSetup:
         """The group's space and OMPL setup (built once per group), prepared for ``base`` and ``resolution``."""
