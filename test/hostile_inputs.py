@@ -52,6 +52,7 @@ SUITE_EXAMPLES = {
 REACTIVE_BATCHES = 3
 LATE_MARGIN = 0.5  # s an answer may take beyond its budget
 LOST_AFTER = 30.0  # s beyond the budget after which a request counts as lost
+LOG_STAMP = re.compile(r"\[\d+\.\d+\] ")  # a ROS log line's time stamp
 MAX_MESSAGE = 400  # characters of an error message (a short excerpt of a bad value, not the value)
 SEED = 18  # the suite's fixed hypothesis seed (issue 18)
 
@@ -1184,14 +1185,23 @@ class ReactiveNodeTarget:
         hostile /plan still in flight (which legitimately replaces the goal's path).
         """
         deadline = time.monotonic() + timeout
-        size, still_since = len(self.process.log()), time.monotonic()
+        size, still_since = self._logged(), time.monotonic()
         while time.monotonic() < deadline:
             time.sleep(0.05)
-            now = len(self.process.log())
+            now = self._logged()
             if now != size:
                 size, still_since = now, time.monotonic()
             elif time.monotonic() - still_since >= quiet:
                 return
+
+    def _logged(self) -> int:
+        """Lines the node has logged, a line repeating the one before counting once.
+
+        The status line repeats every status_period while nothing arrives; any handled message changes its
+        counters (or logs a line of its own).
+        """
+        lines = LOG_STAMP.sub("", self.process.log()).splitlines()
+        return sum(line != before for before, line in zip(["", *lines], lines))
 
     def good_step(self):
         """Good odometry + scan after the good goal: the command must move the base, within the limits."""
