@@ -288,16 +288,15 @@ def test_motion_planner_searches_with_the_margin(arm):
     result = MotionPlanner.from_scene(arm, scene, config).plan(request)
     assert result.success and result.stats.certified and result.stats.repairs == 0, result.message
     assert verify_path(CollisionChecker(arm, scene, padding=0.01), np.asarray(result.path), 1e-3).valid
-    # A start closer than the margin (~4 mm) is searched padded by half that, in whole millimetres, and certified
-    # with the lowered margin.
+    # A start closer than the margin (~4 mm) is searched padded by 3/4 of that and certified with half of it.
     near = dataclasses.replace(request, start={"j1": 0.0, "j2": 0.0}, goal_joints={"j1": 0.3, "j2": 0.0})
     near_plate = Obstacle("plate", "box", size=(0.1, 0.002, 0.05), pose=[REACH - 0.05 - TIP_RADIUS - 0.004, 0.0, 0.0])
     planner = MotionPlanner.from_scene(arm, Scene([near_plate]), config)
     result = planner.plan(near)
     assert result.success and result.stats.certified, result.message
-    half = 0.5 * planner.certifier.clearance(np.array([0.0, 0.0]))  # just under 2 mm
-    assert half - 0.001 < planner._search_checker.padding < half
-    assert result.stats.min_clearance > planner._search_checker.padding
+    clearance = planner.certifier.clearance(np.array([0.0, 0.0]))
+    assert planner._search_checker.padding == pytest.approx(0.75 * clearance)
+    assert result.stats.min_clearance > 0.5 * clearance
 
 
 def test_motion_planner_rejects_a_negative_safety_margin(arm):

@@ -69,7 +69,7 @@ from maru_planner.scene_attached import attachment_key, robot_with_attached
 
 OMPL_LOCK = threading.RLock()
 REPAIR_RESOLUTION = 0.02  # rad: the coarsest motion step of a repair's local search
-PADDING_STEP = 1e-3  # m: a search padded below the margin (an end nearer than it) is padded by a multiple of this
+NEAR_END_PADDING = 0.75  # of the nearer end's clearance: the search's padding when an end is nearer than the margin
 PADDED_CHECKERS = 4  # padded search checkers kept (the margin's, and a few for ends nearer than it)
 REPAIR_SHORTCUT_TRIES = 10  # a repair's local path is short: few failed shortcuts end its simplification
 ou.setLogLevel(ou.LOG_WARN)  # OMPL's INFO chatter would mix into CLI output
@@ -608,7 +608,8 @@ class MotionPlanner:
         When its path will be certified with a safety margin: ``self.checker`` padded by that margin, so the
         search's paths rarely pass closer than certification accepts. A start or goal closer than the margin
         (certification then keeps half the nearer one's clearance, :func:`certify_and_repair`) is searched
-        padded by that much, rounded down to :data:`PADDING_STEP`; unpadded if it touches.
+        padded by :data:`NEAR_END_PADDING` of that clearance (more than certification keeps: the search checks
+        states, certification the motion between them); unpadded if it touches.
         """
         margin = self.safety_margin(req) if self.certifier is not None else 0.0
         if margin <= 0.0:
@@ -617,8 +618,7 @@ class MotionPlanner:
         if padded.is_valid(start_full) and padded.is_valid(goal_full):
             return padded
         ends = min(self.certifier.clearance(start_full), self.certifier.clearance(goal_full))
-        relaxed = math.floor(0.5 * ends / PADDING_STEP) * PADDING_STEP
-        return self._padded_checker(relaxed) if relaxed > 0.0 else self.checker
+        return self._padded_checker(NEAR_END_PADDING * ends) if ends > 0.0 else self.checker
 
     def _padded_checker(self, padding: float):
         """``self.checker`` padded by ``padding`` (kept for the next requests, with their OMPL setups)."""
