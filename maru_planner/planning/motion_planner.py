@@ -281,8 +281,10 @@ class MotionPlanner:
     def _repair_planner(self, request: MotionRequest, seed: int):
         """The local planner of a repair: RRTConnect between two waypoints of the request's group.
 
-        It plans on the exact model padded by the margin, at ``config.resolution`` or :data:`REPAIR_RESOLUTION`
-        if finer (a coarse search's gaps are what certification caught), with a short simplification.
+        It plans on the exact model padded by more than the margin -- half-way to the nearer end's clearance, at
+        most twice the margin: its checks are of states, certification's of the motion between them -- at
+        ``config.resolution`` or :data:`REPAIR_RESOLUTION` if finer (a coarse search's gaps are what certification
+        caught), with a short simplification.
         """
         names = self.robot.joint_names
         group = [names[i] for i in self.robot.group_joint_indices(request.group)]
@@ -297,7 +299,9 @@ class MotionPlanner:
                 certify=False,
                 time_parameterization="trapezoid",
             )
-            local = MotionPlanner(self.robot, padded_checker(self.robot, self.certifier.checker, margin), config)
+            ends = min(self.certifier.clearance(qa), self.certifier.clearance(qb))
+            padding = min(2.0 * margin, 0.5 * (margin + ends)) if ends > margin else margin
+            local = MotionPlanner(self.robot, padded_checker(self.robot, self.certifier.checker, padding), config)
             sub = MotionRequest(
                 request.group, start=dict(zip(names, qa, strict=True)),
                 goal_joints={n: float(qb[names.index(n)]) for n in group}, planner_id="RRTConnect",
