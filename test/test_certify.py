@@ -389,10 +389,12 @@ def test_the_sphere_cover_contains_every_mesh_triangle():
     assert meshes >= 9
 
 
-def test_the_sphere_cover_certifies_like_the_bounding_spheres_with_fewer_coal_queries():
-    robot, checker = panda_shelf()
+@pytest.mark.parametrize("world", [panda_shelf, maru13])
+def test_the_sphere_cover_certifies_like_the_bounding_spheres_with_fewer_coal_queries(world):
+    robot, checker = world()
     plain = PathCertifier(robot, checker, safety_margin=0.005)
-    covered = PathCertifier(robot, checker, safety_margin=0.005, spheres=panda_sphere_model(robot))
+    covered = PathCertifier(robot, checker, safety_margin=0.005, spheres=load_or_fit_of(robot))
+    assert covered._cover.covered.all()  # Panda: the model's spheres; Maru-1's cylinders and boxes: solid_balls
     rng = np.random.default_rng(13)
     outcomes, queries = {True: 0, False: 0}, {"plain": 0, "covered": 0}
     while min(outcomes.values()) < 5:
@@ -405,7 +407,7 @@ def test_the_sphere_cover_certifies_like_the_bounding_spheres_with_fewer_coal_qu
         outcomes[got.valid] += 1
         queries["plain"] += want.exact_queries + want.hull_queries
         queries["covered"] += got.exact_queries + got.hull_queries
-    assert queries["covered"] < 0.6 * queries["plain"]  # ~0.5 here; ~0.5 on MotionBenchMaker paths too
+    assert queries["covered"] < 0.6 * queries["plain"], queries
 
 
 def test_a_sphere_model_of_another_robot_is_not_used():
@@ -440,3 +442,25 @@ def test_a_solid_counts_as_covered_only_when_its_whole_volume_is_in_the_balls():
     assert not solid_inside_spheres(cylinder, here, np.zeros((1, 3)), [0.1])
     assert solid_inside_spheres(coal.Sphere(0.1), here, np.array([[0.01, 0.0, 0.0]]), [0.11])
     assert not solid_inside_spheres(coal.Sphere(0.1), here, np.array([[0.02, 0.0, 0.0]]), [0.11])
+
+
+@pytest.mark.parametrize("shape", [coal.Box(0.3, 0.04, 0.1), coal.Box(0.05, 0.05, 0.05), coal.Cylinder(0.04, 0.3),
+                                   coal.Cylinder(0.1, 0.02)])  # fmt: skip
+def test_solid_balls_contain_their_solid(shape):
+    from maru_planner.collision.certify import solid_balls
+
+    centers, radii = solid_balls(shape)
+    rng = np.random.default_rng(2)
+    if isinstance(shape, coal.Box):
+        points = rng.uniform(-1.0, 1.0, (20000, 3)) * shape.halfSide
+        corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]) * shape.halfSide
+        points = np.concatenate([points, corners])
+    else:
+        angle, radial = rng.uniform(0.0, 2 * np.pi, 20000), shape.radius * np.sqrt(rng.uniform(0.0, 1.0, 20000))
+        radial[:2000] = shape.radius  # the rim and the caps' edges
+        z = rng.uniform(-1.0, 1.0, 20000) * shape.halfLength
+        z[:200] = np.sign(z[:200]) * shape.halfLength
+        points = np.c_[radial * np.cos(angle), radial * np.sin(angle), z]
+    outside = np.linalg.norm(points[:, None] - centers[None], axis=2) - radii
+    assert outside.min(axis=1).max() <= 1e-12
+    assert solid_balls(coal.Capsule(0.1, 0.2)) is None

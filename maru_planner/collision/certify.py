@@ -56,6 +56,8 @@ DISTANCE_TOLERANCE = 1e-6  # m: coal's GJK tolerance, taken off every exact dist
 UNBOUNDED = 1e6  # m: an obstacle bounding box this large is treated as infinite
 MIN_INTERVAL = 1e-9  # rad: a piece of segment this short that is still unproven fails as "unproven"
 NEAR_PATH_MIN_OBSTACLES = 64  # reachable obstacles from which a certification only builds pairs for those near its path
+CLUSTER_BALLS = 6  # balls of a generated cover per cluster (the sphere model's own clustering)
+MAX_SOLID_PARTS = 16  # pieces per axis of a box or cylinder covered by balls
 NEAR_TABLES = 4  # pair tables of near obstacles kept (blends and repairs certify around the same path)
 CLEARANCE_WINDOW = 0.05  # m: clearance() measures the obstacles whose bound is this close to the nearest one first
 REVOLUTE = ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned")
@@ -308,35 +310,81 @@ def solid_inside_spheres(geometry: coal.CollisionGeometry, placement: pin.SE3, c
 
 @dataclass(frozen=True)
 class _SphereCover:
-    """The search's sphere model (:mod:`~maru_planner.collision.sphere_model`) as a lower bound on distances.
+    """Balls containing each robot geometry, in its parent joint's frame: a lower bound on its distances.
 
-    Every triangle of a mesh geometry lies inside one of its spheres, so the spheres' distance to an obstacle
-    primitive (which contains the obstacle) or to another covered geometry's spheres never exceeds coal's
-    distance on the triangles. The fit covers a solid primitive's surface only: a box, sphere or cylinder is
-    covered when :func:`solid_inside_spheres` proves its whole volume lies in the spheres.
+    From the search's sphere model (:mod:`~maru_planner.collision.sphere_model`) where they contain the
+    geometry: every triangle of a mesh lies in one of its spheres (coal measures a mesh as its triangles), and a
+    box, sphere or cylinder counts when :func:`solid_inside_spheres` proves its volume lies in them (the fit
+    covers a solid's surface only). Other boxes and cylinders get :func:`solid_balls`. The balls' distance to
+    an obstacle's kernel primitive (which contains the obstacle) or to another geometry's balls never exceeds
+    coal's distance.
     """
 
-    covered: np.ndarray  # (robot geometries,) bool: a triangle mesh, or a solid proven inside its spheres
-    arrays: tuple  # the sphere and cluster arrays _cover_bounds_nb takes, in its order
+    covered: np.ndarray  # (robot geometries,) bool: its balls contain it (False: a shape with neither)
+    arrays: tuple  # the ball and cluster arrays _cover_bounds_nb takes, in its order
 
     @classmethod
     def of(cls, robot: RobotModel, spheres: SphereModel | None) -> _SphereCover | None:
-        """The cover of ``robot``'s meshes by ``spheres`` (None: no model, one of another robot, or no mesh)."""
+        """The cover of ``robot``'s geometries (None: no sphere model, or one of another robot)."""
         geometries = robot.collision_model.geometryObjects
         if spheres is None or tuple(spheres.group_names) != tuple(obj.name for obj in geometries):
             return None
         covered = np.zeros(len(geometries), dtype=bool)
+        balls: list[tuple[int, np.ndarray, np.ndarray]] = []  # per cluster: joint, centres, radii
+        g_clusters = [0]
         for g, obj in enumerate(geometries):
             mine = slice(spheres.group_start[g], spheres.group_start[g + 1])
-            covered[g] = isinstance(obj.geometry, coal.BVHModelBase) or solid_inside_spheres(
-                obj.geometry, obj.placement, spheres.center[mine], spheres.radius[mine])  # fmt: skip
-        if not covered.any():
-            return None
-        arrays = (spheres.joint, spheres.center, spheres.radius, spheres.cluster_start, spheres.cluster_joint,
-                  spheres.cluster_center, spheres.cluster_radius, spheres.group_clusters)  # fmt: skip
+            if isinstance(obj.geometry, coal.BVHModelBase) or solid_inside_spheres(
+                obj.geometry, obj.placement, spheres.center[mine], spheres.radius[mine]
+            ):
+                covered[g] = True
+                for c in range(spheres.group_clusters[g], spheres.group_clusters[g + 1]):
+                    own = slice(spheres.cluster_start[c], spheres.cluster_start[c + 1])
+                    balls.append((obj.parentJoint, spheres.center[own], spheres.radius[own]))
+            elif (own_balls := solid_balls(obj.geometry)) is not None:
+                covered[g] = True
+                centers = own_balls[0] @ obj.placement.rotation.T + obj.placement.translation
+                for k in range(0, len(centers), CLUSTER_BALLS):
+                    balls.append((obj.parentJoint, centers[k : k + CLUSTER_BALLS], own_balls[1][k : k + CLUSTER_BALLS]))
+            g_clusters.append(len(balls))
+        bounds = [bounding_ball(c, r) for _, c, r in balls]
+        arrays = (
+            np.concatenate([np.full(len(r), j) for j, _, r in balls]), np.concatenate([c for _, c, _ in balls]),
+            np.concatenate([r for _, _, r in balls]), np.cumsum([0] + [len(r) for _, _, r in balls]),
+            np.array([j for j, _, _ in balls]), np.array([c for c, _ in bounds]).reshape(-1, 3),
+            np.array([r for _, r in bounds]), np.array(g_clusters),
+        )  # fmt: skip
         ints = (0, 3, 4, 7)
         return cls(covered, tuple(np.ascontiguousarray(a, dtype=np.int64 if i in ints else float)
                                   for i, a in enumerate(arrays)))  # fmt: skip
+
+
+def solid_balls(geometry: coal.CollisionGeometry) -> tuple[np.ndarray, np.ndarray] | None:
+    """Balls (centres in the geometry's frame, radii) whose union contains a box or cylinder (None: another shape).
+
+    A box is cut into sub-boxes about as long as its thinnest side, a cylinder into slices half its radius
+    long: each piece lies in the ball through its corners (a slice: its rim).
+    """
+    if isinstance(geometry, coal.Box):
+        half = np.asarray(geometry.halfSide, dtype=float)
+        parts = np.minimum(np.ceil(half / half.min()), MAX_SOLID_PARTS).astype(int)
+        piece = half / parts
+        axes = [np.linspace(-h + p, h - p, n) for h, p, n in zip(half, piece, parts, strict=True)]
+        centers = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+        return centers, np.full(len(centers), float(np.linalg.norm(piece)))
+    if isinstance(geometry, coal.Cylinder):
+        radius, half_length = float(geometry.radius), float(geometry.halfLength)
+        parts = int(min(max(np.ceil(2.0 * half_length / radius), 1), MAX_SOLID_PARTS))
+        piece = half_length / parts
+        z = np.linspace(-half_length + piece, half_length - piece, parts)
+        return np.c_[np.zeros((parts, 2)), z], np.full(parts, math.hypot(radius, piece))
+    return None
+
+
+def bounding_ball(centers: np.ndarray, radii: np.ndarray) -> tuple[np.ndarray, float]:
+    """A ball containing the balls (``centers``, ``radii``): centred on their bounding box's middle."""
+    middle = 0.5 * ((centers - radii[:, None]).min(axis=0) + (centers + radii[:, None]).max(axis=0))
+    return middle, float(np.max(np.linalg.norm(centers - middle, axis=1) + radii))
 
 
 class _Run:
