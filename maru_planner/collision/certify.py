@@ -56,6 +56,8 @@ DISTANCE_TOLERANCE = 1e-6  # m: coal's GJK tolerance, taken off every exact dist
 UNBOUNDED = 1e6  # m: an obstacle bounding box this large is treated as infinite
 MIN_INTERVAL = 1e-9  # rad: a piece of segment this short that is still unproven fails as "unproven"
 NEAR_PATH_MIN_OBSTACLES = 64  # reachable obstacles from which a certification only builds pairs for those near its path
+_NO_COVER = (np.zeros(0, np.int64), np.zeros((0, 3)), np.zeros(0), np.zeros(1, np.int64), np.zeros(0, np.int64),
+             np.zeros((0, 3)), np.zeros(0), np.zeros(1, np.int64))  # fmt: skip
 CLUSTER_BALLS = 6  # balls of a generated cover per cluster (the sphere model's own clustering)
 MAX_SOLID_PARTS = 16  # pieces per axis of a box or cylinder covered by balls
 NEAR_TABLES = 4  # pair tables of near obstacles kept (blends and repairs certify around the same path)
@@ -187,6 +189,12 @@ class _Pairs:
     box_half: np.ndarray  # (K, 3)
     covered: np.ndarray  # (P,) bool: a sphere-cover bound applies (mesh geometries, bounded obstacle primitives)
     primitives: tuple  # the obstacles' sphere-kernel primitives (boxes, spheres, cylinders) and each one's index
+
+    @property
+    def arrays(self) -> tuple:
+        """The per-pair arrays :func:`_assess_rows_nb` takes, in its order."""
+        return (self.first, self.second, self.obstacle, self.other, self.covered, self.moves_first, self.moves_other,
+                self.gap, self.box_center, self.box_rot, self.box_half)  # fmt: skip
 
 
 @njit(cache=True)
@@ -387,6 +395,59 @@ def bounding_ball(centers: np.ndarray, radii: np.ndarray) -> tuple[np.ndarray, f
     return middle, float(np.max(np.linalg.norm(centers - middle, axis=1) + radii))
 
 
+@njit(cache=True)
+def _assess_rows_nb(configs, config_of, seg, pair, half, run_arrays, pair_arrays, robot_arrays, cover_arrays,
+                    primitives, use_cover, rot, pos, bound, rate, need, refine):  # fmt: skip
+    """Per row, at the middle of its piece (one call per round of :meth:`PathCertifier._check_rows`): the distance
+    bound (bounding volumes, then the sphere cover where they fall short), the rate (configuration-free, tightened
+    at the middle where the bound falls short of it), ``need`` = margin + half * rate, and whether coal is to refine
+    the bound (module doc: where it may prove the row, and wherever the bounds leave no slack; on a covered pair
+    only then)."""
+    pair_margin, rate_free, motion, downstream = run_arrays
+    first, second, obstacle, other, covered, moves_first, moves_other, gap, box_center, box_rot, box_half = pair_arrays
+    parent, kind, axis, prot, ppos, idx_q, g_joint, g_local, g_radius, q_joint, levers, prismatic = robot_arrays
+    n_rows, n_geoms, nq = seg.shape[0], g_joint.shape[0], q_joint.shape[0]
+    centers = np.empty((configs.shape[0], n_geoms, 3))
+    to_axis = np.empty((configs.shape[0], n_geoms, nq))
+    _frames_nb(configs, parent, kind, axis, prot, ppos, idx_q, g_joint, g_local, q_joint, rot, pos, centers, to_axis)
+    volume = np.empty(n_rows)
+    _volume_bounds_nb(centers, config_of, pair, first, second, obstacle, box_center, box_rot, box_half, g_radius,
+                      volume)  # fmt: skip
+    margin = np.empty(n_rows)
+    n_cover = 0
+    cover_rows = np.empty(n_rows, dtype=np.int64)
+    for r in range(n_rows):
+        s, p = seg[r], pair[r]
+        margin[r] = pair_margin[s, p]
+        bound[r] = volume[r]
+        rate[r] = rate_free[s, p]
+        if use_cover and covered[p] and bound[r] < margin[r] + half[r] * rate[r]:
+            cover_rows[n_cover] = r
+            n_cover += 1
+    if n_cover:
+        rows = cover_rows[:n_cover]
+        rows = rows[np.argsort(config_of[rows])]
+        _cover_bounds_nb(configs, rows, config_of, first[pair], second[pair], obstacle[pair], parent, kind, axis,
+                         prot, ppos, idx_q, *cover_arrays, *primitives, rot, pos, bound)  # fmt: skip
+    for r in range(n_rows):
+        s, p, c = seg[r], pair[r], config_of[r]
+        if bound[r] < margin[r] + half[r] * rate[r]:  # tighten the levers with the configuration at the middle
+            g, o, total = first[p], other[p], 0.0
+            for j in range(nq):
+                lever = 0.0
+                if moves_first[p, j]:
+                    lever += 1.0 if prismatic[j] else min(
+                        levers[g, j], to_axis[c, g, j] + g_radius[g] + half[r] * downstream[s, g, j])
+                if moves_other[p, j]:
+                    lever += 1.0 if prismatic[j] else min(
+                        levers[o, j], to_axis[c, o, j] + g_radius[o] + half[r] * downstream[s, o, j])
+                total += lever * motion[s, j]
+            rate[r] = total
+        need[r] = margin[r] + half[r] * rate[r]
+        no_slack = bound[r] <= margin[r]
+        refine[r] = bound[r] < need[r] and (volume[r] + gap[p] >= need[r] or no_slack) and (no_slack or not covered[p])
+
+
 class _Run:
     """The state of one :meth:`PathCertifier.certify_path` call."""
 
@@ -404,6 +465,8 @@ class _Run:
         # (segments, geometries, nq): how fast a geometry can move relative to each joint's axis (joints below it)
         g, nq = downstream.shape[:2]
         self.downstream = (downstream.reshape(g * nq, nq) @ self.motion.T).T.reshape(-1, g, nq)  # einsum: 20x slower
+        self.arrays = tuple(np.ascontiguousarray(a, dtype=float)
+                            for a in (pair_margin, self.rate, self.motion, self.downstream))  # fmt: skip
         self.clearance = np.full(self.n_segments, math.inf)
         self.failed = self.n_segments  # first failing segment so far (n_segments: none)
         self.alive = curve >= 0  # segments still worth proving: not after a failure on their curve
@@ -480,14 +543,12 @@ class PathCertifier:
         self._boxes: tuple[list, tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
         self._moving = self._joint != 0
         self._cover = _SphereCover.of(robot, spheres)
+        self._robot_arrays = (*self._tree, self._joint, self._local, self._radius, self._q_joint, self._levers,
+                              self._prismatic)  # fmt: skip
+        self._cover_arrays = self._cover.arrays if self._cover is not None else _NO_COVER
         # Compile (or load from numba's cache) the kernels now: inside the first request it took ~1.5 s of its budget.
         self._frames(np.asarray(robot.neutral(), dtype=float)[None])
-        none, no_rows = np.zeros(0, dtype=np.int64), np.zeros(0, dtype=bool)
-        _volume_bounds_nb(np.zeros((1, self._n_robot, 3)), none, none, none, none, no_rows, np.zeros((0, 3)),
-                          np.zeros((0, 3, 3)), np.zeros((0, 3)), self._radius, np.zeros(0))  # fmt: skip
-        if self._cover is not None:
-            _cover_bounds_nb(np.zeros((1, robot.nq)), none, none, none, none, no_rows, *self._tree, *self._cover.arrays,
-                             *_kernel_primitives([]), self._rot, self._pos, np.zeros(0))  # fmt: skip
+        self._warm_row_kernel()
 
     # ---------------------------------------------------------------- public --
     def certify_segment(
@@ -610,18 +671,11 @@ class PathCertifier:
         configs = run.path[seg[first_row]] + mid[first_row, None] * run.delta[seg[first_row]]
         cert.checks += len(keys)
         margin = run.pair_margin[seg, pair]
-        centers, to_axis = self._frames(configs)
-        volume_bound = self._bounds(centers, run.pairs, config_of, pair)
-        rate = run.rate[seg, pair]  # configuration-free; tightened only where the bound falls short of it
-        bound = self._tighten(configs, run.pairs, config_of, pair, volume_bound, margin + half * rate)
-        short = np.flatnonzero(bound < margin + half * rate)
-        rate[short] = self._rates(to_axis[config_of[short]], run, short, half[short])
-        need = margin + half * rate
-        # coal where it may prove the row, and wherever the bounds leave no slack (exact geometry decides every
-        # failure); on a sphere-covered pair only then (bisecting on its bound is cheaper than a coal query)
-        no_slack = bound <= margin
-        refine = (bound < need) & ((volume_bound + run.pairs.gap[pair] >= need) | no_slack)
-        refine &= ~run.pairs.covered[pair] | no_slack
+        bound, rate, need = np.empty(len(seg)), np.empty(len(seg)), np.empty(len(seg))
+        refine = np.empty(len(seg), dtype=bool)
+        _assess_rows_nb(configs, config_of, seg, pair, half, run.arrays, run.pairs.arrays, self._robot_arrays,
+                        self._cover_arrays, run.pairs.primitives, self._cover is not None, self._rot, self._pos,
+                        bound, rate, need, refine)  # fmt: skip
         exact = self._refine(configs, run.pairs, config_of, pair, refine, margin, bound, cert)
         np.minimum.at(run.clearance, seg, np.where(refine | (bound >= need), bound, math.inf))
         slack = bound - margin
@@ -652,42 +706,23 @@ class PathCertifier:
                    centers, to_axis)  # fmt: skip
         return centers, to_axis
 
-    def _rates(self, to_axis: np.ndarray, run: _Run, rows: np.ndarray, half: np.ndarray) -> np.ndarray:
-        """Per row of ``rows``: how fast its pair's distance can change per unit t on its piece.
-
-        A revolute joint's lever over the piece: the centre's distance from its axis at the middle (``to_axis``,
-        the rows' configurations), plus the bounding radius, plus how far the joints below can move the centre
-        in half the piece -- never more than the configuration-free lever of :func:`joint_levers`.
-        """
-        pairs, seg, pair = run.pairs, run.seg[rows], run.pair[rows]
-        first, other, index = pairs.first[pair], pairs.other[pair], np.arange(len(rows))
-        lever = self._lever_at(to_axis[index, first], first, seg, half, run) * pairs.moves_first[pair]
-        lever += self._lever_at(to_axis[index, other], other, seg, half, run) * pairs.moves_other[pair]
-        return np.einsum("rj,rj->r", lever, run.motion[seg])
-
-    def _lever_at(self, to_axis: np.ndarray, g: np.ndarray, seg, half, run: _Run) -> np.ndarray:
-        """(rows, nq): the most geometry ``g`` moves per unit motion of each joint, anywhere on the piece."""
-        local = to_axis + self._radius[g][:, None] + half[:, None] * run.downstream[seg, g]
-        return np.where(self._prismatic, 1.0, np.minimum(self._levers[g], local))
+    def _warm_row_kernel(self) -> None:
+        """Compile (or load) the row kernels for this robot's array types, on no rows (not in a request's budget)."""
+        nq, n_geoms, none, no = self._model.nq, self._n_robot, np.zeros(0, dtype=np.int64), np.zeros(0, dtype=bool)
+        run_arrays = (np.zeros((0, 0)), np.zeros((0, 0)), np.zeros((0, nq)), np.zeros((0, n_geoms, nq)))
+        pair_arrays = (none, none, no, none, no, np.zeros((0, nq), dtype=bool), np.zeros((0, nq), dtype=bool),
+                       np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros((0, 3)))  # fmt: skip
+        _assess_rows_nb(np.zeros((1, nq)), none, none, none, np.zeros(0), run_arrays, pair_arrays, self._robot_arrays,
+                        self._cover_arrays, _kernel_primitives([]), self._cover is not None, self._rot, self._pos,
+                        np.zeros(0), np.zeros(0), np.zeros(0), no)  # fmt: skip
+        _volume_bounds_nb(np.zeros((1, n_geoms, 3)), none, none, *pair_arrays[:3], *pair_arrays[8:], self._radius,
+                          np.zeros(0))  # fmt: skip  # clearance() calls it from Python
 
     def _bounds(self, centers: np.ndarray, pairs: _Pairs, config_of: np.ndarray, pair: np.ndarray) -> np.ndarray:
         """Bounding-volume lower bound of each row's pair distance at its configuration."""
         bound = np.empty(len(pair))
         _volume_bounds_nb(centers, config_of, pair, pairs.first, pairs.second, pairs.obstacle, pairs.box_center,
                           pairs.box_rot, pairs.box_half, self._radius, bound)  # fmt: skip
-        return bound
-
-    def _tighten(self, configs, pairs: _Pairs, config_of, pair, bound, need) -> np.ndarray:
-        """``bound`` (a copy) raised to the sphere-cover bound on the covered rows it leaves short of ``need``."""
-        bound = bound.copy()
-        if self._cover is None:
-            return bound
-        rows = np.flatnonzero((bound < need) & pairs.covered[pair])
-        if len(rows):
-            rows = rows[np.argsort(config_of[rows], kind="stable")]
-            ends = (pairs.first[pair], pairs.second[pair], pairs.obstacle[pair])
-            _cover_bounds_nb(configs, rows, config_of, *ends, *self._tree, *self._cover.arrays, *pairs.primitives,
-                             self._rot, self._pos, bound)  # fmt: skip
         return bound
 
     def _refine(self, configs, pairs: _Pairs, config_of, pair, refine, margin, bound, cert: Certificate) -> np.ndarray:
