@@ -68,6 +68,10 @@ from maru_planner.planning.types import (
 from maru_planner.scene_attached import attachment_key, robot_with_attached
 
 OMPL_LOCK = threading.RLock()
+# rad: chords of a certified blend. Their count drives the blends' certification; the chord deviation margin
+# grows with the step squared. On 30 MotionBenchMaker plans 0.05 -> 0.1 rad took time parameterisation from
+# 21.5 to 14.8 ms median with 215 of 217 corners still blended (216 before); 0.2 rad stopped at 8 corners.
+CERTIFIED_CHORD_STEP = 0.1
 REPAIR_RESOLUTION = 0.02  # rad: the coarsest motion step of a repair's local search
 NEAR_END_PADDING = 0.75  # of the nearer end's clearance: the search's padding when an end is nearer than the margin
 PADDED_CHECKERS = 4  # padded search checkers kept (the margin's, and a few for ends nearer than it)
@@ -453,14 +457,14 @@ class MotionPlanner:
         """How blended corners are checked, and the joint step of their samples.
 
         With a certifier, like the path: proven clear by the request's safety margin, continuously along
-        chords ``config.resolution`` apart, the margin grown by how far the curve leaves them. Otherwise
+        chords :data:`CERTIFIED_CHORD_STEP` apart, the margin grown by how far the curve leaves them. Otherwise
         the exact checker at the states alone, :data:`timing.CERTIFY_STEP` apart.
         """
         monitor = self._monitor
         if self.certifier is not None:
             margin = self.safety_margin(req)
             curve_free = timing.certified_curve(self.certifier, start_full, indices, deadline, margin)
-            step = self.config.resolution
+            step = CERTIFIED_CHORD_STEP
         else:
             checker = self.exact_checker or self.checker
 
