@@ -1,0 +1,83 @@
+"""SphereCover: balls that provably contain each robot geometry (the certifier's cheap distance bound)."""
+
+from __future__ import annotations
+
+import coal
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from maru_planner.collision.sphere_cover import SphereCover, solid_balls, solid_inside_spheres
+from maru_planner.collision.sphere_model import load_or_fit
+from maru_planner.robot import RobotModel, load_example_robot
+
+
+def sphere_model(robot: RobotModel):
+    return load_or_fit(robot.model, robot.collision_model)
+
+
+def test_the_sphere_cover_contains_every_mesh_triangle():
+    """The premise of the cover bound: each triangle of a mesh geometry lies inside one sphere of its group
+    (its vertices and centroid are inside the union of the group's spheres)."""
+    robot = load_example_robot("panda")
+    spheres = sphere_model(robot)
+    meshes = 0
+    for g, obj in enumerate(robot.collision_model.geometryObjects):
+        if not hasattr(obj.geometry, "vertices"):
+            continue
+        meshes += 1
+        vertices = np.asarray(obj.geometry.vertices(), dtype=float)
+        triangles = np.array([[t[i] for i in range(3)] for t in (obj.geometry.tri_indices(k)
+                              for k in range(obj.geometry.num_tris))])  # fmt: skip
+        points = np.concatenate([vertices, vertices[triangles].mean(axis=1)]) @ obj.placement.rotation.T
+        points += obj.placement.translation  # in the parent joint's frame, like the spheres
+        mine = slice(spheres.group_start[g], spheres.group_start[g + 1])
+        gaps = np.linalg.norm(points[:, None] - spheres.center[mine][None], axis=2) - spheres.radius[mine]
+        assert gaps.min(axis=1).max() <= 1e-9, obj.name
+    assert meshes >= 9
+
+
+def test_a_sphere_model_of_another_robot_is_not_used():
+    panda, maru = load_example_robot("panda"), RobotModel.maru1()
+    assert SphereCover.of(panda, sphere_model(maru)) is None
+    assert SphereCover.of(panda, None) is None
+    cover = SphereCover.of(panda, sphere_model(panda))
+    assert cover is not None and cover.covered.all()
+
+
+def test_a_solid_counts_as_covered_only_when_its_whole_volume_is_in_the_balls():
+    box, here = coal.Box(0.2, 0.1, 0.1), pin.SE3.Identity()
+    assert solid_inside_spheres(box, here, np.zeros((1, 3)), [np.linalg.norm([0.1, 0.05, 0.05])])
+    corners = np.array([[x, y, z] for x in (-0.1, 0.1) for y in (-0.05, 0.05) for z in (-0.05, 0.05)])
+    assert not solid_inside_spheres(box, here, corners, np.full(8, 0.06))  # the surface's corners, not its middle
+    two = np.array([[-0.05, 0.0, 0.0], [0.05, 0.0, 0.0]])
+    assert solid_inside_spheres(box, here, two, np.full(2, 0.1))  # two balls, each holding one half
+    assert not solid_inside_spheres(box, here, two, np.full(2, 0.085))  # each half's far corners stick out
+    moved = pin.SE3(np.eye(3), np.array([1.0, 0.0, 0.0]))
+    assert solid_inside_spheres(box, moved, two + [1.0, 0.0, 0.0], np.full(2, 0.1))
+    assert not solid_inside_spheres(box, moved, two, np.full(2, 0.1))
+    cylinder = coal.Cylinder(0.05, 0.2)  # radius, length: its bounding box's corners are off the disc
+    assert solid_inside_spheres(cylinder, here, np.zeros((1, 3)), [0.12])  # hypot(0.05, 0.1) = 0.112: cells need slack
+    assert not solid_inside_spheres(cylinder, here, np.zeros((1, 3)), [0.1])
+    assert solid_inside_spheres(coal.Sphere(0.1), here, np.array([[0.01, 0.0, 0.0]]), [0.11])
+    assert not solid_inside_spheres(coal.Sphere(0.1), here, np.array([[0.02, 0.0, 0.0]]), [0.11])
+
+
+@pytest.mark.parametrize("shape", [coal.Box(0.3, 0.04, 0.1), coal.Box(0.05, 0.05, 0.05), coal.Cylinder(0.04, 0.3),
+                                   coal.Cylinder(0.1, 0.02)])  # fmt: skip
+def test_solid_balls_contain_their_solid(shape):
+    centers, radii = solid_balls(shape)
+    rng = np.random.default_rng(2)
+    if isinstance(shape, coal.Box):
+        points = rng.uniform(-1.0, 1.0, (20000, 3)) * shape.halfSide
+        corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]) * shape.halfSide
+        points = np.concatenate([points, corners])
+    else:
+        angle, radial = rng.uniform(0.0, 2 * np.pi, 20000), shape.radius * np.sqrt(rng.uniform(0.0, 1.0, 20000))
+        radial[:2000] = shape.radius  # the rim and the caps' edges
+        z = rng.uniform(-1.0, 1.0, 20000) * shape.halfLength
+        z[:200] = np.sign(z[:200]) * shape.halfLength
+        points = np.c_[radial * np.cos(angle), radial * np.sin(angle), z]
+    outside = np.linalg.norm(points[:, None] - centers[None], axis=2) - radii
+    assert outside.min(axis=1).max() <= 1e-12
+    assert solid_balls(coal.Capsule(0.1, 0.2)) is None
