@@ -13,7 +13,7 @@ import pytest
 REPO_ROOT = Path(__file__).resolve().parent.parent
 COLCON = Path(sys.executable).parent / "colcon"
 PACKAGES = {"maru_planner": "ros.ament_python", "maru_planner_interfaces": "ros.ament_cmake"}
-BUILD_BASE = REPO_ROOT / "build"  # where scripts/build_interfaces.sh builds maru_planner_interfaces
+INTERFACES_BUILD = REPO_ROOT / "build" / "maru_planner_interfaces"  # scripts/build_interfaces.sh's build tree
 INTERFACES_LOCK = "/tmp/maru_interfaces.lock"
 
 pytestmark = pytest.mark.ros
@@ -33,14 +33,17 @@ def test_colcon_finds_both_packages(tmp_path):
 
 @pytest.fixture(scope="module")
 def install_space(tmp_path_factory) -> Path:
-    """colcon's install space, built on the tree in build/ that make setup compiled the interfaces in.
+    """colcon's install space; the interfaces are built in the tree where make setup compiled them.
 
     colcon re-runs CMake there and rebuilds only what changed (a fresh tree: 2-3 min of compiling), under the
     lock that rebuilds of the interfaces take, so no other build uses that tree meanwhile.
     """
     out = tmp_path_factory.mktemp("colcon")
+    INTERFACES_BUILD.mkdir(parents=True, exist_ok=True)
+    (out / "build").mkdir()
+    (out / "build" / "maru_planner_interfaces").symlink_to(INTERFACES_BUILD, target_is_directory=True)
     build = subprocess.run(
-        ["flock", INTERFACES_LOCK, "bash", str(REPO_ROOT / "scripts" / "colcon_build.sh"), str(out), str(BUILD_BASE)],
+        ["flock", INTERFACES_LOCK, "bash", str(REPO_ROOT / "scripts" / "colcon_build.sh"), str(out)],
         capture_output=True,
         text=True,
         timeout=900,
