@@ -362,9 +362,13 @@ def test_a_large_scene_certifies_like_its_full_pair_table(monkeypatch):
 
 
 @pytest.mark.parametrize("world", [panda_shelf, maru13])
-def test_the_sphere_cover_certifies_like_the_bounding_spheres_with_fewer_coal_queries(world):
+def test_the_sphere_cover_certifies_like_the_bounding_spheres_with_fewer_coal_queries(world, monkeypatch):
+    from maru_planner.collision import certify
+
     robot, checker = world()
-    plain = PathCertifier(robot, checker, safety_margin=0.005)
+    with monkeypatch.context() as patch:
+        patch.setattr(certify.SphereCover, "of", lambda *_: None)
+        plain = PathCertifier(robot, checker, safety_margin=0.005)
     covered = PathCertifier(robot, checker, safety_margin=0.005, spheres=load_or_fit_of(robot))
     assert covered._cover.covered.all()  # Panda: the model's spheres; Maru-1's cylinders and boxes: solid_balls
     rng = np.random.default_rng(13)

@@ -37,12 +37,14 @@ def test_the_sphere_cover_contains_every_mesh_triangle():
     assert meshes >= 9
 
 
-def test_a_sphere_model_of_another_robot_is_not_used():
+def test_without_its_sphere_model_only_primitives_are_covered():
     panda, maru = load_example_robot("panda"), RobotModel.maru1()
-    assert SphereCover.of(panda, sphere_model(maru)) is None
-    assert SphereCover.of(panda, None) is None
-    cover = SphereCover.of(panda, sphere_model(panda))
-    assert cover is not None and cover.covered.all()
+    meshes = np.array([isinstance(obj.geometry, coal.BVHModelBase) for obj in panda.collision_model.geometryObjects])
+    for model in (None, sphere_model(maru)):  # none, or another robot's: the fingers' boxes get solid_balls
+        cover = SphereCover.of(panda, model)
+        assert cover is not None and np.array_equal(cover.covered, ~meshes)
+    assert SphereCover.of(panda, sphere_model(panda)).covered.all()
+    assert SphereCover.of(maru, None).covered.all()  # Maru-1: boxes, cylinders and spheres only
 
 
 def test_a_solid_counts_as_covered_only_when_its_whole_volume_is_in_the_balls():
@@ -81,3 +83,5 @@ def test_solid_balls_contain_their_solid(shape):
     outside = np.linalg.norm(points[:, None] - centers[None], axis=2) - radii
     assert outside.min(axis=1).max() <= 1e-12
     assert solid_balls(coal.Capsule(0.1, 0.2)) is None
+    centers, radii = solid_balls(coal.Sphere(0.1))
+    assert np.allclose(centers, 0.0) and np.allclose(radii, 0.1)

@@ -127,18 +127,19 @@ class SphereCover:
 
     @classmethod
     def of(cls, robot: RobotModel, spheres: SphereModel | None) -> SphereCover | None:
-        """The cover of ``robot``'s geometries (None: no sphere model, or one of another robot)."""
+        """The cover of ``robot``'s geometries, from ``spheres`` where it holds them (ignored if it is another
+        robot's; without it meshes stay uncovered). None when no geometry is covered."""
         geometries = robot.collision_model.geometryObjects
-        if spheres is None or tuple(spheres.group_names) != tuple(obj.name for obj in geometries):
-            return None
+        if spheres is not None and tuple(spheres.group_names) != tuple(obj.name for obj in geometries):
+            spheres = None
         covered = np.zeros(len(geometries), dtype=bool)
         balls: list[tuple[int, np.ndarray, np.ndarray]] = []  # per cluster: joint, centres, radii
         g_clusters = [0]
         for g, obj in enumerate(geometries):
-            mine = slice(spheres.group_start[g], spheres.group_start[g + 1])
-            if isinstance(obj.geometry, coal.BVHModelBase) or solid_inside_spheres(
+            mine = slice(spheres.group_start[g], spheres.group_start[g + 1]) if spheres is not None else slice(0)
+            if spheres is not None and (isinstance(obj.geometry, coal.BVHModelBase) or solid_inside_spheres(
                 obj.geometry, obj.placement, spheres.center[mine], spheres.radius[mine]
-            ):
+            )):  # fmt: skip
                 covered[g] = True
                 for c in range(spheres.group_clusters[g], spheres.group_clusters[g + 1]):
                     own = slice(spheres.cluster_start[c], spheres.cluster_start[c + 1])
@@ -149,6 +150,8 @@ class SphereCover:
                 for k in range(0, len(centers), CLUSTER_BALLS):
                     balls.append((obj.parentJoint, centers[k : k + CLUSTER_BALLS], own_balls[1][k : k + CLUSTER_BALLS]))
             g_clusters.append(len(balls))
+        if not covered.any():
+            return None
         bounds = [balls_bound(c, r) for _, c, r in balls]
         arrays = (
             np.concatenate([np.full(len(r), j) for j, _, r in balls]), np.concatenate([c for _, c, _ in balls]),
@@ -162,11 +165,14 @@ class SphereCover:
 
 
 def solid_balls(geometry: coal.CollisionGeometry) -> tuple[np.ndarray, np.ndarray] | None:
-    """Balls (centres in the geometry's frame, radii) whose union contains a box or cylinder (None: another shape).
+    """Balls (centres in the geometry's frame, radii) whose union contains a sphere, box or cylinder (None: another
+    shape).
 
-    A box is cut into sub-boxes about as long as its thinnest side, a cylinder into slices half its radius
-    long: each piece lies in the ball through its corners (a slice: its rim).
+    A sphere is its own ball; a box is cut into sub-boxes about as long as its thinnest side, a cylinder into
+    slices half its radius long: each piece lies in the ball through its corners (a slice: its rim).
     """
+    if isinstance(geometry, coal.Sphere):
+        return np.zeros((1, 3)), np.array([float(geometry.radius)])
     if isinstance(geometry, coal.Box):
         half = np.asarray(geometry.halfSide, dtype=float)
         parts = np.minimum(np.ceil(half / half.min()), MAX_SOLID_PARTS).astype(int)

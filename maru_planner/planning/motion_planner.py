@@ -236,7 +236,7 @@ class MotionPlanner:
         # lazy: certification loads numba (batched kinematics); planners on toy checkers never need it
         from maru_planner.collision.certify import PathCertifier
 
-        spheres = self.checker.spheres if is_sphere_checker(self.checker) else None  # tighter bounds on meshes
+        spheres = self.checker.spheres if is_sphere_checker(self.checker) else None  # bounds meshes too
         return PathCertifier(self.robot, exact, self.config.safety_margin, spheres=spheres)
 
     def _certify(self, request: MotionRequest, result: MotionResult, t0: float) -> MotionResult:
