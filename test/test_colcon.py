@@ -94,7 +94,8 @@ def test_planning_node_runs_from_the_install_space(install_space, spinning_node,
     script = install_space / "maru_planner" / "lib" / "maru_planner" / "planning_node"
     log = open(tmp_path / "planning_node.log", "w")
     proc = subprocess.Popen(
-        [str(script), "--ros-args", "-r", "__node:=installed_planning_node", "-r", "get_scene:=installed_get_scene"],
+        # its own namespace: none of its services or actions (plan_motion) may answer another test's clients
+        [str(script), "--ros-args", "-r", "__ns:=/installed"],
         stdout=log,
         stderr=subprocess.STDOUT,
         stdin=subprocess.DEVNULL,
@@ -102,7 +103,7 @@ def test_planning_node_runs_from_the_install_space(install_space, spinning_node,
         cwd=str(tmp_path),
     )
     try:
-        client = spinning_node.node.create_client(GetScene, "installed_get_scene")
+        client = spinning_node.node.create_client(GetScene, "/installed/get_scene")
         deadline = time.monotonic() + 120.0
         while not client.wait_for_service(timeout_sec=0.5):
             assert proc.poll() is None, (tmp_path / "planning_node.log").read_text()[-3000:]
@@ -111,5 +112,9 @@ def test_planning_node_runs_from_the_install_space(install_space, spinning_node,
         assert "obstacles" in response.scene_yaml
     finally:
         proc.terminate()
-        proc.wait(timeout=20)
+        try:
+            proc.wait(timeout=20)
+        except subprocess.TimeoutExpired:  # never left running for the tests after this one
+            proc.kill()
+            proc.wait()
         log.close()
