@@ -104,7 +104,7 @@ def solid_inside_spheres(geometry: coal.CollisionGeometry, placement: pin.SE3, c
             lo = np.maximum(np.minimum(np.abs(grid[:-1, :-1, :-1, :2]), np.abs(grid[1:, 1:, 1:, :2])), 0.0)
             across = np.sign(grid[:-1, :-1, :-1, :2]) != np.sign(grid[1:, 1:, 1:, :2])
             nearest = np.linalg.norm(np.where(across, 0.0, lo), axis=-1)
-            cell_covered |= nearest >= geometry.radius
+            cell_covered |= nearest > geometry.radius  # touching the rim still needs its ball
         if cell_covered.all():
             return True
     return False
