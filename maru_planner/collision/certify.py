@@ -44,7 +44,7 @@ from numba import njit
 
 from maru_planner import errors
 from maru_planner.collision.batch_fk import KinematicTree, joint_poses_nb, sphere_centers_nb, tree_arrays
-from maru_planner.collision.checker import CollisionChecker, convex_hull, self_collision_pairs
+from maru_planner.collision.checker import CollisionChecker, convex_hull, robot_mesh_hull, self_collision_pairs
 from maru_planner.collision.sphere_cover import (
     DISTANCE_TOLERANCE,
     NO_COVER,
@@ -365,7 +365,7 @@ class PathCertifier:
         self._n_robot = len(geometries)
         enclosing = [bounding_sphere(obj.geometry) for obj in geometries]
         meshes = [g for g, obj in enumerate(geometries) if isinstance(obj.geometry, coal.BVHModelBase)]
-        self._hulls = {g: convex_hull(geometries[g].geometry) for g in meshes}
+        self._hulls = {g: robot_mesh_hull(geometries[g].geometry) for g in meshes}
         self._joint = np.array([obj.parentJoint for obj in geometries], dtype=int)
         self._local = np.array([obj.placement.act(c) for obj, (c, _) in zip(geometries, enclosing, strict=True)])
         self._radius = np.array([r for _, r in enclosing])

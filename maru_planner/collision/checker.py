@@ -24,6 +24,7 @@ inflates each box by half the largest security margin of its pairs.
 
 from __future__ import annotations
 
+import functools
 from itertools import combinations
 
 import coal
@@ -303,3 +304,8 @@ def convex_hull(mesh: coal.BVHModelBase) -> coal.ConvexBase:
     for vertex in np.asarray(mesh.vertices(), dtype=float):
         points.append(vertex)
     return coal.Convex.convexHull(points, False, "Qt")
+
+
+#: :func:`convex_hull` of a robot's mesh, kept: the certifier and every sphere checker of the robot (padded
+#: twins included) share one hull per mesh instead of each running Qhull again.
+robot_mesh_hull = functools.lru_cache(maxsize=64)(convex_hull)

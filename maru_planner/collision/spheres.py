@@ -29,7 +29,7 @@ import numpy as np
 from maru_planner.collision import sphere_kernels as _kernels
 from maru_planner.collision.batch_fk import KinematicTree, batch_joint_poses, joint_poses_nb, sphere_centers_nb
 from maru_planner.collision.broadphase import robot_reach
-from maru_planner.collision.checker import convex_hull, self_collision_pairs
+from maru_planner.collision.checker import convex_hull, robot_mesh_hull, self_collision_pairs
 from maru_planner.collision.sphere_model import SphereFitOptions, SphereModel, load_or_fit
 from maru_planner.scene import BuildClock, Obstacle, Scene
 from maru_planner.shapes import KERNEL_KINDS, KernelPrimitive
@@ -170,7 +170,6 @@ class SphereCollisionChecker:
         self._packed_robot = _kernels.pack_robot(*self._robot_args, *clusters) if self.use_numba else None
         self._robot_geoms = list(robot.collision_model.geometryObjects)
         self._exact_shapes = [obj.geometry for obj in self._robot_geoms]  # the exact checker's own shapes
-        self._robot_hulls: dict[int, Any] = {}  # convex hulls of the mesh geometries, made on first use
         self._rot = np.empty((self.tree.njoints, 3, 3))
         self._pos = np.empty((self.tree.njoints, 3))
         self._sphere_pairs = self._expand_pairs()
@@ -351,9 +350,9 @@ class SphereCollisionChecker:
             j = obj.parentJoint
             r = rot[j] @ obj.placement.rotation
             p = rot[j] @ obj.placement.translation + pos[j]
-            if g not in self._robot_hulls:
-                self._robot_hulls[g] = _with_hull(self._exact_shapes[g], None)[1]
-            placed[g] = (self._exact_shapes[g], self._robot_hulls[g], _coal_tf(r, p))
+            shape = self._exact_shapes[g]
+            hull = robot_mesh_hull(shape) if isinstance(shape, coal.BVHModelBase) else shape
+            placed[g] = (shape, hull, _coal_tf(r, p))
         return placed[g]
 
     def _expand_pairs(self) -> np.ndarray:
