@@ -13,12 +13,14 @@ from maru_planner.collision import CollisionChecker
 from maru_planner.collision.checker import bisection_order
 from maru_planner.collision.sphere_kernels import scan_nb, unpack_robot, unpack_scene
 from maru_planner.collision.spheres import SphereCollisionChecker, verify_path
+from maru_planner.moveit_scene import PANDA_FINGERS_OPEN, iter_mbm_problems
+from maru_planner.paths import benchmarks_dir
 from maru_planner.planning import PLANNERS, MotionPlanner, MotionRequest, PlannerConfig, PlanStatus
 from maru_planner.planning import rrtc_kernel as kernel
 from maru_planner.planning.compiled_rrtc import CompiledRRTConnect
 from maru_planner.planning.problems import PROBLEMS
 from maru_planner.planning.space import EdgeChecker, GroupSpace
-from maru_planner.robot import RobotModel
+from maru_planner.robot import RobotModel, load_example_robot
 from maru_planner.scene import Obstacle, Scene
 
 ARM = [f"panda_joint{i}" for i in range(1, 8)]
@@ -228,3 +230,37 @@ def test_on_the_exact_checker_it_falls_back_to_ompl_rrtconnect(maru1, panda):
     assert not CompiledRRTConnect(si, EdgeChecker(gs, CollisionChecker(panda), RESOLUTION)).compiled
     assert CompiledRRTConnect(si, EdgeChecker(gs, SphereCollisionChecker(panda), RESOLUTION)).compiled
     assert "CompiledRRTConnect" in PLANNERS and PLANNERS["CompiledRRTConnect"].has("tree")
+
+
+MBM_TARBALL = benchmarks_dir() / "motionbenchmaker" / "vamp_panda_problems.tar.bz2"
+
+
+@pytest.mark.skipif(not MBM_TARBALL.is_file(), reason="MotionBenchMaker tarball not present")
+def test_certification_repairs_search_with_the_kernel_on_padded_spheres(monkeypatch):
+    """cage/0073: the search's last edge into a goal ~13 mm from the bars passes closer than the 10 mm margin.
+
+    Its repair must search like the request did (the kernel on the padded sphere checker): OMPL's RRTConnect on
+    the exact checker spent the whole budget on that narrow approach and failed the request.
+    """
+    robot = load_example_robot("panda")
+    fingers = robot.joint_indices(list(PANDA_FINGERS_OPEN))
+    robot.upper_limits[fingers] = np.maximum(robot.upper_limits[fingers], list(PANDA_FINGERS_OPEN.values()))
+    (problem,) = [p for p in iter_mbm_problems(MBM_TARBALL, sets=["cage"], limit_per_set=73,
+                                               fixed_joints=PANDA_FINGERS_OPEN) if p.name == "cage/0073"]  # fmt: skip
+    config = PlannerConfig(collision_model="spheres", verify_resolution=0.025, safety_margin=0.01)
+    planner = MotionPlanner.from_scene(robot, problem.scene, config)
+    searches = []
+    plan = MotionPlanner.plan
+
+    def recording_plan(self, request, monitor=None):
+        searches.append((request.planner_id, type(self.checker).__name__, getattr(self.checker, "padding", 0.0)))
+        return plan(self, request, monitor)
+
+    monkeypatch.setattr(MotionPlanner, "plan", recording_plan)
+    goal = {k: v for k, v in problem.request.goal.items() if k in ARM}
+    res = planner.plan(MotionRequest("arm", start=problem.request.start, goal_joints=goal, seed=0, simplify=False,
+                                     planner_id="CompiledRRTConnect", time_budget=10.0))  # fmt: skip
+    assert res.success and res.stats.certified, res.message
+    assert res.stats.repairs >= 1 and len(searches) == 1 + res.stats.repairs
+    for planner_id, checker, padding in searches[1:]:
+        assert (planner_id, checker) == ("CompiledRRTConnect", "SphereCollisionChecker") and padding > 0.01

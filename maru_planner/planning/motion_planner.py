@@ -283,9 +283,10 @@ class MotionPlanner:
             self._set_path(request, result, full_path[:, indices], full_path[0], indices, certify_deadline)
 
     def _repair_planner(self, request: MotionRequest, seed: int):
-        """The local planner of a repair: RRTConnect between two waypoints of the request's group.
+        """The local planner of a repair: RRT-Connect between two waypoints of the request's group, searched like
+        the request was -- the compiled kernel on the sphere checker, else OMPL's RRTConnect on the exact one.
 
-        It plans on the exact model padded by more than the margin -- half-way to the nearer end's clearance, at
+        It plans padded by more than the margin -- half-way to the nearer end's clearance, at
         most twice the margin: its checks are of states, certification's of the motion between them -- at
         ``config.resolution`` or :data:`REPAIR_RESOLUTION` if finer (a coarse search's gaps are what certification
         caught), with a short simplification.
@@ -305,10 +306,13 @@ class MotionPlanner:
             )
             ends = min(self.certifier.clearance(qa), self.certifier.clearance(qb))
             padding = min(2.0 * margin, 0.5 * (margin + ends)) if ends > margin else margin
-            local = MotionPlanner(self.robot, padded_checker(self.robot, self.certifier.checker, padding), config)
+            fast = is_sphere_checker(self.checker)
+            checker = padded_checker(self.robot, self.checker if fast else self.certifier.checker, padding)
+            local = MotionPlanner(self.robot, checker, config)
             sub = MotionRequest(
                 request.group, start=dict(zip(names, qa, strict=True)),
-                goal_joints={n: float(qb[names.index(n)]) for n in group}, planner_id="RRTConnect",
+                goal_joints={n: float(qb[names.index(n)]) for n in group},
+                planner_id="CompiledRRTConnect" if fast else "RRTConnect",
                 time_budget=max(deadline - time.monotonic(), 1e-3), seed=seed + next(attempt),
             )  # fmt: skip
             nested = PlanMonitor()
