@@ -232,6 +232,54 @@ def test_on_the_exact_checker_it_falls_back_to_ompl_rrtconnect(maru1, panda):
     assert "CompiledRRTConnect" in PLANNERS and PLANNERS["CompiledRRTConnect"].has("tree")
 
 
+# --- balanced trees and dynamic domains (VAMP's RRTCSettings) --------------------------------
+def test_a_failed_extension_gives_its_node_a_dynamic_domain_that_shrinks_and_grows():
+    tune = kernel.tuning(True, 4.0, 0.1, 3.5)
+    radius = np.full((2, 4), np.inf)
+    kernel._update_domain(radius, 1, 0, True, tune)
+    assert radius[1, 0] == np.inf  # a success leaves an unbounded domain unbounded
+    kernel._update_domain(radius, 1, 0, False, tune)
+    assert radius[1, 0] == 4.0
+    kernel._update_domain(radius, 1, 0, False, tune)
+    assert radius[1, 0] == pytest.approx(3.6)
+    kernel._update_domain(radius, 1, 0, False, tune)
+    assert radius[1, 0] == 3.5  # not below the smallest domain
+    kernel._update_domain(radius, 1, 0, True, tune)
+    assert radius[1, 0] == pytest.approx(3.85)
+    off = np.full((2, 4), np.inf)
+    kernel._update_domain(off, 1, 0, False, kernel.tuning(True, 0.0, 0.1, 3.5))
+    assert off[1, 0] == np.inf
+
+
+def test_extensions_sample_inside_the_dynamic_domain_of_their_nearest_node():
+    lower, upper = np.full(3, -np.pi), np.full(3, np.pi)
+    nodes, parent, radius, st = kernel.new_state(np.zeros(3), np.full(3, 2.0), 8)
+    radius[0, 0] = 0.3
+    st[kernel.PHASE], st[kernel.TREE] = kernel.EXTEND, 0
+    rng, q_new = kernel.seed_rng(5), np.empty(3)
+    proposed = []
+    for _ in range(20_000):
+        if kernel._propose(nodes, radius, st, q_new, lower, upper, rng, 1.0):
+            proposed.append(np.linalg.norm(q_new))
+            assert st[kernel.REACHED]
+    # a sample lands in the ball of 0.3 rad with probability 4.6e-4: the others are rejected, without an edge
+    assert 0 < len(proposed) < 30 and max(proposed) <= 0.3
+    radius[0, 0] = np.inf
+    far = [np.linalg.norm(q_new) for _ in range(50) if kernel._propose(nodes, radius, st, q_new, lower, upper, rng, 1.0)]
+    assert len(far) == 50 and max(far) == pytest.approx(1.0)  # unbounded: every sample, steered to the full range
+
+
+def test_balancing_extends_the_smaller_tree_until_the_other_has_less_than_twice_its_nodes():
+    st = np.zeros(len(kernel.STATE_FIELDS), dtype=np.int64)
+    st[kernel.N0], st[kernel.N1] = 2, 1
+    balanced, alternating = kernel.tuning(True, 0.0, 0.0, 0.0), kernel.tuning(False, 0.0, 0.0, 0.0)
+    assert kernel._next_extension(st, 1, balanced) == 1  # the goal's tree stays stuck at one node: it goes on
+    assert kernel._next_extension(st, 1, alternating) == 0
+    assert kernel._next_extension(st, 0, balanced) == 1
+    st[kernel.N0] = 1
+    assert kernel._next_extension(st, 1, balanced) == 0
+
+
 MBM_TARBALL = benchmarks_dir() / "motionbenchmaker" / "vamp_panda_problems.tar.bz2"
 
 

@@ -2,7 +2,9 @@
 
 The whole search loop runs compiled: two trees in preallocated arrays, brute-force nearest
 neighbours over each tree's contiguous node array, extend/connect steps of at most ``range``
-(L2, like OMPL's RRTConnect), and every edge checked at the motion resolution (L∞ step, the states
+(L2, like OMPL's RRTConnect), VAMP's balanced trees and dynamic domains (:func:`tuning`: the
+smaller tree extends while the other has twice its nodes; a node whose extension failed only
+takes samples within its domain), and every edge checked at the motion resolution (L∞ step, the states
 of :func:`maru_planner.planning.space.edge_states`, computed the same way) in coarse-to-fine
 bisection order with an early exit on the first colliding state. Each state is classified by
 :func:`classify`: forward kinematics once, then robot spheres against the scene primitives and the
@@ -43,6 +45,7 @@ from maru_planner.collision.sphere_kernels import (
 )
 
 SOLVED, RUNNING, NEED_EXACT, FULL = 0, 1, 2, 3  # what run() returns
+BALANCE, DOMAIN_RADIUS, DOMAIN_ALPHA, DOMAIN_MIN_RADIUS = range(4)  # fields of the tuning array (tuning())
 DIRECT, EXTEND, CONNECT = 0, 1, 2  # phases: the straight start-goal edge, extend toward a sample, connect
 
 #: Fields of the int64 search state ``st`` (index = position).
@@ -51,26 +54,34 @@ STATE_FIELDS = ("phase", "tree", "from", "target", "pending", "reached", "n0", "
 (PHASE, TREE, FROM, TARGET, PENDING, REACHED, N0, N1, CHECKS, N_AMB, LINK0, LINK1, DUPLICATE) = range(len(STATE_FIELDS))
 
 
-def new_state(start: np.ndarray, goal: np.ndarray, capacity: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Trees (2, capacity, dim) holding the start (tree 0) and the goal (tree 1), parents, and ``st``."""
+def new_state(start: np.ndarray, goal: np.ndarray, capacity: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Trees (2, capacity, dim) holding the start (tree 0) and the goal (tree 1), parents, domain radii, ``st``."""
     dim = len(start)
     nodes = np.zeros((2, capacity, dim))
     nodes[0, 0], nodes[1, 0] = start, goal
     parent = np.full((2, capacity), -1, dtype=np.int64)
+    radius = np.full((2, capacity), np.inf)
     st = np.zeros(len(STATE_FIELDS), dtype=np.int64)
     st[N0] = st[N1] = 1
     st[PHASE] = DIRECT
-    return nodes, parent, st
+    return nodes, parent, radius, st
 
 
-def grow(nodes: np.ndarray, parent: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def grow(nodes: np.ndarray, parent: np.ndarray, radius: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The trees' arrays with twice the capacity (contents kept)."""
     cap = nodes.shape[1]
     bigger = np.zeros((2, 2 * cap, nodes.shape[2]))
     bigger[:, :cap] = nodes
     parents = np.full((2, 2 * cap), -1, dtype=np.int64)
     parents[:, :cap] = parent
-    return bigger, parents
+    radii = np.full((2, 2 * cap), np.inf)
+    radii[:, :cap] = radius
+    return bigger, parents, radii
+
+
+def tuning(balance: bool, domain_radius: float, domain_alpha: float, domain_min_radius: float) -> np.ndarray:
+    """The kernel's tree balancing and dynamic-domain settings (:func:`run`); ``domain_radius`` 0 = no domains."""
+    return np.array([float(balance), domain_radius, domain_alpha, domain_min_radius])
 
 
 def seed_rng(seed: int) -> np.ndarray:
@@ -91,6 +102,12 @@ def _uniform(rng):
 
 @njit(cache=True)
 def _nearest(tree_nodes, count, q):
+    return _nearest_with_distance(tree_nodes, count, q)[0]
+
+
+@njit(cache=True)
+def _nearest_with_distance(tree_nodes, count, q):
+    """(index, L2 distance) of the node of ``tree_nodes[:count]`` nearest ``q``."""
     best, best_d = 0, np.inf
     dim = q.shape[0]
     for i in range(count):
@@ -100,7 +117,7 @@ def _nearest(tree_nodes, count, q):
             d += e * e
         if d < best_d:
             best, best_d = i, d
-    return best
+    return best, np.sqrt(best_d)
 
 
 @njit(cache=True)
@@ -441,25 +458,59 @@ def _solved(st, tree, node, other):
 
 
 @njit(cache=True)
-def _propose(nodes, st, q_new, lower, upper, rng, max_range):
-    """The next edge: from node st[FROM] of tree st[TREE] to ``q_new`` (st[REACHED]: q_new is the target)."""
+def _propose(nodes, radius, st, q_new, lower, upper, rng, max_range):
+    """The next edge: from node st[FROM] of tree st[TREE] to ``q_new`` (st[REACHED]: q_new is the target).
+
+    False, and no edge, when an extension's sample lies outside its nearest node's dynamic domain (``radius``).
+    """
     phase, tree = st[PHASE], st[TREE]
     if phase == DIRECT:
         q_new[:] = nodes[1, 0]
         st[TREE], st[FROM], st[REACHED] = 0, 0, 1
-        return
+        return True
     if phase == EXTEND:
         sample = np.empty(lower.shape[0])
         for a in range(lower.shape[0]):
             sample[a] = lower[a] + _uniform(rng) * (upper[a] - lower[a])
-        st[FROM] = _nearest(nodes[tree], st[N0 + tree], sample)
-        st[REACHED] = _steer(nodes[tree, st[FROM]], sample, max_range, q_new)
-        return
+        nearest, distance = _nearest_with_distance(nodes[tree], st[N0 + tree], sample)
+        if distance > radius[tree, nearest]:
+            return False
+        st[FROM] = nearest
+        st[REACHED] = _steer(nodes[tree, nearest], sample, max_range, q_new)
+        return True
     st[REACHED] = _steer(nodes[tree, st[FROM]], nodes[1 - tree, st[TARGET]], max_range, q_new)
+    return True
 
 
 @njit(cache=True)
-def _apply(nodes, parent, st, q_new, valid):
+def _next_extension(st, last, tuning):
+    """The tree to extend after tree ``last``'s round: the other one (as OMPL), unless balancing keeps
+    extending ``last`` while the other has at least twice its nodes (VAMP's ``balance``, ``tree_ratio`` 1)."""
+    other = 1 - last
+    if tuning[BALANCE] > 0.0 and st[N0 + other] >= 2 * st[N0 + last]:
+        return last
+    return other
+
+
+@njit(cache=True)
+def _update_domain(radius, tree, node, valid, tuning):
+    """Dynamic domain (Yershova et al. 2005, as VAMP): a node whose extension failed gets a domain of
+    ``DOMAIN_RADIUS``, shrunk by ``DOMAIN_ALPHA`` at each further failure (not below ``DOMAIN_MIN_RADIUS``)
+    and grown by it at each success."""
+    if tuning[DOMAIN_RADIUS] <= 0.0:
+        return
+    r = radius[tree, node]
+    if valid:
+        if r < np.inf:
+            radius[tree, node] = r * (1.0 + tuning[DOMAIN_ALPHA])
+    elif r == np.inf:
+        radius[tree, node] = tuning[DOMAIN_RADIUS]
+    else:
+        radius[tree, node] = max(r * (1.0 - tuning[DOMAIN_ALPHA]), tuning[DOMAIN_MIN_RADIUS])
+
+
+@njit(cache=True)
+def _apply(nodes, parent, radius, st, q_new, valid, tuning):
     """Update the trees and the phase with the verdict on the proposed edge; SOLVED or RUNNING."""
     phase, tree = st[PHASE], st[TREE]
     if phase == DIRECT:
@@ -468,10 +519,13 @@ def _apply(nodes, parent, st, q_new, valid):
             return _solved(st, 0, 0, 0)
         st[PHASE], st[TREE] = EXTEND, 0
         return RUNNING
-    if not valid:  # trapped: the other tree extends next (OMPL swaps the trees after each round)
-        st[PHASE], st[TREE] = EXTEND, (1 - tree if phase == EXTEND else tree)
+    if phase == EXTEND:
+        _update_domain(radius, tree, st[FROM], valid, tuning)
+    if not valid:  # trapped: the round of the tree that extended last is over
+        st[PHASE], st[TREE] = EXTEND, _next_extension(st, tree if phase == EXTEND else 1 - tree, tuning)
         return RUNNING
     new = _add(nodes, parent, st, tree, q_new, st[FROM])
+    radius[tree, new] = np.inf
     if phase == EXTEND:
         other = 1 - tree
         st[PHASE], st[TREE], st[TARGET] = CONNECT, other, new
@@ -485,29 +539,32 @@ def _apply(nodes, parent, st, q_new, valid):
 
 
 @njit(cache=True)
-def run(nodes, parent, verdict, max_edges, st, q_new, amb_states, lower, upper, rng, max_range, resolution, base,
-        indices, ri, rf, sf, grid_i, grid_f, amb, mark, confirm, exact_near):  # fmt: skip
+def run(nodes, parent, radius, verdict, max_edges, st, q_new, amb_states, tuning, lower, upper, rng, max_range,
+        resolution, base, indices, ri, rf, sf, grid_i, grid_f, amb, mark, confirm, exact_near):  # fmt: skip
     """Advance the search by at most ``max_edges`` edge checks; SOLVED, RUNNING, NEED_EXACT or FULL (module doc).
 
     ``verdict``: the exact answer for the pending edge after a NEED_EXACT return (ignored otherwise);
-    ``ri`` … ``mark``: the sphere checker's kernel inputs; ``exact_near``: see :func:`check_edge`.
+    ``tuning``: :func:`tuning`; ``ri`` … ``mark``: the sphere checker's kernel inputs; ``exact_near``: see
+    :func:`check_edge`.
     """
     if st[PENDING]:
         st[PENDING] = 0
-        if _apply(nodes, parent, st, q_new, verdict) == SOLVED:
+        if _apply(nodes, parent, radius, st, q_new, verdict, tuning) == SOLVED:
             return SOLVED
     cap = nodes.shape[1]
     for _ in range(max_edges):
         if st[N0] >= cap or st[N1] >= cap:
             return FULL
-        _propose(nodes, st, q_new, lower, upper, rng, max_range)
+        if not _propose(nodes, radius, st, q_new, lower, upper, rng, max_range):  # an iteration without an edge
+            st[TREE] = _next_extension(st, st[TREE], tuning)
+            continue
         tree = st[TREE]
         status = check_edge(nodes[tree, st[FROM]], q_new, resolution, base, indices, ri, rf, sf, grid_i, grid_f,
                             amb, mark, confirm, amb_states, st, nodes[:, 0], exact_near)  # fmt: skip
         if status == AMBIGUOUS:
             st[PENDING] = 1
             return NEED_EXACT
-        if _apply(nodes, parent, st, q_new, status == VALID) == SOLVED:
+        if _apply(nodes, parent, radius, st, q_new, status == VALID, tuning) == SOLVED:
             return SOLVED
     return RUNNING
 
