@@ -291,6 +291,96 @@ def _assess_rows_nb(configs, config_of, seg, pair, half, run_arrays, pair_arrays
         refine[r] = bound[r] < need[r] and (volume[r] + gap[p] >= need[r] or no_slack) and (no_slack or not covered[p])
 
 
+FAILURE_REASONS = ("collision", "margin", "unproven", "timeout")  # Certificate.reason by the round kernels' codes
+
+
+@njit(cache=True)
+def _round_configs_nb(path, delta, seg, a, b):
+    """The middle of each row's piece: (distinct configurations in key order, each row's configuration, half
+    the piece). Rows at the same segment and middle share one configuration (as ``np.unique`` would sort them)."""
+    n = seg.shape[0]
+    half = np.empty(n)
+    keys = np.empty(n)
+    for r in range(n):
+        half[r] = 0.5 * (b[r] - a[r])
+        keys[r] = seg[r] + 0.25 * (a[r] + b[r])
+    order = np.argsort(keys, kind="mergesort")
+    config_of = np.empty(n, dtype=np.int64)
+    firsts = np.empty(n, dtype=np.int64)
+    count = 0
+    for i in range(n):
+        r = order[i]
+        if i == 0 or keys[r] != keys[order[i - 1]]:
+            firsts[count] = r
+            count += 1
+        config_of[r] = count - 1
+    configs = np.empty((count, path.shape[1]))
+    for c in range(count):
+        r = firsts[c]
+        mid = 0.5 * (a[r] + b[r])
+        for j in range(path.shape[1]):
+            configs[c, j] = path[seg[r], j] + mid * delta[seg[r], j]
+    return configs, config_of, half
+
+
+@njit(cache=True)
+def _fail_nb(segment, reason, config, alive, curve, failure, witness):
+    """Segment ``segment`` fails: the rest of its curve needs no more proof; the first failure is kept
+    (``failure``: [segment, reason code], ``witness``: its configuration)."""
+    for s in range(segment, alive.shape[0]):
+        if curve[s] == curve[segment]:
+            alive[s] = False
+    if segment < failure[0]:
+        failure[0], failure[1] = segment, reason
+        witness[:] = config
+
+
+@njit(cache=True)
+def _finish_round_nb(configs, config_of, seg, pair, a, b, half, margin, bound, rate, need, refine, exact, span,
+                     timed_out, min_interval, alive, curve, clearance, failure, witness):  # fmt: skip
+    """After a round's bounds (:meth:`PathCertifier._check_rows`): each segment's clearance, the failures, and the
+    rows still unproven, as (seg, pair, a, b) of the next round.
+
+    At the middle of its piece ``[a, b]`` a row's pair is proven for ``|t - m| <= (bound - margin) / rate``; each
+    unproven end of the piece is widened to the dyadic piece that holds it, so that the pieces of all pairs share
+    their middles, hence their forward kinematics (4x fewer configurations).
+    """
+    n = seg.shape[0]
+    for r in range(n):
+        if refine[r] or bound[r] >= need[r]:
+            clearance[seg[r]] = min(clearance[seg[r]], bound[r])
+    for r in range(n):
+        if exact[r] and bound[r] - margin[r] <= 0.0:
+            _fail_nb(seg[r], 0 if bound[r] <= 0.0 else 1, configs[config_of[r]], alive, curve, failure, witness)
+    reach = np.empty(n)
+    open_ = np.zeros(n, dtype=np.bool_)
+    for r in range(n):
+        slack = max(bound[r] - margin[r], 0.0)
+        reach[r] = slack / rate[r] if rate[r] > 0.0 else np.inf
+        open_[r] = reach[r] < half[r] and alive[seg[r]]
+    for r in range(n):
+        if open_[r]:
+            short = half[r] * span[seg[r]] < min_interval
+            if short or timed_out:
+                _fail_nb(seg[r], 2 if short else 3, configs[config_of[r]], alive, curve, failure, witness)
+    keep = 0
+    for r in range(n):
+        if open_[r] and alive[seg[r]]:
+            keep += 1
+    seg2, pair2 = np.empty(2 * keep, dtype=np.int64), np.empty(2 * keep, dtype=np.int64)
+    a2, b2 = np.empty(2 * keep), np.empty(2 * keep)
+    k = 0
+    for r in range(n):
+        if open_[r] and alive[seg[r]]:
+            size = min(half[r], 2.0 ** np.ceil(np.log2(half[r] - reach[r])))
+            seg2[k] = seg2[k + keep] = seg[r]
+            pair2[k] = pair2[k + keep] = pair[r]
+            a2[k], b2[k] = a[r], a[r] + size
+            a2[k + keep], b2[k + keep] = b[r] - size, b[r]
+            k += 1
+    return seg2, pair2, a2, b2
+
+
 class _Run:
     """The state of one :meth:`PathCertifier.certify_path` call."""
 
@@ -311,10 +401,9 @@ class _Run:
         self.arrays = tuple(np.ascontiguousarray(a, dtype=float)
                             for a in (pair_margin, self.rate, self.motion, self.downstream))  # fmt: skip
         self.clearance = np.full(self.n_segments, math.inf)
-        self.failed = self.n_segments  # first failing segment so far (n_segments: none)
+        self.failure = np.array([self.n_segments, -1], dtype=np.int64)  # first failing segment, reason code
+        self.witness_config = np.zeros(path.shape[1])
         self.alive = curve >= 0  # segments still worth proving: not after a failure on their curve
-        self.reason = ""
-        self.witness: np.ndarray | None = None
         n_pairs = len(pairs.first)
         # Pending work, one row per (segment, pair, piece [a, b] of the segment not yet proven for the pair).
         live = np.flatnonzero(self.alive)
@@ -322,11 +411,18 @@ class _Run:
         self.pair = np.tile(np.arange(n_pairs), len(live))
         self.a, self.b = np.zeros(len(self.seg)), np.ones(len(self.seg))
 
-    def fail(self, segment: int, reason: str, q: np.ndarray) -> None:
-        """Segment ``segment`` fails: the rest of its curve needs no more proof (its first failure is reported)."""
-        self.alive[segment:][self.curve[segment:] == self.curve[segment]] = False
-        if segment < self.failed:
-            self.failed, self.reason, self.witness = segment, reason, q.copy()
+    @property
+    def failed(self) -> int:
+        """The first failing segment (``n_segments``: none)."""
+        return int(self.failure[0])
+
+    @property
+    def reason(self) -> str:
+        return FAILURE_REASONS[self.failure[1]] if self.failure[1] >= 0 else ""
+
+    @property
+    def witness(self) -> np.ndarray | None:
+        return self.witness_config.copy() if self.failure[1] >= 0 else None
 
     def failed_curves(self, n_curves: int) -> np.ndarray:
         """(n_curves,) bool: whether each curve has a failing segment."""
@@ -509,36 +605,20 @@ class PathCertifier:
         configuration share its forward kinematics.
         """
         seg, pair = run.seg, run.pair
-        mid, half = 0.5 * (run.a + run.b), 0.5 * (run.b - run.a)
-        keys, first_row, config_of = np.unique(seg + 0.5 * mid, return_index=True, return_inverse=True)
-        configs = run.path[seg[first_row]] + mid[first_row, None] * run.delta[seg[first_row]]
-        cert.checks += len(keys)
+        configs, config_of, half = _round_configs_nb(run.path, run.delta, seg, run.a, run.b)
+        cert.checks += len(configs)
         margin = run.pair_margin[seg, pair]
-        bound, rate, need = np.empty(len(seg)), np.empty(len(seg)), np.empty(len(seg))
-        refine = np.empty(len(seg), dtype=bool)
+        n_rows = len(seg)
+        bound, rate, need, refine = np.empty(n_rows), np.empty(n_rows), np.empty(n_rows), np.empty(n_rows, dtype=bool)
         _assess_rows_nb(configs, config_of, seg, pair, half, run.arrays, run.pairs.arrays, self._robot_arrays,
                         self._cover_arrays, run.pairs.primitives, self._cover is not None, self._rot, self._pos,
                         bound, rate, need, refine)  # fmt: skip
         exact = self._refine(configs, run.pairs, config_of, pair, refine, margin, bound, cert)
-        np.minimum.at(run.clearance, seg, np.where(refine | (bound >= need), bound, math.inf))
-        slack = bound - margin
-        for row in np.flatnonzero(exact & (slack <= 0.0)):
-            reason = "collision" if bound[row] <= 0.0 else "margin"
-            run.fail(int(seg[row]), reason, configs[config_of[row]])
-        with np.errstate(divide="ignore", invalid="ignore"):
-            reach = np.where(rate > 0.0, np.maximum(slack, 0.0) / rate, math.inf)
-        open_ = (reach < half) & run.alive[seg]
-        stuck = open_ & ((half * run.span[seg] < MIN_INTERVAL) | (time.monotonic() > run.deadline))
-        for row in np.flatnonzero(stuck):
-            reason = "unproven" if half[row] * run.span[seg[row]] < MIN_INTERVAL else "timeout"
-            run.fail(int(seg[row]), reason, configs[config_of[row]])
-        keep = np.flatnonzero(open_ & run.alive[seg])
-        run.seg, run.pair = np.tile(seg[keep], 2), np.tile(pair[keep], 2)
-        # The unproven ends [a, m - reach] and [m + reach, b], each widened to the dyadic piece that holds it: the
-        # pieces of all pairs then share their middles, hence their forward kinematics (4x fewer configurations).
-        size = np.minimum(half[keep], 2.0 ** np.ceil(np.log2(half[keep] - reach[keep])))
-        lo, hi = run.a[keep], run.b[keep]
-        run.a, run.b = np.concatenate([lo, hi - size]), np.concatenate([lo + size, hi])
+        run.seg, run.pair, run.a, run.b = _finish_round_nb(
+            configs, config_of, seg, pair, run.a, run.b, half, margin, bound, rate, need, refine, exact, run.span,
+            time.monotonic() > run.deadline, MIN_INTERVAL, run.alive, run.curve, run.clearance, run.failure,
+            run.witness_config,
+        )  # fmt: skip
 
     def _frames(self, configs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """At each configuration (one numba call): the bounding-sphere centres (C, geometries, 3) and each
@@ -560,6 +640,11 @@ class PathCertifier:
                         np.zeros(0), np.zeros(0), np.zeros(0), no)  # fmt: skip
         _volume_bounds_nb(np.zeros((1, n_geoms, 3)), none, none, *pair_arrays[:3], *pair_arrays[8:], self._radius,
                           np.zeros(0))  # fmt: skip  # clearance() calls it from Python
+        path, rows = np.zeros((2, nq)), np.zeros(0)
+        configs, config_of, half = _round_configs_nb(path, np.diff(path, axis=0), none, rows, rows)
+        _finish_round_nb(configs, config_of, none, none, rows, rows, half, rows, rows, rows, rows, no, no, np.zeros(1),
+                         False, MIN_INTERVAL, np.ones(1, dtype=bool), np.zeros(1, dtype=np.int64), np.zeros(1),
+                         np.array([1, -1], dtype=np.int64), np.zeros(nq))  # fmt: skip
 
     def _bounds(self, centers: np.ndarray, pairs: _Pairs, config_of: np.ndarray, pair: np.ndarray) -> np.ndarray:
         """Bounding-volume lower bound of each row's pair distance at its configuration."""
@@ -576,6 +661,8 @@ class PathCertifier:
         """
         exact = np.zeros(len(pair), dtype=bool)
         rows = np.flatnonzero(refine)
+        if not len(rows):
+            return exact
         rows = rows[np.argsort(config_of[rows], kind="stable")]
         current, placed = -1, set[int]()
         for row in rows:
