@@ -121,6 +121,31 @@ def test_curves_certified_together_get_each_their_own_answer(arm):
     assert certifier.certify_curves([]) == []
 
 
+def test_bent_segments_are_proven_as_the_parabolas_they_are(arm):
+    """certify_curves with bends: segment q(t) = (1 - t) q0 + t q1 + (t² - t) bend. The tip's chord sweeps through
+    a 4 mm ball; bending the elbow enough swings the tip inside it. Each answer equals a dense check's."""
+    scene = Scene([Obstacle("ball", "sphere", radius=0.004, pose=[REACH, 0.0, 0.0])])
+    certifier = PathCertifier(arm, scene, safety_margin=0.0)
+    ends = np.array([[-0.2, 0.0], [0.2, 0.0]])
+    t = np.linspace(0.0, 1.0, 4001)[:, None]
+
+    def dense_clear(bend: np.ndarray, margin: float) -> bool:
+        states = (1.0 - t) * ends[0] + t * ends[1] + (t * t - t) * bend
+        return verify_path(CollisionChecker(arm, scene, padding=margin), states, 1.0).valid
+
+    answers = []
+    for bend in ([0.0, 0.0], [0.0, 2.0], [0.0, 4.0], [0.0, 6.0], [0.0, -6.0], [2.0, 6.0]):
+        for margin in (0.0, 0.003):
+            proven = certifier.certify_curves([(ends, np.zeros(2), np.array([bend]))], margin=margin)[0]
+            assert proven == dense_clear(np.array(bend), margin), (bend, margin)
+            answers.append(proven)
+    assert answers == [False, False, False, False, True, False, True, True, True, True, False, False]
+    rng = np.random.default_rng(7)
+    for bend in rng.uniform(-8.0, 8.0, (30, 2)):  # never a proof of a curve that touches
+        if certifier.certify_curves([(ends, np.zeros(2), bend[None])])[0]:
+            assert dense_clear(bend, 0.0), bend
+
+
 def test_scene_edits_are_followed(arm):
     scene = Scene()
     certifier = PathCertifier(arm, CollisionChecker(arm, scene), safety_margin=0.0)

@@ -295,9 +295,10 @@ FAILURE_REASONS = ("collision", "margin", "unproven", "timeout")  # Certificate.
 
 
 @njit(cache=True)
-def _round_configs_nb(path, delta, seg, a, b):
+def _round_configs_nb(path, delta, bend, seg, a, b):
     """The middle of each row's piece: (distinct configurations in key order, each row's configuration, half
-    the piece). Rows at the same segment and middle share one configuration (as ``np.unique`` would sort them)."""
+    the piece). Rows at the same segment and middle share one configuration (as ``np.unique`` would sort them).
+    Segment s at t is ``path[s] + t * delta[s] + t² * bend[s]``."""
     n = seg.shape[0]
     half = np.empty(n)
     keys = np.empty(n)
@@ -319,7 +320,7 @@ def _round_configs_nb(path, delta, seg, a, b):
         r = firsts[c]
         mid = 0.5 * (a[r] + b[r])
         for j in range(path.shape[1]):
-            configs[c, j] = path[seg[r], j] + mid * delta[seg[r], j]
+            configs[c, j] = path[seg[r], j] + mid * delta[seg[r], j] + mid * mid * bend[seg[r], j]
     return configs, config_of, half
 
 
@@ -385,14 +386,17 @@ class _Run:
     """The state of one :meth:`PathCertifier.certify_path` call."""
 
     def __init__(self, path: np.ndarray, pairs: _Pairs, pair_margin: np.ndarray, deadline: float, downstream,
-                 curve: np.ndarray):  # fmt: skip
+                 curve: np.ndarray, bend: np.ndarray):  # fmt: skip
         """``pair_margin`` (segments, pairs); ``curve`` (segments,): the curve each segment belongs to, -1 for a
-        segment not to certify (between two curves)."""
+        segment not to certify (between two curves); ``bend`` (segments, nq): segment s at t in [0, 1] is
+        ``(1 - t) * path[s] + t * path[s + 1] + (t² - t) * bend[s]`` (zeros: straight)."""
         self.path, self.pairs, self.pair_margin, self.deadline = path, pairs, pair_margin, deadline
         self.curve = curve
         self.n_segments = len(path) - 1
-        self.delta = np.diff(path, axis=0)
-        self.motion = np.abs(self.delta)  # (segments, nq)
+        self.bend = np.ascontiguousarray(bend, dtype=float)
+        self.delta = np.diff(path, axis=0) - self.bend  # segment s at t: path[s] + t * delta[s] + t² * bend[s]
+        # (segments, nq): the largest |dq_j / dt| on each segment (at one of its ends: dq/dt is linear in t)
+        self.motion = np.maximum(np.abs(self.delta), np.abs(self.delta + 2.0 * self.bend))
         self.span = self.motion.max(axis=1, initial=0.0)
         self.rate = self.motion @ pairs.rate.T  # (segments, pairs): configuration-free bound on distance change
         # (segments, geometries, nq): how fast a geometry can move relative to each joint's axis (joints below it)
@@ -526,41 +530,50 @@ class PathCertifier:
         cert.seconds = time.monotonic() - t0
         return cert
 
-    def certify_curves(
-        self, curves: list[tuple[np.ndarray, np.ndarray]], deadline: float | None = None, *, margin: float | None = None
-    ) -> list[bool]:
+    def certify_curves(self, curves: list[tuple], deadline: float | None = None, *, margin: float | None = None
+                       ) -> list[bool]:  # fmt: skip
         """Whether each curve is certified, all in one pass (their pairs share the work).
 
-        ``curves``: (configurations (n, nq), deviation (nq,)) as :meth:`certify_path` takes them. A curve
-        still unproven at ``deadline`` counts as not certified.
+        ``curves``: (configurations (n, nq), deviation (nq,)) as :meth:`certify_path` takes them, or
+        (configurations, deviation, bend (n - 1, nq)) whose segment i is the parabola
+        ``(1 - t) * q_i + t * q_i+1 + (t² - t) * bend[i]`` (a blend proven as the curve it is, no chords).
+        A curve still unproven at ``deadline`` counts as not certified.
         """
         margin = self.safety_margin if margin is None else float(margin)
         nq = self._model.nq
         points: list[np.ndarray] = []
         deviation: list[np.ndarray] = []
+        bends: list[np.ndarray] = []
         curve: list[int] = []
-        for c, (configs, dev) in enumerate(curves):
+        for c, (configs, dev, *bend) in enumerate(curves):
             configs = np.atleast_2d(np.asarray(configs, dtype=float))
             if points:  # the straight step from the last curve's end to this curve's start is not certified
                 deviation.append(np.zeros(nq))
+                bends.append(np.zeros((1, nq)))
                 curve.append(-1)
             points.append(configs)
             deviation += [np.abs(np.asarray(dev, dtype=float))] * (len(configs) - 1)
+            bends.append(np.reshape(bend[0], (-1, nq)) if bend else np.zeros((len(configs) - 1, nq)))
             curve += [c] * (len(configs) - 1)
         if not points:
             return []
         path = np.concatenate(points)
-        _, run = self._certify(path, np.array(deviation).reshape(-1, nq), np.array(curve, dtype=int), margin, deadline)
+        _, run = self._certify(path, np.array(deviation).reshape(-1, nq), np.array(curve, dtype=int), margin, deadline,
+                               np.concatenate(bends))  # fmt: skip
         return (~run.failed_curves(len(curves))).tolist()
 
     def _certify(
-        self, path: np.ndarray, deviation: np.ndarray, curve: np.ndarray, margin: float, deadline: float | None
+        self, path: np.ndarray, deviation: np.ndarray, curve: np.ndarray, margin: float, deadline: float | None,
+        bend: np.ndarray | None = None,
     ) -> tuple[Certificate, _Run]:
-        """Prove the segments of ``path`` (deviation (segments, nq), ``curve`` as :class:`_Run` takes it)."""
-        pairs = self._pair_table(self._swept_reach(path, margin, deviation))
+        """Prove the segments of ``path`` (deviation (segments, nq), ``curve`` and ``bend`` as :class:`_Run` takes
+        them; ``bend`` None: straight segments)."""
+        bend = np.zeros((max(len(path) - 1, 0), self._model.nq)) if bend is None else bend
+        # A bent segment stays within |bend| / 4 of its chord, the reach of the obstacles to consider
+        pairs = self._pair_table(self._swept_reach(path, margin, deviation + 0.25 * np.abs(bend)))
         pair_margin = margin + deviation @ pairs.rate.T  # (segments, pairs)
         cert = Certificate(valid=True, margin=margin)
-        run = _Run(path, pairs, pair_margin, math.inf if deadline is None else deadline, self._downstream, curve)
+        run = _Run(path, pairs, pair_margin, math.inf if deadline is None else deadline, self._downstream, curve, bend)
         while len(run.seg):
             self._check_rows(run, cert)
         return cert, run
@@ -605,7 +618,7 @@ class PathCertifier:
         configuration share its forward kinematics.
         """
         seg, pair = run.seg, run.pair
-        configs, config_of, half = _round_configs_nb(run.path, run.delta, seg, run.a, run.b)
+        configs, config_of, half = _round_configs_nb(run.path, run.delta, run.bend, seg, run.a, run.b)
         cert.checks += len(configs)
         margin = run.pair_margin[seg, pair]
         n_rows = len(seg)
@@ -641,7 +654,7 @@ class PathCertifier:
         _volume_bounds_nb(np.zeros((1, n_geoms, 3)), none, none, *pair_arrays[:3], *pair_arrays[8:], self._radius,
                           np.zeros(0))  # fmt: skip  # clearance() calls it from Python
         path, rows = np.zeros((2, nq)), np.zeros(0)
-        configs, config_of, half = _round_configs_nb(path, np.diff(path, axis=0), none, rows, rows)
+        configs, config_of, half = _round_configs_nb(path, np.diff(path, axis=0), np.zeros((1, nq)), none, rows, rows)
         _finish_round_nb(configs, config_of, none, none, rows, rows, half, rows, rows, rows, rows, no, no, np.zeros(1),
                          False, MIN_INTERVAL, np.ones(1, dtype=bool), np.zeros(1, dtype=np.int64), np.zeros(1),
                          np.array([1, -1], dtype=np.int64), np.zeros(nq))  # fmt: skip

@@ -460,9 +460,10 @@ class MotionPlanner:
     def _curve_check(self, req, start_full, indices, deadline) -> tuple[timing.CurveFree, float]:
         """How blended corners are checked, and the joint step of their samples.
 
-        With a certifier, like the path: proven clear by the request's safety margin, continuously along
-        chords :data:`CERTIFIED_CHORD_STEP` apart, the margin grown by how far the curve leaves them. Otherwise
-        the exact checker at the states alone, :data:`timing.CERTIFY_STEP` apart.
+        With a certifier, like the path: proven clear by the request's safety margin, toppra's parabolic blends
+        as they are, sampled curves (Ruckig's) continuously along chords :data:`CERTIFIED_CHORD_STEP` apart, the
+        margin grown by how far the curve leaves them. Otherwise the exact checker at the states alone,
+        :data:`timing.CERTIFY_STEP` apart.
         """
         monitor = self._monitor
         if self.certifier is not None:

@@ -65,7 +65,9 @@ RUCKIG_DURATION = 100.0  # s: longer sections are computed sped up and played ba
 MIN_SCALING = 1e-4
 
 CurveFree = Callable[[np.ndarray, np.ndarray], bool]  # (states, chord deviation per joint) -> collision-free
-Curve = tuple[np.ndarray, np.ndarray]  # (states, chord deviation per joint)
+# (states, chord deviation per joint), or with a third element, bends (states - 1, joints): segment i is the parabola
+# (1 - t)·q_i + t·q_i+1 + (t² - t)·bend_i -- only for a curve check whose ``takes_bends`` is True
+Curve = tuple
 
 
 @dataclass(frozen=True)
@@ -107,16 +109,22 @@ class CertifiedCurve:
     indices: Sequence[int]
     deadline: float | None
     margin: float
+    takes_bends = True  # the certifier proves parabolic segments as they are
 
     def __call__(self, states: np.ndarray, chord_deviation: np.ndarray) -> bool:
         return self.many([(states, chord_deviation)])[0]
 
     def many(self, curves: Sequence[Curve]) -> list[bool]:
         full = []
-        for states, chord_deviation in curves:
+        for states, chord_deviation, *bend in curves:
             deviation = np.zeros(len(self.base))
             deviation[self.indices] = chord_deviation
-            full.append((full_configurations(self.base, self.indices, states), deviation))
+            curve = (full_configurations(self.base, self.indices, states), deviation)
+            if bend:
+                full_bend = np.zeros((len(states) - 1, len(self.base)))
+                full_bend[:, self.indices] = bend[0]
+                curve += (full_bend,)
+            full.append(curve)
         return self.certifier.certify_curves(full, self.deadline, margin=self.margin)
 
 
@@ -133,6 +141,10 @@ class WatchedCurve:
     curve_free: CurveFree
     before: Callable[[], None]
 
+    @property
+    def takes_bends(self) -> bool:
+        return takes_bends(self.curve_free)
+
     def __call__(self, states: np.ndarray, chord_deviation: np.ndarray) -> bool:
         self.before()
         return self.curve_free(states, chord_deviation)
@@ -140,6 +152,11 @@ class WatchedCurve:
     def many(self, curves: Sequence[Curve]) -> list[bool]:
         self.before()
         return curves_free(self.curve_free, curves)
+
+
+def takes_bends(curve_free: CurveFree) -> bool:
+    """Whether ``curve_free`` proves curves given with bends (:data:`Curve`), else only sampled chords."""
+    return bool(getattr(curve_free, "takes_bends", False))
 
 
 def curves_free(curve_free: CurveFree, curves: Sequence[Curve]) -> list[bool]:
@@ -249,6 +266,14 @@ class BlendedPath(toppra.interpolator.AbstractGeometricPath):
         if order == 2:
             return self.dd[piece].copy()
         raise ValueError(f"order must be 0, 1 or 2, got {order}")
+
+    def blend_bend(self, piece: int) -> Curve:
+        """Blend ``piece`` as one bent segment (:data:`Curve`): its ends, no chord deviation, and the bend
+        ``2·l²·p''`` of ``p(t) = (1 - t)·p(0) + t·p(1) + (t² - t)·bend`` (t = σ / 2l)."""
+        s0, s1 = self.starts[piece], self.starts[piece + 1]
+        ends = self.at(np.array([s0, s1]), np.full(2, piece), 0)
+        bend = 0.5 * (s1 - s0) ** 2 * self.dd[piece]
+        return ends, np.zeros(self.dof), bend[None]
 
     def blend_chords(self, piece: int, step: float) -> tuple[np.ndarray, np.ndarray]:
         """Points along blend ``piece`` at most ``step`` apart (|p'| ≤ 1, so a path step bounds the joint
@@ -403,8 +428,8 @@ def _certified_half_lengths(
         pending = [k for k in pending if half[k] > 0.0]
         if not pending:
             break
-        curves = [_single_blend(waypoints, k, half[k]).blend_chords(1, check.step) for k in pending]
-        report.certify_checks += sum(len(samples) for samples, _ in curves)
+        curves = [_blend_curve(_single_blend(waypoints, k, half[k]), check) for k in pending]
+        report.certify_checks += sum(len(curve[0]) for curve in curves)
         failed = [k for k, free in zip(pending, check.many(curves), strict=True) if not free]
         for k in failed:
             report.fallbacks.append(f"blend at waypoint {k} not certified at deviation {deviation[k]:.3g} rad")
@@ -414,6 +439,11 @@ def _certified_half_lengths(
     report.certify_time += time.monotonic() - t0
     _count_corners(waypoints, half, report)
     return half
+
+
+def _blend_curve(path: BlendedPath, check: _Check) -> Curve:
+    """Blend piece 1 of ``path`` as ``check`` takes it: one bent segment, else chords ``check.step`` apart."""
+    return path.blend_bend(1) if takes_bends(check.curve_free) else path.blend_chords(1, check.step)
 
 
 def _single_blend(waypoints: np.ndarray, k: int, half_length: float) -> BlendedPath:
