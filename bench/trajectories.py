@@ -6,8 +6,9 @@ Paths: the paper's 13-DOF and 6-DOF Maru-1 problems (``--seeds`` seeds each) and
 MotionBenchMaker Panda problems (spread over the sets), planned by ``MotionPlanner`` (RRTConnect,
 sphere checker, verified on the exact model, shortcut). Every path is then time-parameterised by
 each method of :mod:`maru_planner.planning.timing` with the same limits, blend deviation and
-blend certification (``PathCertifier``: continuous, the safety margin, chords ``resolution`` apart
-plus their error) as the planner uses.
+blend certification as the planner uses (``PathCertifier`` through ``timing.certified_curve``: continuous,
+the safety margin, toppra's blends as the parabolas they are, Ruckig's curves as chords ``resolution``
+apart plus their error).
 
 Reported per family and method: trajectory duration, its ratio to the trapezoids and to the
 cruise-only lower bound (every segment at its fastest synchronised speed, no acceleration),
@@ -62,9 +63,8 @@ def log(msg: str) -> None:
 class Case:
     """One planned path (rows: group configurations) and what checks it.
 
-    Blends are certified as ``MotionPlanner`` does (``PathCertifier``, the planner's safety margin,
-    chords ``resolution`` apart plus their error); the finished trajectory is re-checked on the exact
-    checker alone, finely.
+    Blends are certified as ``MotionPlanner`` does (``timing.certified_curve`` on ``PathCertifier``, the
+    planner's safety margin); the finished trajectory is re-checked on the exact checker alone, finely.
     """
 
     family: str
@@ -83,12 +83,27 @@ class Case:
         out[:, self.indices] = states
         return out
 
-    def curve_free(self, states: np.ndarray, chord_deviation: np.ndarray) -> bool:
+    @property
+    def curve_free(self) -> _TimedCheck:
+        check = timing.certified_curve(self.certifier, self.base, self.indices, None, self.certifier.safety_margin)
+        return _TimedCheck(check, self)
+
+
+@dataclass
+class _TimedCheck:
+    """The planner's blend check (one certification pass per call, bent blends), its CPU time added to the case's."""
+
+    check: timing.CertifiedCurve
+    case: Case
+    takes_bends = True
+
+    def __call__(self, states: np.ndarray, chord_deviation: np.ndarray) -> bool:
+        return self.many([(states, chord_deviation)])[0]
+
+    def many(self, curves: list) -> list[bool]:
         t0 = time.thread_time()
-        deviation = np.zeros(len(self.base))
-        deviation[self.indices] = chord_deviation
-        free = self.certifier.certify_path(self.full(states), deviation=deviation).valid
-        self.check_cpu += time.thread_time() - t0
+        free = self.check.many(curves)
+        self.case.check_cpu += time.thread_time() - t0
         return free
 
 
@@ -271,7 +286,8 @@ def markdown(summary: dict, args, checks: dict) -> str:
         f"Command: `.venv/bin/python bench/trajectories.py{quick} --seeds {args.seeds} --mbm {args.mbm}`. "
         f"Blend deviation {args.deviation} rad, sample period 0.05 s; limits re-checked on a sampling with joint "
         "steps ≤ 0.005 rad (values and finite differences); the same sampling re-checked for collision on the "
-        "exact model. Blends certified as by MotionPlanner (PathCertifier, safety margin, chords 0.02 rad apart). "
+        "exact model. Blends certified as by MotionPlanner (PathCertifier, safety margin; toppra's as parabolas, "
+        "Ruckig's as chords 0.02 rad apart). "
         "Parameterisation time excludes that certification of blends (listed apart); wall time "
         "depends on the machine's load, the 5 ms target is checked on CPU time.",
         "",
