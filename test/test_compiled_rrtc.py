@@ -265,8 +265,9 @@ def test_extensions_sample_inside_the_dynamic_domain_of_their_nearest_node():
     # a sample lands in the ball of 0.3 rad with probability 4.6e-4: the others are rejected, without an edge
     assert 0 < len(proposed) < 30 and max(proposed) <= 0.3
     radius[0, 0] = np.inf
-    far = [np.linalg.norm(q_new) for _ in range(50) if kernel._propose(nodes, radius, st, q_new, lower, upper, rng, 1.0)]
-    assert len(far) == 50 and max(far) == pytest.approx(1.0)  # unbounded: every sample, steered to the full range
+    far = [np.linalg.norm(q_new) for _ in range(50)
+           if kernel._propose(nodes, radius, st, q_new, lower, upper, rng, 1.0)]  # fmt: skip
+    assert len(far) == 50 and max(far) == pytest.approx(1.0)  # unbounded: every sample, steered to full range
 
 
 def test_balancing_extends_the_smaller_tree_until_the_other_has_less_than_twice_its_nodes():

@@ -54,7 +54,9 @@ STATE_FIELDS = ("phase", "tree", "from", "target", "pending", "reached", "n0", "
 (PHASE, TREE, FROM, TARGET, PENDING, REACHED, N0, N1, CHECKS, N_AMB, LINK0, LINK1, DUPLICATE) = range(len(STATE_FIELDS))
 
 
-def new_state(start: np.ndarray, goal: np.ndarray, capacity: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def new_state(
+    start: np.ndarray, goal: np.ndarray, capacity: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Trees (2, capacity, dim) holding the start (tree 0) and the goal (tree 1), parents, domain radii, ``st``."""
     dim = len(start)
     nodes = np.zeros((2, capacity, dim))

@@ -119,12 +119,12 @@ class CertifiedCurve:
         for states, chord_deviation, *bend in curves:
             deviation = np.zeros(len(self.base))
             deviation[self.indices] = chord_deviation
-            curve = (full_configurations(self.base, self.indices, states), deviation)
+            curve: list[np.ndarray] = [full_configurations(self.base, self.indices, states), deviation]
             if bend:
                 full_bend = np.zeros((len(states) - 1, len(self.base)))
                 full_bend[:, self.indices] = bend[0]
-                curve += (full_bend,)
-            full.append(curve)
+                curve.append(full_bend)
+            full.append(tuple(curve))
         return self.certifier.certify_curves(full, self.deadline, margin=self.margin)
 
 
