@@ -141,6 +141,39 @@ def test_each_check_gets_states_within_the_step_and_a_bound_on_the_chord_error(m
             assert np.allclose(deviation, chord_error, rtol=1e-6, atol=1e-15)
 
 
+class BendRecorder:
+    """A curve check that takes bent segments (as the certifier's does) and records what it is given."""
+
+    takes_bends = True
+
+    def __init__(self):
+        self.curves = []
+
+    def __call__(self, states, deviation):
+        return self.many([(states, deviation)])[0]
+
+    def many(self, curves):
+        self.curves += curves
+        return [True] * len(curves)
+
+
+def test_a_bend_taking_check_gets_each_blend_as_exact_parabola_parts():
+    recorder = BendRecorder()
+    deviation = 0.3
+    parameterize(ZIGZAG, "toppra", curve_free=recorder, max_deviation=deviation)
+    assert len(recorder.curves) == len(ZIGZAG) - 2  # every corner once: none failed
+    tau = np.linspace(0.0, 1.0, 11)
+    for k, (ends, chord_deviation, bends) in enumerate(recorder.curves, start=1):
+        parts = timing.BLEND_BEND_PARTS
+        assert len(ends) == parts + 1 and len(bends) == parts and not chord_deviation.any()
+        blend = timing._single_blend(ZIGZAG, k, timing.blend_half_length(ZIGZAG, k, deviation))
+        s0, s1 = blend.starts[1], blend.starts[2]
+        for j, (a, b, bend) in enumerate(zip(ends[:-1], ends[1:], bends, strict=True)):
+            on_part = (1.0 - tau)[:, None] * a + tau[:, None] * b + (tau * tau - tau)[:, None] * bend
+            sigma = s0 + (j + tau) * (s1 - s0) / parts
+            assert np.allclose(on_part, blend.at(sigma, np.ones(len(sigma), dtype=int), 0), atol=1e-12)
+
+
 @pytest.mark.parametrize("method", timing.METHODS)
 def test_tiny_velocity_scaling_stays_within_the_point_cap(method):
     limits = timing.Limits.scaled([1.0, 1.5, 2.0], [2.0, 3.0, 4.0], velocity_scaling=1e-4)

@@ -55,6 +55,9 @@ JERK_RAMP_TIME = 0.1  # s: default jerk limit = acceleration limit / this (full 
 CERTIFY_STEP = 0.005  # rad: joint step of the collision re-check of blends
 BLEND_SHRINK = 4.0  # each retry of a colliding blend divides its deviation by this
 BLEND_RETRIES = 2  # retries before a corner becomes a stop
+# A blend is certified as this many bent segments: each gets its own joint-speed bound (dq/dt runs from the incoming
+# to the outgoing direction). 4 took Maru-1's blend certification from 10.7 to 7.5 ms a plan (1 part) and 9.4 (8).
+BLEND_BEND_PARTS = 4
 MIN_BLEND_SPEED = 0.1  # |u_in + u_out| below this (a near reversal): stop instead of blending
 GRID_INTERVALS = 30  # toppra grid intervals along a section (plus ≥ BLEND_INTERVALS per blend)
 BLEND_INTERVALS = 3
@@ -267,13 +270,13 @@ class BlendedPath(toppra.interpolator.AbstractGeometricPath):
             return self.dd[piece].copy()
         raise ValueError(f"order must be 0, 1 or 2, got {order}")
 
-    def blend_bend(self, piece: int) -> Curve:
-        """Blend ``piece`` as one bent segment (:data:`Curve`): its ends, no chord deviation, and the bend
-        ``2·l²·p''`` of ``p(t) = (1 - t)·p(0) + t·p(1) + (t² - t)·bend`` (t = σ / 2l)."""
+    def blend_bend(self, piece: int, parts: int = BLEND_BEND_PARTS) -> Curve:
+        """Blend ``piece`` as ``parts`` bent segments (:data:`Curve`): ends, no chord deviation, and each part's
+        bend ``½·h²·p''`` (h its length in σ): on it ``p = (1 - t)·p(start) + t·p(end) + (t² - t)·bend``."""
         s0, s1 = self.starts[piece], self.starts[piece + 1]
-        ends = self.at(np.array([s0, s1]), np.full(2, piece), 0)
-        bend = 0.5 * (s1 - s0) ** 2 * self.dd[piece]
-        return ends, np.zeros(self.dof), bend[None]
+        ends = self.at(np.linspace(s0, s1, parts + 1), np.full(parts + 1, piece), 0)
+        bend = 0.5 * ((s1 - s0) / parts) ** 2 * self.dd[piece]
+        return ends, np.zeros(self.dof), np.repeat(bend[None], parts, axis=0)
 
     def blend_chords(self, piece: int, step: float) -> tuple[np.ndarray, np.ndarray]:
         """Points along blend ``piece`` at most ``step`` apart (|p'| ≤ 1, so a path step bounds the joint
