@@ -163,9 +163,9 @@ def test_a_bend_taking_check_gets_each_blend_as_exact_parabola_parts():
     parameterize(ZIGZAG, "toppra", curve_free=recorder, max_deviation=deviation)
     assert len(recorder.curves) == len(ZIGZAG) - 2  # every corner once: none failed
     tau = np.linspace(0.0, 1.0, 11)
-    for k, (ends, chord_deviation, bends) in enumerate(recorder.curves, start=1):
+    for k, (ends, off_chord, bends) in enumerate(recorder.curves, start=1):
         parts = timing.BLEND_BEND_PARTS
-        assert len(ends) == parts + 1 and len(bends) == parts and not chord_deviation.any()
+        assert len(ends) == parts + 1 and len(bends) == parts and not off_chord.any()
         blend = timing._single_blend(ZIGZAG, k, timing.blend_half_length(ZIGZAG, k, deviation))
         s0, s1 = blend.starts[1], blend.starts[2]
         for j, (a, b, bend) in enumerate(zip(ends[:-1], ends[1:], bends, strict=True)):
