@@ -11,6 +11,7 @@ import pytest
 from maru_planner import errors
 from maru_planner.collision import CollisionChecker
 from maru_planner.collision.certify import (
+    MIN_ANCHOR_CLEARANCE,
     PathCertifier,
     certify_and_repair,
     chord_deviation,
@@ -266,6 +267,42 @@ def test_a_failing_segment_is_repaired_locally(arm):
     assert np.allclose(repaired.path[0], path[0]) and np.allclose(repaired.path[-1], path[-1])
     assert certifier.certify_path(repaired.path).valid
     assert repaired.certificate.min_clearance >= 0.005
+
+
+def test_a_repair_never_starts_at_a_waypoint_touching_an_obstacle(arm):
+    """Margin 0: waypoint 1 is 1 mm from the plate (more than the margin), segment 1 sweeps through it. The repair
+    starts at waypoint 0 instead: every local path from a touching waypoint grazed the obstacle again."""
+    tangent_offset = (0.001 + TIP_RADIUS + 0.001) / REACH  # plate's half thickness, the ball, 1 mm of clearance
+    certifier = PathCertifier(arm, Scene([plate_at(0.1)]), safety_margin=0.0)
+    path = np.array([[-0.2, 0.0], [0.1 - tangent_offset, 0.0], [0.4, 0.0]])
+    assert certifier.clearance(path[1]) == pytest.approx(0.001, abs=1e-4)
+    assert 0.0 < certifier.clearance(path[1]) < MIN_ANCHOR_CLEARANCE
+    local = DetourPlanner()
+    certify_and_repair(certifier, path, local, deadline=np.inf, max_repairs=1)
+    (qa, qb, _margin), *_ = local.calls
+    assert np.array_equal(qa, path[0]) and np.array_equal(qb, path[2])
+
+
+def test_a_margin_0_repair_is_searched_padded(arm, monkeypatch):
+    """Twice a margin of 0 is 0: a repair's search is padded by up to MIN_REPAIR_PADDING, half-way to its anchors'
+    clearance, so that its edges (checked at states) do not graze what certification just rejected."""
+    from maru_planner.planning import motion_planner
+
+    paddings = []
+    padded = motion_planner.padded_checker
+
+    def recording(robot, checker, padding):
+        paddings.append(padding)
+        return padded(robot, checker, padding)
+
+    monkeypatch.setattr(motion_planner, "padded_checker", recording)
+    scene = Scene([Obstacle("plate", "box", size=(0.04, 0.002, 0.05), pose=[REACH + 0.01, 0.0, 0.0])])
+    request = MotionRequest("all", start={"j1": -0.3, "j2": 0.0}, goal_joints={"j1": 0.4, "j2": 0.0},
+                            planner_id="RRTConnect", time_budget=10.0, seed=1)  # fmt: skip
+    planner = MotionPlanner.from_scene(arm, scene, PlannerConfig(resolution=0.7, safety_margin=0.0))
+    result = planner.plan(request)
+    assert result.success and result.stats.certified and result.stats.repairs >= 1, result.message
+    assert paddings and all(0.0 < p <= motion_planner.REPAIR_MIN_PADDING for p in paddings)
 
 
 def test_repair_gives_up_without_a_local_path(arm):

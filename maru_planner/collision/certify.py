@@ -63,6 +63,9 @@ MIN_INTERVAL = 1e-9  # rad: a piece of segment this short that is still unproven
 NEAR_PATH_MIN_OBSTACLES = 64  # reachable obstacles from which a certification only builds pairs for those near its path
 NEAR_TABLES = 4  # pair tables of near obstacles kept (blends and repairs certify around the same path)
 CLEARANCE_WINDOW = 0.05  # m: clearance() measures the obstacles whose bound is this close to the nearest one first
+# m: a repair starts and ends at waypoints at least this clear even when the margin is less (a margin of 0 let it
+# start at waypoints touching an obstacle, from which every local path grazed it again)
+MIN_ANCHOR_CLEARANCE = 0.0025
 REVOLUTE = ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned")
 PRISMATIC = ("JointModelPX", "JointModelPY", "JointModelPZ", "JointModelPrismaticUnaligned")
 
@@ -890,7 +893,7 @@ def certify_and_repair(
 
     ``local_planner(qa, qb, margin, deadline)`` returns full configurations from ``qa`` to ``qb`` (None if it
     finds none); its path is certified like the rest. A failing segment is re-planned between the nearest
-    waypoints around it that keep the margin. ``margin`` (m; None = ``certifier.safety_margin``): a start or
+    waypoints around it that keep the margin, and at least :data:`MIN_ANCHOR_CLEARANCE`. ``margin`` (m; None = ``certifier.safety_margin``): a start or
     goal closer than that lowers the margin of this path to half its clearance (nothing nearer can be
     certified). Repairs stop at ``deadline``; certification itself at ``certify_deadline`` (None: no limit).
     """
@@ -912,7 +915,7 @@ def certify_and_repair(
                 continue
         if cert.reason == "timeout" or repairs >= max_repairs or time.monotonic() >= deadline:
             return CertifiedPath(None, total, repairs)
-        a, b = _repair_anchors(certifier, path, total.first_failing_segment, margin)
+        a, b = _repair_anchors(certifier, path, total.first_failing_segment, max(margin, MIN_ANCHOR_CLEARANCE))
         repairs += 1
         local = local_planner(path[a], path[b], margin, deadline)
         if local is None:

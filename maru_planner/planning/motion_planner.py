@@ -76,6 +76,7 @@ REPAIR_RESOLUTION = 0.02  # rad: the coarsest motion step of a repair's local se
 NEAR_END_PADDING = 0.75  # of the nearer end's clearance: the search's padding when an end is nearer than the margin
 PADDED_CHECKERS = 4  # padded search checkers kept (the margin's, and a few for ends nearer than it)
 REPAIR_SHORTCUT_TRIES = 10  # a repair's local path is short: few failed shortcuts end its simplification
+REPAIR_MIN_PADDING = 0.005  # m: the most a repair may pad when twice the margin is less (a margin of 0 included)
 ou.setLogLevel(ou.LOG_WARN)  # OMPL's INFO chatter would mix into CLI output
 
 
@@ -286,8 +287,9 @@ class MotionPlanner:
         """The local planner of a repair: RRT-Connect between two waypoints of the request's group, searched like
         the request was -- the compiled kernel on the sphere checker, else OMPL's RRTConnect on the exact one.
 
-        It plans padded by more than the margin -- half-way to the nearer end's clearance, at
-        most twice the margin: its checks are of states, certification's of the motion between them -- at
+        It plans padded by more than the margin -- half-way to the nearer end's clearance, at most twice the
+        margin or :data:`REPAIR_MIN_PADDING` if more: its checks are of states, certification's of the motion
+        between them -- at
         ``config.resolution`` or :data:`REPAIR_RESOLUTION` if finer (a coarse search's gaps are what certification
         caught), with a short simplification.
         """
@@ -305,7 +307,7 @@ class MotionPlanner:
                 time_parameterization="trapezoid",
             )
             ends = min(self.certifier.clearance(qa), self.certifier.clearance(qb))
-            padding = min(2.0 * margin, 0.5 * (margin + ends)) if ends > margin else margin
+            padding = min(max(2.0 * margin, REPAIR_MIN_PADDING), 0.5 * (margin + ends)) if ends > margin else margin
             fast = is_sphere_checker(self.checker)
             checker = padded_checker(self.robot, self.checker if fast else self.certifier.checker, padding)
             local = MotionPlanner(self.robot, checker, config)
