@@ -893,9 +893,10 @@ def certify_and_repair(
 
     ``local_planner(qa, qb, margin, deadline)`` returns full configurations from ``qa`` to ``qb`` (None if it
     finds none); its path is certified like the rest. A failing segment is re-planned between the nearest
-    waypoints around it that keep the margin, and at least :data:`MIN_ANCHOR_CLEARANCE`. ``margin`` (m; None = ``certifier.safety_margin``): a start or
-    goal closer than that lowers the margin of this path to half its clearance (nothing nearer can be
-    certified). Repairs stop at ``deadline``; certification itself at ``certify_deadline`` (None: no limit).
+    waypoints around it that keep the margin, and at least :data:`MIN_ANCHOR_CLEARANCE`. ``margin`` (m; None =
+    ``certifier.safety_margin``): a start or goal closer than that lowers the margin of this path to half its
+    clearance (nothing nearer can be certified). Repairs stop at ``deadline``; certification itself at
+    ``certify_deadline`` (None: no limit).
     """
     path = np.atleast_2d(np.asarray(path, dtype=float))
     margin = certifier.safety_margin if margin is None else float(margin)
