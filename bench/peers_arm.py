@@ -31,11 +31,11 @@ import numpy as np
 import pinocchio as pin
 
 from maru_planner.collision import self_collision_pairs
-from maru_planner.moveit_scene import PANDA_FINGERS_OPEN, iter_mbm_problems
+from maru_planner.moveit_scene import PANDA_FINGERS_OPEN, iter_mbm_problems, mbm_panda
 from maru_planner.paths import benchmarks_dir
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig
 from maru_planner.planning.problems import PROBLEMS
-from maru_planner.robot import RobotModel, load_example_robot
+from maru_planner.robot import RobotModel
 from maru_planner.scene import Scene
 
 ROOT = Path(__file__).resolve().parent
@@ -69,13 +69,6 @@ def maru13_case(robot) -> Case:
     names = robot.groups[problem.group]
     return Case("maru13", "maru13", robot, Scene.from_yaml(problem.scene_path), problem.group,
                 problem.start_dict(names), problem.goal_dict(names))
-
-
-def panda_robot():
-    robot = load_example_robot("panda")
-    fingers = robot.joint_indices(list(PANDA_FINGERS_OPEN))
-    robot.upper_limits[fingers] = np.maximum(robot.upper_limits[fingers], list(PANDA_FINGERS_OPEN.values()))
-    return robot
 
 
 def mbm_cases(robot, per_set: int | None) -> list[Case]:
@@ -310,7 +303,7 @@ def main(argv=None) -> int:
     maru_seeds = list(range(3 if args.quick else args.maru_seeds))
 
     log("loading robots and problems ...")
-    maru, panda = RobotModel.maru1(), panda_robot()
+    maru, panda = RobotModel.maru1(), mbm_panda()
     maru_cases = [maru13_case(maru)]
     panda_cases = mbm_cases(panda, per_set)
     pyro_names = {c.name for c in panda_cases if int(c.name.split("/")[1]) <= pyro_per_set}

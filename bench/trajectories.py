@@ -42,11 +42,11 @@ sys.path.insert(0, str(ROOT))
 
 from maru_planner.collision import CollisionChecker  # noqa: E402
 from maru_planner.collision.certify import PathCertifier  # noqa: E402
-from maru_planner.moveit_scene import PANDA_FINGERS_OPEN, iter_mbm_problems  # noqa: E402
+from maru_planner.moveit_scene import PANDA_FINGERS_OPEN, iter_mbm_problems, mbm_panda  # noqa: E402
 from maru_planner.paths import benchmarks_dir  # noqa: E402
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig, timing  # noqa: E402
 from maru_planner.planning.problems import PROBLEMS  # noqa: E402
-from maru_planner.robot import RobotModel, load_example_robot  # noqa: E402
+from maru_planner.robot import RobotModel  # noqa: E402
 from maru_planner.scene import Scene  # noqa: E402
 
 RESULTS = ROOT / "bench" / "results"
@@ -144,9 +144,7 @@ def paper_cases(family: str, seeds: int) -> list[Case]:
 
 
 def mbm_cases(count: int) -> list[Case]:
-    robot = load_example_robot("panda")
-    fingers = robot.joint_indices(list(PANDA_FINGERS_OPEN))
-    robot.upper_limits[fingers] = np.maximum(robot.upper_limits[fingers], list(PANDA_FINGERS_OPEN.values()))
+    robot = mbm_panda()
     planner = MotionPlanner.from_scene(robot, None, PlannerConfig(collision_model="spheres"))
     problems = list(iter_mbm_problems(TARBALL, fixed_joints=PANDA_FINGERS_OPEN))
     chosen = [problems[int(i)] for i in np.linspace(0, len(problems) - 1, min(count, len(problems)))]

@@ -29,9 +29,19 @@ import yaml
 
 from maru_planner import shapes
 from maru_planner.errors import InvalidRequest, InvalidScene, one_line
+from maru_planner.robot import RobotModel, load_example_robot
 from maru_planner.scene import Obstacle, Scene
 
 PANDA_FINGERS_OPEN = {"panda_finger_joint1": 0.065, "panda_finger_joint2": 0.065}  # MotionBenchMaker's convention
+
+
+def mbm_panda() -> RobotModel:
+    """example-robot-data's Panda with its finger limits (0.04 m) widened to :data:`PANDA_FINGERS_OPEN`, the
+    MotionBenchMaker problems' finger opening."""
+    robot = load_example_robot("panda")
+    fingers = robot.joint_indices(list(PANDA_FINGERS_OPEN))
+    robot.upper_limits[fingers] = np.maximum(robot.upper_limits[fingers], list(PANDA_FINGERS_OPEN.values()))
+    return robot
 
 
 @dataclass

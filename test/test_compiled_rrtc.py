@@ -13,14 +13,14 @@ from maru_planner.collision import CollisionChecker
 from maru_planner.collision.checker import bisection_order
 from maru_planner.collision.sphere_kernels import scan_nb, unpack_robot, unpack_scene
 from maru_planner.collision.spheres import SphereCollisionChecker, verify_path
-from maru_planner.moveit_scene import PANDA_FINGERS_OPEN, iter_mbm_problems
+from maru_planner.moveit_scene import PANDA_FINGERS_OPEN, iter_mbm_problems, mbm_panda
 from maru_planner.paths import benchmarks_dir
 from maru_planner.planning import PLANNERS, MotionPlanner, MotionRequest, PlannerConfig, PlanStatus
 from maru_planner.planning import rrtc_kernel as kernel
 from maru_planner.planning.compiled_rrtc import CompiledRRTConnect
 from maru_planner.planning.problems import PROBLEMS
 from maru_planner.planning.space import EdgeChecker, GroupSpace
-from maru_planner.robot import RobotModel, load_example_robot
+from maru_planner.robot import RobotModel
 from maru_planner.scene import Obstacle, Scene
 
 ARM = [f"panda_joint{i}" for i in range(1, 8)]
@@ -291,9 +291,7 @@ def test_certification_repairs_search_with_the_kernel_on_padded_spheres(monkeypa
     Its repair must search like the request did (the kernel on the padded sphere checker): OMPL's RRTConnect on
     the exact checker spent the whole budget on that narrow approach and failed the request.
     """
-    robot = load_example_robot("panda")
-    fingers = robot.joint_indices(list(PANDA_FINGERS_OPEN))
-    robot.upper_limits[fingers] = np.maximum(robot.upper_limits[fingers], list(PANDA_FINGERS_OPEN.values()))
+    robot = mbm_panda()
     (problem,) = [p for p in iter_mbm_problems(MBM_TARBALL, sets=["cage"], limit_per_set=73,
                                                fixed_joints=PANDA_FINGERS_OPEN) if p.name == "cage/0073"]  # fmt: skip
     config = PlannerConfig(collision_model="spheres", verify_resolution=0.025, safety_margin=0.01)
