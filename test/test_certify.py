@@ -15,9 +15,9 @@ from maru_planner.collision.certify import (
     PathCertifier,
     certify_and_repair,
     chord_deviation,
-    convex_hull,
     joint_levers,
 )
+from maru_planner.collision.checker import convex_hull
 from maru_planner.collision.spheres import densify, verify_path
 from maru_planner.paths import config_path
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig, PlanStatus

@@ -44,7 +44,7 @@ from numba import njit
 
 from maru_planner import errors
 from maru_planner.collision.batch_fk import KinematicTree, joint_poses_nb, sphere_centers_nb, tree_arrays
-from maru_planner.collision.checker import CollisionChecker, convex_hull, robot_mesh_hull, self_collision_pairs
+from maru_planner.collision.checker import CollisionChecker, hull_or_self, robot_hull, self_collision_pairs
 from maru_planner.collision.sphere_cover import (
     DISTANCE_TOLERANCE,
     NO_COVER,
@@ -468,7 +468,7 @@ class PathCertifier:
         self._n_robot = len(geometries)
         enclosing = [bounding_sphere(obj.geometry) for obj in geometries]
         meshes = [g for g, obj in enumerate(geometries) if isinstance(obj.geometry, coal.BVHModelBase)]
-        self._hulls = {g: robot_mesh_hull(geometries[g].geometry) for g in meshes}
+        self._hulls = {g: robot_hull(geometries[g].geometry) for g in meshes}
         self._joint = np.array([obj.parentJoint for obj in geometries], dtype=int)
         self._local = np.array([obj.placement.act(c) for obj, (c, _) in zip(geometries, enclosing, strict=True)])
         self._radius = np.array([r for _, r in enclosing])
@@ -795,8 +795,7 @@ class PathCertifier:
         shapes = []
         for ob in obstacles:
             geometry = ob.geometry()
-            hull = convex_hull(geometry) if isinstance(geometry, coal.BVHModelBase) else geometry
-            shapes.append((geometry, hull, pin.SE3(ob.pose[:3, :3].copy(), ob.pose[:3, 3].copy())))
+            shapes.append((geometry, hull_or_self(geometry), pin.SE3(ob.pose[:3, :3].copy(), ob.pose[:3, 3].copy())))
         boxes = [_bounding_box(geometry, placement) for geometry, _, placement in shapes]
         box_half = np.array([h for _, _, h, _ in boxes], dtype=float).reshape(-1, 3)
         box_slack = np.array([0.0 if exact else 2.0 * np.linalg.norm(h) for _, _, h, exact in boxes])

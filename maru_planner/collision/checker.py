@@ -306,6 +306,11 @@ def convex_hull(mesh: coal.BVHModelBase) -> coal.ConvexBase:
     return coal.Convex.convexHull(points, False, "Qt")
 
 
-#: :func:`convex_hull` of a robot's mesh, kept: the certifier and every sphere checker of the robot (padded
+def hull_or_self(shape: coal.CollisionGeometry) -> coal.CollisionGeometry:
+    """A cheaper lower bound for distances to ``shape``: its convex hull if it is a mesh, else the shape itself."""
+    return convex_hull(shape) if isinstance(shape, coal.BVHModelBase) else shape
+
+
+#: :func:`hull_or_self` of a robot's geometry, kept: the certifier and every sphere checker of the robot (padded
 #: twins included) share one hull per mesh instead of each running Qhull again.
-robot_mesh_hull = functools.lru_cache(maxsize=64)(convex_hull)
+robot_hull = functools.lru_cache(maxsize=64)(hull_or_self)

@@ -29,7 +29,7 @@ import numpy as np
 from maru_planner.collision import sphere_kernels as _kernels
 from maru_planner.collision.batch_fk import KinematicTree, batch_joint_poses, joint_poses_nb, sphere_centers_nb
 from maru_planner.collision.broadphase import robot_reach
-from maru_planner.collision.checker import convex_hull, robot_mesh_hull, self_collision_pairs
+from maru_planner.collision.checker import hull_or_self, robot_hull, self_collision_pairs
 from maru_planner.collision.sphere_model import SphereFitOptions, SphereModel, load_or_fit
 from maru_planner.scene import BuildClock, Obstacle, Scene
 from maru_planner.shapes import KERNEL_KINDS, KernelPrimitive
@@ -351,8 +351,7 @@ class SphereCollisionChecker:
             r = rot[j] @ obj.placement.rotation
             p = rot[j] @ obj.placement.translation + pos[j]
             shape = self._exact_shapes[g]
-            hull = robot_mesh_hull(shape) if isinstance(shape, coal.BVHModelBase) else shape
-            placed[g] = (shape, hull, _coal_tf(r, p))
+            placed[g] = (shape, robot_hull(shape), _coal_tf(r, p))
         return placed[g]
 
     def _expand_pairs(self) -> np.ndarray:
@@ -441,7 +440,7 @@ class SphereCollisionChecker:
 
 def _with_hull(shape, placement) -> tuple:
     """(shape, its convex hull if a mesh else itself, placement)."""
-    return shape, convex_hull(shape) if isinstance(shape, coal.BVHModelBase) else shape, placement
+    return shape, hull_or_self(shape), placement
 
 
 def _coal_tf(rot: np.ndarray, pos: np.ndarray):
