@@ -136,10 +136,7 @@ class SphereCover:
         balls: list[tuple[int, np.ndarray, np.ndarray]] = []  # per cluster: joint, centres, radii
         g_clusters = [0]
         for g, obj in enumerate(geometries):
-            mine = slice(spheres.group_start[g], spheres.group_start[g + 1]) if spheres is not None else slice(0)
-            if spheres is not None and (isinstance(obj.geometry, coal.BVHModelBase) or solid_inside_spheres(
-                obj.geometry, obj.placement, spheres.center[mine], spheres.radius[mine]
-            )):  # fmt: skip
+            if spheres is not None and _model_covers(spheres, g, obj):
                 covered[g] = True
                 for c in range(spheres.group_clusters[g], spheres.group_clusters[g + 1]):
                     own = slice(spheres.cluster_start[c], spheres.cluster_start[c + 1])
@@ -162,6 +159,15 @@ class SphereCover:
         ints = (0, 3, 4, 7)
         return cls(covered, tuple(np.ascontiguousarray(a, dtype=np.int64 if i in ints else float)
                                   for i, a in enumerate(arrays)))  # fmt: skip
+
+
+def _model_covers(spheres: SphereModel, g: int, obj: pin.GeometryObject) -> bool:
+    """Whether the sphere model's spheres of geometry ``g`` hold all of it: a mesh's by construction, a solid's
+    when :func:`solid_inside_spheres` proves it."""
+    mine = slice(spheres.group_start[g], spheres.group_start[g + 1])
+    return isinstance(obj.geometry, coal.BVHModelBase) or solid_inside_spheres(
+        obj.geometry, obj.placement, spheres.center[mine], spheres.radius[mine]
+    )
 
 
 def solid_balls(geometry: coal.CollisionGeometry) -> tuple[np.ndarray, np.ndarray] | None:

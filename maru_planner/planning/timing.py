@@ -445,7 +445,8 @@ def _certified_half_lengths(
 
 
 def _blend_curve(path: BlendedPath, check: _Check) -> Curve:
-    """Blend piece 1 of ``path`` as ``check`` takes it: one bent segment, else chords ``check.step`` apart."""
+    """Blend piece 1 of ``path`` as ``check`` takes it: :data:`BLEND_BEND_PARTS` bent segments, else chords
+    ``check.step`` apart."""
     return path.blend_bend(1) if takes_bends(check.curve_free) else path.blend_chords(1, check.step)
 
 
