@@ -7,9 +7,18 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from maru_planner.collision.sphere_cover import SphereCover, solid_balls, solid_inside_spheres
+from maru_planner.collision.batch_fk import KinematicTree, batch_joint_poses
+from maru_planner.collision.certify import _kernel_primitives
+from maru_planner.collision.sphere_cover import (
+    DISTANCE_TOLERANCE,
+    SphereCover,
+    cover_bounds_nb,
+    solid_balls,
+    solid_inside_spheres,
+)
 from maru_planner.collision.sphere_model import load_or_fit
 from maru_planner.robot import RobotModel, load_example_robot
+from maru_planner.scene import Obstacle
 
 
 def sphere_model(robot: RobotModel):
@@ -85,3 +94,48 @@ def test_solid_balls_contain_their_solid(shape):
     assert solid_balls(coal.Capsule(0.1, 0.2)) is None
     centers, radii = solid_balls(coal.Sphere(0.1))
     assert np.allclose(centers, 0.0) and np.allclose(radii, 0.1)
+
+
+def test_cover_bounds_are_the_balls_least_distance_below_enough_and_at_least_enough_above():
+    """:func:`cover_bounds_nb` skips clusters whose bound reaches the row's ``enough``: its bound is the exact least
+    ball distance where that is below ``enough``, else between ``enough`` and it (never above the balls' distance)."""
+    robot = load_example_robot("panda")
+    cover = SphereCover.of(robot, sphere_model(robot))
+    s_joint, s_center, s_radius, c_start, _, _, _, g_clusters = cover.arrays
+    obstacles = [Obstacle("box", "box", size=(0.3, 0.2, 0.4), pose=[0.45, 0.1, 0.4]),
+                 Obstacle("ball", "sphere", radius=0.08, pose=[0.3, -0.3, 0.6])]  # fmt: skip
+    primitives = _kernel_primitives(obstacles)
+    rng = np.random.default_rng(3)
+    configs = rng.uniform(robot.lower_limits, robot.upper_limits, (40, robot.nq))
+    rots, poss = batch_joint_poses(KinematicTree.from_pinocchio(robot.model), configs)
+    n_geoms = len(g_clusters) - 1
+    rows = [(c, g, k, True) for c in range(len(configs)) for g in range(n_geoms) for k in range(2)]
+    rows += [(c, g, h, False) for c in range(len(configs)) for g, h in ((1, 7), (2, 8), (3, 9))]
+    config_of, first, second, obstacle = (np.array([row[i] for row in rows]) for i in range(4))
+    world = np.einsum("csab,sb->csa", rots[:, s_joint], s_center) + poss[:, s_joint]  # (configs, balls, 3)
+    own = [np.arange(c_start[g_clusters[g]], c_start[g_clusters[g + 1]]) for g in range(n_geoms)]
+    exact = np.empty(len(rows))
+    for r, (c, g, h, is_obstacle) in enumerate(rows):
+        if is_obstacle:
+            ob = obstacles[h]
+            local = (world[c, own[g]] - ob.pose[:3, 3]) @ ob.pose[:3, :3]
+            if h == 0:  # the box
+                outside = np.abs(local) - 0.5 * np.asarray(ob.size)
+                inside = np.minimum(outside.max(axis=1), 0.0)
+                distance = np.linalg.norm(np.maximum(outside, 0.0), axis=1) + inside
+            else:
+                distance = np.linalg.norm(local, axis=1) - 0.08
+            exact[r] = (distance - s_radius[own[g]]).min()
+        else:
+            gaps = np.linalg.norm(world[c, own[g]][:, None] - world[c, own[h]][None], axis=2)
+            exact[r] = (gaps - s_radius[own[g]][:, None] - s_radius[own[h]][None]).min()
+    exact -= DISTANCE_TOLERANCE
+    enough = exact + rng.choice([-0.05, -0.01, 0.01, 0.05, np.inf], len(rows))
+    bound = np.full(len(rows), -np.inf)
+    cover_bounds_nb(rots, poss, np.arange(len(rows)), config_of, first, second, obstacle.astype(bool), enough,
+                    *cover.arrays, *primitives, bound)  # fmt: skip
+    below = exact < enough
+    assert below.any() and (~below).any()
+    np.testing.assert_allclose(bound[below], exact[below], atol=1e-12)
+    assert np.all(bound[~below] <= exact[~below] + 1e-12)
+    assert np.all(bound[~below] >= enough[~below] - DISTANCE_TOLERANCE - 1e-12)

@@ -202,23 +202,27 @@ class _Pairs:
 
 
 @njit(cache=True)
-def _frames_nb(configs, parent, kind, axis, prot, ppos, idx_q, joint, local, q_joint, rot, pos, centers, to_axis):
-    """Per configuration: world centres of the geometries' bounding spheres, and each centre's distance from
-    the axis of each joint of q."""
+def _poses_nb(configs, parent, kind, axis, prot, ppos, idx_q, joint, local, rots, poss, centers):
+    """Per configuration: every joint's world pose (``rots``, ``poss``) and the world centres of the geometries'
+    bounding spheres."""
     for i in range(configs.shape[0]):
-        joint_poses_nb(configs[i], parent, kind, axis, prot, ppos, idx_q, rot, pos)
-        sphere_centers_nb(rot, pos, joint, local, centers[i])
-        for k in range(q_joint.shape[0]):
-            j = q_joint[k]
-            u0 = rot[j, 0, 0] * axis[j, 0] + rot[j, 0, 1] * axis[j, 1] + rot[j, 0, 2] * axis[j, 2]
-            u1 = rot[j, 1, 0] * axis[j, 0] + rot[j, 1, 1] * axis[j, 1] + rot[j, 1, 2] * axis[j, 2]
-            u2 = rot[j, 2, 0] * axis[j, 0] + rot[j, 2, 1] * axis[j, 1] + rot[j, 2, 2] * axis[j, 2]
-            for g in range(centers.shape[1]):
-                d0 = centers[i, g, 0] - pos[j, 0]
-                d1 = centers[i, g, 1] - pos[j, 1]
-                d2 = centers[i, g, 2] - pos[j, 2]
-                along = d0 * u0 + d1 * u1 + d2 * u2
-                to_axis[i, g, k] = np.sqrt(max(d0 * d0 + d1 * d1 + d2 * d2 - along * along, 0.0))
+        joint_poses_nb(configs[i], parent, kind, axis, prot, ppos, idx_q, rots[i], poss[i])
+        sphere_centers_nb(rots[i], poss[i], joint, local, centers[i])
+
+
+@njit(cache=True)
+def _to_axis_nb(rot, pos, axis, q_joint, center, out):
+    """``out[k]``: the distance of ``center`` from the axis of the joint of q ``k`` (one configuration's poses)."""
+    for k in range(q_joint.shape[0]):
+        j = q_joint[k]
+        u0 = rot[j, 0, 0] * axis[j, 0] + rot[j, 0, 1] * axis[j, 1] + rot[j, 0, 2] * axis[j, 2]
+        u1 = rot[j, 1, 0] * axis[j, 0] + rot[j, 1, 1] * axis[j, 1] + rot[j, 1, 2] * axis[j, 2]
+        u2 = rot[j, 2, 0] * axis[j, 0] + rot[j, 2, 1] * axis[j, 1] + rot[j, 2, 2] * axis[j, 2]
+        d0 = center[0] - pos[j, 0]
+        d1 = center[1] - pos[j, 1]
+        d2 = center[2] - pos[j, 2]
+        along = d0 * u0 + d1 * u1 + d2 * u2
+        out[k] = np.sqrt(max(d0 * d0 + d1 * d1 + d2 * d2 - along * along, 0.0))
 
 
 @njit(cache=True)
@@ -243,7 +247,7 @@ def _volume_bounds_nb(centers, config_of, pair, first, second, obstacle, box_cen
 
 @njit(cache=True)
 def _assess_rows_nb(configs, config_of, seg, pair, half, run_arrays, pair_arrays, robot_arrays, cover_arrays,
-                    primitives, use_cover, rot, pos, bound, rate, need, refine):  # fmt: skip
+                    primitives, use_cover, bound, rate, need, refine):  # fmt: skip
     """Per row, at the middle of its piece (one call per round of :meth:`PathCertifier._check_rows`): the distance
     bound (bounding volumes, then the sphere cover where they fall short), the rate (configuration-free, tightened
     at the middle where the bound falls short of it), ``need`` = margin + half * rate, and whether coal is to refine
@@ -252,14 +256,15 @@ def _assess_rows_nb(configs, config_of, seg, pair, half, run_arrays, pair_arrays
     pair_margin, rate_free, motion, downstream = run_arrays
     first, second, obstacle, other, covered, moves_first, moves_other, gap, box_center, box_rot, box_half = pair_arrays
     parent, kind, axis, prot, ppos, idx_q, g_joint, g_local, g_radius, q_joint, levers, prismatic = robot_arrays
-    n_rows, n_geoms, nq = seg.shape[0], g_joint.shape[0], q_joint.shape[0]
-    centers = np.empty((configs.shape[0], n_geoms, 3))
-    to_axis = np.empty((configs.shape[0], n_geoms, nq))
-    _frames_nb(configs, parent, kind, axis, prot, ppos, idx_q, g_joint, g_local, q_joint, rot, pos, centers, to_axis)
+    n_rows, n_geoms, nq, n_configs = seg.shape[0], g_joint.shape[0], q_joint.shape[0], configs.shape[0]
+    rots, poss = np.empty((n_configs, parent.shape[0], 3, 3)), np.empty((n_configs, parent.shape[0], 3))
+    centers = np.empty((n_configs, n_geoms, 3))
+    _poses_nb(configs, parent, kind, axis, prot, ppos, idx_q, g_joint, g_local, rots, poss, centers)
     volume = np.empty(n_rows)
     _volume_bounds_nb(centers, config_of, pair, first, second, obstacle, box_center, box_rot, box_half, g_radius,
                       volume)  # fmt: skip
     margin = np.empty(n_rows)
+    enough = np.empty(n_rows)  # a bound this large proves the whole piece even with the configuration-free rate
     n_cover = 0
     cover_rows = np.empty(n_rows, dtype=np.int64)
     for r in range(n_rows):
@@ -267,18 +272,25 @@ def _assess_rows_nb(configs, config_of, seg, pair, half, run_arrays, pair_arrays
         margin[r] = pair_margin[s, p]
         bound[r] = volume[r]
         rate[r] = rate_free[s, p]
-        if use_cover and covered[p] and bound[r] < margin[r] + half[r] * rate[r]:
+        enough[r] = margin[r] + half[r] * rate[r]
+        if use_cover and covered[p] and bound[r] < enough[r]:
             cover_rows[n_cover] = r
             n_cover += 1
     if n_cover:
         rows = cover_rows[:n_cover]
         rows = rows[np.argsort(config_of[rows])]
-        cover_bounds_nb(configs, rows, config_of, first[pair], second[pair], obstacle[pair], parent, kind, axis,
-                         prot, ppos, idx_q, *cover_arrays, *primitives, rot, pos, bound)  # fmt: skip
+        cover_bounds_nb(rots, poss, rows, config_of, first[pair], second[pair], obstacle[pair], enough, *cover_arrays,
+                        *primitives, bound)  # fmt: skip
+    to_axis = np.empty((n_configs, n_geoms, nq))
+    has_axis = np.zeros((n_configs, n_geoms), dtype=np.bool_)
     for r in range(n_rows):
         s, p, c = seg[r], pair[r], config_of[r]
         if bound[r] < margin[r] + half[r] * rate[r]:  # tighten the levers with the configuration at the middle
             g, o, total = first[p], other[p], 0.0
+            for b in (g, o):
+                if not has_axis[c, b]:
+                    _to_axis_nb(rots[c], poss[c], axis, q_joint, centers[c, b], to_axis[c, b])
+                    has_axis[c, b] = True
             for j in range(nq):
                 lever = 0.0
                 if moves_first[p, j]:
@@ -474,8 +486,6 @@ class PathCertifier:
         self._radius = np.array([r for _, r in enclosing])
         self._chain = self._levers > 0.0
         self._tree = tree_arrays(KinematicTree.from_pinocchio(robot.model))
-        self._rot = np.empty((self._model.njoints, 3, 3))
-        self._pos = np.empty((self._model.njoints, 3))
         self._q_joint = np.array([_joint_of_q(robot.model, i) for i in range(robot.nq)], dtype=np.int64)
         self._prismatic = np.array([robot.model.joints[int(j)].shortname() in PRISMATIC for j in self._q_joint])
         self._downstream = _downstream(robot, self._levers)
@@ -493,7 +503,7 @@ class PathCertifier:
                               self._prismatic)  # fmt: skip
         self._cover_arrays = self._cover.arrays if self._cover is not None else NO_COVER
         # Compile (or load from numba's cache) the kernels now: inside the first request it took ~1.5 s of its budget.
-        self._frames(np.asarray(robot.neutral(), dtype=float)[None])
+        self._centers(np.asarray(robot.neutral(), dtype=float)[None])
         self._warm_row_kernel()
 
     # ---------------------------------------------------------------- public --
@@ -600,7 +610,7 @@ class PathCertifier:
         pairs = self._pair_table(near)
         if not len(pairs.first):
             return math.inf
-        centers, _ = self._frames(q[None])
+        centers = self._centers(q[None])
         lower = self._bounds(centers, pairs, np.zeros(len(pairs.first), dtype=int), np.arange(len(pairs.first)))
         pin.forwardKinematics(self._model, self._data, q)
         best, placed = math.inf, set[int]()
@@ -627,8 +637,8 @@ class PathCertifier:
         n_rows = len(seg)
         bound, rate, need, refine = np.empty(n_rows), np.empty(n_rows), np.empty(n_rows), np.empty(n_rows, dtype=bool)
         _assess_rows_nb(configs, config_of, seg, pair, half, run.arrays, run.pairs.arrays, self._robot_arrays,
-                        self._cover_arrays, run.pairs.primitives, self._cover is not None, self._rot, self._pos,
-                        bound, rate, need, refine)  # fmt: skip
+                        self._cover_arrays, run.pairs.primitives, self._cover is not None, bound, rate, need,
+                        refine)  # fmt: skip
         exact = self._refine(configs, run.pairs, config_of, pair, refine, margin, bound, cert)
         run.seg, run.pair, run.a, run.b = _finish_round_nb(
             configs, config_of, seg, pair, run.a, run.b, half, margin, bound, rate, need, refine, exact, run.span,
@@ -636,14 +646,13 @@ class PathCertifier:
             run.witness_config,
         )  # fmt: skip
 
-    def _frames(self, configs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """At each configuration (one numba call): the bounding-sphere centres (C, geometries, 3) and each
-        centre's distance from each joint's axis (C, geometries, nq)."""
-        centers = np.empty((len(configs), self._n_robot, 3))
-        to_axis = np.empty((len(configs), self._n_robot, self._model.nq))
-        _frames_nb(configs, *self._tree, self._joint, self._local, self._q_joint, self._rot, self._pos,
-                   centers, to_axis)  # fmt: skip
-        return centers, to_axis
+    def _centers(self, configs: np.ndarray) -> np.ndarray:
+        """The geometries' bounding-sphere centres at each configuration (C, geometries, 3), in one numba call."""
+        n = len(configs)
+        centers = np.empty((n, self._n_robot, 3))
+        _poses_nb(configs, *self._tree, self._joint, self._local, np.empty((n, self._model.njoints, 3, 3)),
+                  np.empty((n, self._model.njoints, 3)), centers)  # fmt: skip
+        return centers
 
     def _warm_row_kernel(self) -> None:
         """Compile (or load) the row kernels for this robot's array types, on no rows (not in a request's budget)."""
@@ -652,8 +661,8 @@ class PathCertifier:
         pair_arrays = (none, none, no, none, no, np.zeros((0, nq), dtype=bool), np.zeros((0, nq), dtype=bool),
                        np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros((0, 3)))  # fmt: skip
         _assess_rows_nb(np.zeros((1, nq)), none, none, none, np.zeros(0), run_arrays, pair_arrays, self._robot_arrays,
-                        self._cover_arrays, _kernel_primitives([]), self._cover is not None, self._rot, self._pos,
-                        np.zeros(0), np.zeros(0), np.zeros(0), no)  # fmt: skip
+                        self._cover_arrays, _kernel_primitives([]), self._cover is not None, np.zeros(0),
+                        np.zeros(0), np.zeros(0), no)  # fmt: skip
         _volume_bounds_nb(np.zeros((1, n_geoms, 3)), none, none, *pair_arrays[:3], *pair_arrays[8:], self._radius,
                           np.zeros(0))  # fmt: skip  # clearance() calls it from Python
         path, rows = np.zeros((2, nq)), np.zeros(0)
@@ -752,7 +761,7 @@ class PathCertifier:
         travel = 0.5 * np.abs(np.diff(path, axis=0)) @ self._levers.T if len(path) > 1 else np.zeros((1, self._n_robot))
         grown = deviation @ self._levers.T if len(deviation) else 0.0  # deviation: (segments, nq)
         reach = (self._radius + travel + margin + grown)[:, self._moving]  # (segments, geometries)
-        centers = self._frames(mids)[0][:, self._moving]
+        centers = self._centers(mids)[:, self._moving]
         box_center, box_rot, box_half = boxes
         lo, hi = (centers - reach[..., None]).min(axis=0), (centers + reach[..., None]).max(axis=0)
         unbounded = ~np.isfinite(box_half).all(axis=1)
@@ -773,7 +782,7 @@ class PathCertifier:
         boxes = self._obstacle_boxes()
         if boxes is None:
             return None
-        centers, _ = self._frames(q[None])
+        centers = self._centers(q[None])
         gaps = _box_distances(centers[0, self._moving], *boxes) - self._radius[self._moving, None]
         return np.where(np.isfinite(boxes[2]).all(axis=1), gaps.min(axis=0, initial=math.inf), -math.inf)
 

@@ -16,7 +16,6 @@ import numpy as np
 import pinocchio as pin
 from numba import njit
 
-from maru_planner.collision.batch_fk import joint_poses_nb, sphere_centers_nb
 from maru_planner.collision.sphere_kernels import obstacle_distance
 from maru_planner.collision.sphere_model import SphereModel
 from maru_planner.collision.sphere_model import bounding_sphere as balls_bound
@@ -31,33 +30,43 @@ MAX_SOLID_PARTS = 16  # pieces per axis of a box or cylinder covered by balls
 
 
 @njit(cache=True)
-def cover_bounds_nb(configs, rows, config_of, first, second, obstacle, parent, kind, axis, prot, ppos, idx_q,
-                     s_joint, s_center, s_radius, c_start, c_joint, c_center, c_radius, g_clusters, primitive,
-                     box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, rot, pos, bound):  # fmt: skip
+def cover_bounds_nb(rots, poss, rows, config_of, first, second, obstacle, enough, s_joint, s_center, s_radius,
+                    c_start, c_joint, c_center, c_radius, g_clusters, primitive, box_c, box_r, box_h, sph_c, sph_r,
+                    cyl_c, cyl_a, cyl_h, cyl_r, bound):  # fmt: skip
     """Raise ``bound`` of each of ``rows`` (sorted by configuration) to its pair's sphere-cover bound.
 
     Obstacle pair (geometry g, obstacle k): the least signed distance of g's spheres to k's primitive minus
-    their radii; self pair: the least gap between the two geometries' spheres. A cluster whose bounding sphere
-    cannot beat the best value so far is skipped (its spheres lie inside it).
+    their radii; self pair: the least gap between the two geometries' spheres. ``rots``/``poss``: each
+    configuration's joint world poses. A cluster whose bounding sphere cannot beat the best value so far is
+    skipped (its spheres lie inside it), and so is one whose bound reaches the row's ``enough``: the row's bound
+    is then at most that cluster's bound, exact below ``enough``. Balls are placed in the world when first used.
     """
     sphere_world = np.empty((s_center.shape[0], 3))
     cluster_world = np.empty((c_center.shape[0], 3))
+    cluster_placed = np.zeros(c_center.shape[0], dtype=np.bool_)
+    balls_placed = np.zeros(c_center.shape[0], dtype=np.bool_)
     current = -1
     for r in rows:
         c = config_of[r]
         if c != current:
-            joint_poses_nb(configs[c], parent, kind, axis, prot, ppos, idx_q, rot, pos)
-            sphere_centers_nb(rot, pos, c_joint, c_center, cluster_world)
-            sphere_centers_nb(rot, pos, s_joint, s_center, sphere_world)
+            cluster_placed[:] = False
+            balls_placed[:] = False
             current = c
-        g, h, best = first[r], second[r], np.inf
+        rot, pos = rots[c], poss[c]
+        g, h, best, skipped = first[r], second[r], np.inf, np.inf
         for ca in range(g_clusters[g], g_clusters[g + 1]):
+            _place_cluster(ca, rot, pos, c_joint, c_center, cluster_world, cluster_placed)
             a = cluster_world[ca]
             if obstacle[r]:
                 k = primitive[h]
-                if obstacle_distance(a[0], a[1], a[2], k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h,
-                                     cyl_r) - c_radius[ca] >= best:  # fmt: skip
+                lower = obstacle_distance(a[0], a[1], a[2], k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h,
+                                          cyl_r) - c_radius[ca]  # fmt: skip
+                if lower >= best:
                     continue
+                if lower >= enough[r]:
+                    skipped = min(skipped, lower)
+                    continue
+                _place_balls(ca, rot, pos, c_start, s_joint, s_center, sphere_world, balls_placed)
                 for sa in range(c_start[ca], c_start[ca + 1]):
                     p = sphere_world[sa]
                     d = obstacle_distance(p[0], p[1], p[2], k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a,
@@ -65,13 +74,44 @@ def cover_bounds_nb(configs, rows, config_of, first, second, obstacle, parent, k
                     best = min(best, d)
                 continue
             for cb in range(g_clusters[h], g_clusters[h + 1]):
-                if center_distance(a, cluster_world[cb]) - c_radius[ca] - c_radius[cb] >= best:
+                _place_cluster(cb, rot, pos, c_joint, c_center, cluster_world, cluster_placed)
+                lower = center_distance(a, cluster_world[cb]) - c_radius[ca] - c_radius[cb]
+                if lower >= best:
                     continue
+                if lower >= enough[r]:
+                    skipped = min(skipped, lower)
+                    continue
+                _place_balls(ca, rot, pos, c_start, s_joint, s_center, sphere_world, balls_placed)
+                _place_balls(cb, rot, pos, c_start, s_joint, s_center, sphere_world, balls_placed)
                 for sa in range(c_start[ca], c_start[ca + 1]):
                     for sb in range(c_start[cb], c_start[cb + 1]):
                         gap = center_distance(sphere_world[sa], sphere_world[sb]) - s_radius[sa] - s_radius[sb]
                         best = min(best, gap)
-        bound[r] = max(bound[r], best - DISTANCE_TOLERANCE)
+        bound[r] = max(bound[r], min(best, skipped) - DISTANCE_TOLERANCE)
+
+
+@njit(cache=True, inline="always")
+def _place_cluster(c, rot, pos, c_joint, c_center, world, placed):
+    """World centre of cluster ``c``'s bounding sphere into ``world``, unless it is there for this configuration."""
+    if not placed[c]:
+        placed[c] = True
+        _place(c_joint[c], c_center[c], rot, pos, world[c])
+
+
+@njit(cache=True, inline="always")
+def _place_balls(c, rot, pos, c_start, s_joint, s_center, world, placed):
+    """World centres of cluster ``c``'s balls into ``world``, unless they are there for this configuration."""
+    if not placed[c]:
+        placed[c] = True
+        for s in range(c_start[c], c_start[c + 1]):
+            _place(s_joint[s], s_center[s], rot, pos, world[s])
+
+
+@njit(cache=True, inline="always")
+def _place(j, local, rot, pos, out):
+    """``out`` = the point ``local`` of joint ``j``'s frame in the world (as ``batch_fk.sphere_centers_nb``)."""
+    for a in range(3):
+        out[a] = pos[j, a] + rot[j, a, 0] * local[0] + rot[j, a, 1] * local[1] + rot[j, a, 2] * local[2]
 
 
 @njit(cache=True, inline="always")
