@@ -13,6 +13,7 @@ from maru_planner.collision import CollisionChecker
 from maru_planner.collision.certify import (
     MIN_ANCHOR_CLEARANCE,
     PathCertifier,
+    _without_corners,
     certify_and_repair,
     chord_deviation,
     joint_levers,
@@ -452,3 +453,53 @@ def load_or_fit_of(robot: RobotModel):
     from maru_planner.collision.sphere_model import load_or_fit
 
     return load_or_fit(robot.model, robot.collision_model)
+
+
+def _tip(q: np.ndarray) -> np.ndarray:
+    """The toy arm's tip ball centre at joints ``q``."""
+    return 0.3 * np.array([np.cos(q[0]), np.sin(q[0]), 0.0]) + 0.3 * np.array([np.cos(q[0] + q[1]),
+                                                                                np.sin(q[0] + q[1]), 0.0])  # fmt: skip
+
+
+def test_corner_blends_leave_out_only_the_ends_a_blend_replaces(arm):
+    """A ball on the tip's corner configuration: the path fails there, but with its ends near the corner proven
+    elsewhere (a trajectory's blend) the rest is certified; the ends left out never reach past a segment's middle
+    of what is asked, and an obstacle on a segment's remaining part still fails it."""
+    path = np.array([[-0.3, 0.0], [0.0, 0.4], [0.3, 0.0]])
+    ball = Obstacle("ball", "sphere", radius=0.005, pose=list(_tip(path[1])))
+    certifier = PathCertifier(arm, Scene([ball]), safety_margin=0.005)
+    plain = certifier.certify_path(path)
+    assert not plain.valid and plain.first_failing_segment == 0
+    blended = certifier.certify_path(path, corner_blends=np.array([0.0, 0.15, 0.0]))
+    assert blended.valid and len(blended.segment_clearance) == 2, blended
+    assert not certifier.certify_path(path, corner_blends=np.array([0.0, 0.002, 0.0])).valid  # too short a blend
+    middle = Obstacle("ball", "sphere", radius=0.005, pose=list(_tip(0.5 * (path[1] + path[2]))))
+    on_segment = PathCertifier(arm, Scene([middle]), safety_margin=0.005)
+    cert = on_segment.certify_path(path, corner_blends=np.array([0.0, 0.15, 0.0]))
+    assert not cert.valid and cert.first_failing_segment == 1 and len(cert.segment_clearance) == 1
+
+
+def test_without_corners_clips_each_end_to_its_segment():
+    path = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 0.5], [3.0, 0.5]])
+    ends = _without_corners(path, np.array([0.0, 0.3, 2.0, 0.0]))
+    np.testing.assert_allclose(ends, [[0.0, 0.0], [0.7, 0.0], [1.0, 0.3], [1.0, 0.3], [3.0, 0.5], [3.0, 0.5]])
+
+
+def test_certify_and_repair_certifies_all_of_a_repaired_path_again(arm):
+    """A repair changes the corners next to it, so the blends the first certification left out are not trusted."""
+    path = np.array([[-0.3, 0.0], [0.0, 0.4], [0.3, 0.0], [0.9, 0.0]])
+    ball = Obstacle("ball", "sphere", radius=0.005, pose=list(_tip(0.5 * (path[2] + path[3]))))
+    certifier = PathCertifier(arm, Scene([ball]), safety_margin=0.005)
+    seen = []
+    real = certifier.certify_path
+
+    def recording(points, *args, **kwargs):
+        seen.append(kwargs.get("corner_blends"))
+        return real(points, *args, **kwargs)
+
+    certifier.certify_path = recording
+    detour = np.array([[0.3, 0.0], [0.3, -1.2], [0.9, -1.2], [0.9, 0.0]])  # the elbow bent: the tip passes inside
+    repaired = certify_and_repair(certifier, path, lambda *_: detour, deadline=np.inf,
+                                  corner_blends=np.array([0.0, 0.1, 0.1, 0.0]))  # fmt: skip
+    assert repaired.path is not None and repaired.repairs == 1
+    assert seen[0] is not None and seen[-1] is None

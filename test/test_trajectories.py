@@ -215,6 +215,26 @@ def test_repeated_and_collinear_waypoints_are_harmless():
         assert_within_limits(traj, LIMITS3, jerk=method == "ruckig")
 
 
+def test_toppra_reports_each_certified_blend_at_the_row_of_the_path_it_rounds():
+    """``corner_blends`` lines up with the rows given (a repeated row, the ends and a stopped corner get 0), and the
+    trajectory leaves the path only within that far of those corners."""
+    path = np.insert(ZIGZAG, 2, ZIGZAG[1], axis=0)  # row 1 twice
+
+    def corner_3_collides(states: np.ndarray, _deviation: np.ndarray) -> bool:
+        return timing.deviation_from_path(ZIGZAG[3], states).min() > 0.3  # a blend near ZIGZAG[3]
+
+    traj, report = parameterize(path, "toppra", curve_free=corner_3_collides)
+    blends = report.corner_blends
+    assert len(blends) == len(path) and blends[[0, 2, 4, 5]].tolist() == [0.0] * 4 and blends[[1, 3]].min() > 0
+    far = timing.deviation_from_path(traj.positions, path) > 1e-9
+    near_a_blend = np.zeros(len(traj.positions), dtype=bool)
+    for row in (1, 3):
+        near_a_blend |= np.linalg.norm(traj.positions - path[row], axis=1) <= blends[row] + 1e-9
+    assert far.any() and not (far & ~near_a_blend).any()
+    assert parameterize(path, "ruckig")[1].corner_blends is None
+    assert parameterize(path, "trapezoid")[1].corner_blends is None
+
+
 def test_a_path_of_one_configuration_is_a_trajectory_of_zero_duration():
     traj, _ = parameterize(ZIGZAG[:1], "toppra")
     assert traj.duration == 0.0 and np.array_equal(traj.positions[-1], ZIGZAG[0])

@@ -520,26 +520,35 @@ class PathCertifier:
         *,
         margin: float | None = None,
         deviation: np.ndarray | None = None,
+        corner_blends: np.ndarray | None = None,
     ) -> Certificate:
         """Certify every segment of ``path`` (n, nq full configurations); reports the first failing one.
 
         ``margin`` overrides ``safety_margin``. ``deviation`` (nq,): per joint, how far the real motion may
         leave the straight segments (a sampled curve: :func:`chord_deviation`); each pair's margin grows
-        by the motion that deviation can cause. ``deadline`` (``time.monotonic()``): a certification still
-        running then fails with reason "timeout".
+        by the motion that deviation can cause. ``corner_blends`` (n,): per waypoint, how far along each of its
+        segments (rad) a curve proven elsewhere replaces the path (a trajectory's blend): those ends are left out.
+        ``deadline`` (``time.monotonic()``): a certification still running then fails with reason "timeout".
         """
         t0 = time.monotonic()
         path = np.atleast_2d(np.asarray(path, dtype=float))
         margin = self.safety_margin if margin is None else float(margin)
         deviation = np.zeros(self._model.nq) if deviation is None else np.abs(np.asarray(deviation, dtype=float))
         n_segments = max(len(path) - 1, 0)
-        cert, run = self._certify(path, np.tile(deviation, (n_segments, 1)), np.zeros(n_segments, int), margin,
-                                  deadline)  # fmt: skip
+        points, curve, stride = path, np.zeros(n_segments, int), 1
+        if corner_blends is not None and np.any(np.asarray(corner_blends) > 0.0) and n_segments:
+            points, stride = _without_corners(path, np.asarray(corner_blends, dtype=float)), 2
+            curve = np.zeros(2 * n_segments - 1, int)
+            curve[1::2] = -1  # between two trimmed segments: a blend, not this certification's
+        cert, run = self._certify(points, np.tile(deviation, (len(curve), 1)), curve, margin, deadline)
+        kept = run.clearance[::stride]  # per segment of ``path``
+        failed = n_segments
         if run.failed < run.n_segments:
-            cert.valid, cert.first_failing_segment = False, run.failed
+            failed = run.failed // stride
+            cert.valid, cert.first_failing_segment = False, failed
             cert.reason, cert.witness = run.reason, run.witness
-        cert.segment_clearance = run.clearance[: run.failed].tolist()
-        cert.min_clearance = float(run.clearance[: run.failed + 1].min(initial=math.inf))
+        cert.segment_clearance = kept[:failed].tolist()
+        cert.min_clearance = float(kept[: failed + 1].min(initial=math.inf))
         cert.seconds = time.monotonic() - t0
         return cert
 
@@ -896,8 +905,13 @@ def certify_and_repair(
     margin: float | None = None,
     max_repairs: int = 3,
     certify_deadline: float | None = None,
+    corner_blends: np.ndarray | None = None,
 ) -> CertifiedPath:
     """Certify ``path``; re-plan each failing segment locally (``local_planner``) until certified or out of tries.
+
+    ``corner_blends`` (per waypoint, as :meth:`PathCertifier.certify_path` takes it): the corners a trajectory
+    rounds with blends proven elsewhere are left out, until a repair changes the path (then all of it is certified
+    again: its blends are to be proven anew).
 
     ``local_planner(qa, qb, margin, deadline)`` returns full configurations from ``qa`` to ``qb`` (None if it
     finds none); its path is certified like the rest. A failing segment is re-planned between the nearest
@@ -911,7 +925,8 @@ def certify_and_repair(
     done, repairs, relaxed = 0, 0, False
     total = Certificate(valid=False, margin=margin)
     while True:
-        cert = certifier.certify_path(path[done:], certify_deadline, margin=margin)
+        blends = None if corner_blends is None else corner_blends[done:]
+        cert = certifier.certify_path(path[done:], certify_deadline, margin=margin, corner_blends=blends)
         _accumulate(total, cert, done)
         if cert.valid:
             return CertifiedPath(path, total, repairs)
@@ -930,6 +945,22 @@ def certify_and_repair(
         if local is None:
             return CertifiedPath(None, total, repairs)
         path, done = np.vstack([path[:a], np.atleast_2d(local), path[b + 1 :]]), a
+        if corner_blends is not None:  # the corners certified without their blends' ends change: all of it again
+            corner_blends, done = None, 0
+
+
+def _without_corners(path: np.ndarray, corner_blends: np.ndarray) -> np.ndarray:
+    """Each segment of ``path`` without its ends within ``corner_blends`` of its waypoints (at most all of it), as
+    consecutive (start, end) rows."""
+    delta = np.diff(path, axis=0)
+    length = np.linalg.norm(delta, axis=1)
+    unit = np.divide(delta, length[:, None], out=np.zeros_like(delta), where=length[:, None] > 0.0)
+    head = np.minimum(corner_blends[:-1], length)
+    tail = np.minimum(corner_blends[1:], length - head)
+    out = np.empty((2 * len(delta), path.shape[1]))
+    out[0::2] = path[:-1] + head[:, None] * unit
+    out[1::2] = path[1:] - tail[:, None] * unit
+    return out
 
 
 def _repair_anchors(certifier: PathCertifier, path: np.ndarray, segment: int, margin: float) -> tuple[int, int]:

@@ -265,6 +265,7 @@ class MotionPlanner:
             margin=self.safety_margin(request),
             max_repairs=self.config.max_refinements,
             certify_deadline=certify_deadline,
+            corner_blends=result.corner_blends,
         )
         self._monitor.check()  # a repair search ended by a cancel looks like a failed repair
         certificate = repaired.certificate
@@ -329,7 +330,8 @@ class MotionPlanner:
         """Make ``path`` (group configurations) the result's path, with its trajectory (returned) and statistics."""
         stats = result.stats
         t_par = time.monotonic()
-        result.trajectory = self._time_parameterize(req, path, start_full, indices, stats, deadline)
+        result.trajectory, report = self._time_parameterize(req, path, start_full, indices, stats, deadline)
+        result.corner_blends = report.corner_blends if self.certifier is not None else None
         stats.parameterize_time += time.monotonic() - t_par
         result.path = path
         stats.waypoints = len(path)
@@ -428,9 +430,10 @@ class MotionPlanner:
             f"trajectory {trajectory.duration:.2f} s ({stats.time_parameterization})"
         )
 
-    def _time_parameterize(self, req, path, start_full, indices, stats, deadline=None) -> Trajectory:
+    def _time_parameterize(self, req, path, start_full, indices, stats, deadline=None
+                           ) -> tuple[Trajectory, timing.TimingReport]:  # fmt: skip
         """``path`` timed by the request's method (:mod:`~maru_planner.planning.timing`), blends checked by
-        :meth:`_curve_check`.
+        :meth:`_curve_check`; with how it was made.
 
         Blends still unchecked at ``deadline`` (the request's budget; None: no limit) become stops, so a
         tight budget gets a slower trajectory rather than a timeout.
@@ -457,7 +460,7 @@ class MotionPlanner:
             sample_deadline=deadline,
         )
         stats.time_parameterization = report.method
-        return trajectory
+        return trajectory, report
 
     def _curve_check(self, req, start_full, indices, deadline) -> tuple[timing.CurveFree, float]:
         """How blended corners are checked, and the joint step of their samples.

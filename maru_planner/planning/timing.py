@@ -204,6 +204,9 @@ class TimingReport:
     certify_checks: int = 0  # configurations re-checked for collision
     certify_time: float = 0.0
     fallbacks: list[str] = field(default_factory=list)
+    # per waypoint of the path given: the half-length (rad) of the certified parabolic blend the curve rounds it with
+    # (toppra; 0: the curve passes it or stops there). None: the curve was not made of certified blends (ruckig's).
+    corner_blends: np.ndarray | None = None
 
 
 # --- geometry: the blended curve ---------------------------------------------------------------
@@ -375,7 +378,21 @@ def parameterize(
     except _ParameterizationFailed as exc:
         report = TimingReport("trapezoid", fallbacks=[f"{method}: {exc}"])
         return _trapezoid(waypoints, joint_names, limits, dt, max_points), report
+    if report.corner_blends is not None:
+        report.corner_blends = _at_rows(np.asarray(path, float), waypoints, report.corner_blends)
     return _sample(sections, joint_names, waypoints[-1], dt, max_points, sample_deadline), report
+
+
+def _at_rows(path: np.ndarray, waypoints: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """``values`` (one per row of ``waypoints``: rows of ``path`` in order, as :func:`_distinct` keeps them) at the
+    rows of ``path`` they are (0 at the others)."""
+    out, i = np.zeros(len(path)), 0
+    for waypoint, value in zip(waypoints, values, strict=True):
+        while not np.array_equal(path[i], waypoint):
+            i += 1
+        out[i] = value
+        i += 1
+    return out
 
 
 @dataclass(frozen=True)
@@ -536,6 +553,7 @@ class _PathVelocity:
 def _toppra(waypoints, limits: Limits, check: _Check, max_deviation: float):
     report = TimingReport("toppra")
     half = _certified_half_lengths(waypoints, max_deviation, check, report)
+    report.corner_blends = half
     return [_toppra_section(BlendedPath(w, h), limits) for w, h in _sections(waypoints, half)], report
 
 

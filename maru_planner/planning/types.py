@@ -163,9 +163,11 @@ class PlanStats:
     verify_time: float = 0.0  # s spent re-checking paths on the exact model
     replans: int = 0  # re-plans at a finer resolution after a path failed that check
     time_parameterization: str = ""  # the method that made the trajectory (a blended one may fall back)
-    certified: bool = False  # the path is proven collision-free on the exact model (docs/certification.md)
+    # the motion is proven collision-free on the exact model: the path, without the ends of its corners the trajectory
+    # rounds with certified blends (MotionResult.corner_blends; docs/certification.md)
+    certified: bool = False
     certify_time: float = 0.0  # s spent certifying (all attempts)
-    min_clearance: float = math.inf  # m: smallest distance measured while certifying the returned path
+    min_clearance: float = math.inf  # m: smallest distance measured while certifying the path (as ``certified``)
     repairs: int = 0  # segments that failed certification and were re-planned locally
 
     def to_dict(self) -> dict:
@@ -184,6 +186,9 @@ class MotionResult:
     trajectory: Trajectory | None = None
     stats: PlanStats = field(default_factory=PlanStats)
     verification: PathVerification | None = None  # the last exact re-check ("spheres" only)
+    # per waypoint of ``path``: the half-length (rad) of the parabolic blend the trajectory rounds it with, proven
+    # by the certifier (toppra only; 0: the trajectory passes through it or stops there); None: no such blends
+    corner_blends: np.ndarray | None = None
 
     @property
     def success(self) -> bool:
