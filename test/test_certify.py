@@ -503,3 +503,16 @@ def test_certify_and_repair_certifies_all_of_a_repaired_path_again(arm):
                                   corner_blends=np.array([0.0, 0.1, 0.1, 0.0]))  # fmt: skip
     assert repaired.path is not None and repaired.repairs == 1
     assert seen[0] is not None and seen[-1] is None
+
+
+def test_set_scene_builds_the_pair_table_so_requests_do_not(arm, monkeypatch):
+    planner = MotionPlanner.from_scene(arm, Scene(), PlannerConfig(safety_margin=0.005))
+    planner.set_scene(Scene([plate_at(1.5)]))
+
+    def rebuilt(*_args):
+        raise AssertionError("pair table built inside the request")
+
+    monkeypatch.setattr(PathCertifier, "_build_pairs", rebuilt)
+    result = planner.plan(MotionRequest("all", start={"j1": 0.0, "j2": 0.0}, goal_joints={"j1": 0.5, "j2": 0.2},
+                                        planner_id="RRTConnect", time_budget=10.0, seed=1))  # fmt: skip
+    assert result.success and result.stats.certified, result.message

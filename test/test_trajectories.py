@@ -166,7 +166,8 @@ def test_a_bend_taking_check_gets_each_blend_as_exact_parabola_parts():
     for k, (ends, off_chord, bends) in enumerate(recorder.curves, start=1):
         parts = timing.BLEND_BEND_PARTS
         assert len(ends) == parts + 1 and len(bends) == parts and not off_chord.any()
-        blend = timing._single_blend(ZIGZAG, k, timing.blend_half_length(ZIGZAG, k, deviation))
+        half_length = timing.blend_half_length(ZIGZAG, k, deviation)
+        blend = timing.BlendedPath(ZIGZAG[k - 1 : k + 2], np.array([0.0, half_length, 0.0]))  # corner k alone
         s0, s1 = blend.starts[1], blend.starts[2]
         for j, (a, b, bend) in enumerate(zip(ends[:-1], ends[1:], bends, strict=True)):
             on_part = (1.0 - tau)[:, None] * a + tau[:, None] * b + (tau * tau - tau)[:, None] * bend

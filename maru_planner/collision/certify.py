@@ -631,6 +631,12 @@ class PathCertifier:
             best = min(best, self._distance(pairs, int(p), False, placed))
         return best
 
+    def prepare(self) -> None:
+        """Build what certifying in the checker's current scene needs ahead of the first request: the pair table of
+        a small scene, the obstacles' bounding boxes of a large one (both are otherwise built on first use)."""
+        if self._obstacle_boxes() is None:
+            self._pair_table()
+
     # ------------------------------------------------------------ internals --
     def _check_rows(self, run: _Run, cert: Certificate) -> None:
         """Evaluate every pending row at the middle of its piece at once; queue the parts still unproven.

@@ -159,6 +159,8 @@ class MotionPlanner:
                     self.exact_checker.set_scene(scene)
                 for padded in self._padded.values():
                     padded.set_scene(scene)
+            if self.certifier is not None:
+                self.certifier.prepare()
             self.scene = scene
             self._scene_epoch += 1
 

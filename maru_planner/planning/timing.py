@@ -273,22 +273,6 @@ class BlendedPath(toppra.interpolator.AbstractGeometricPath):
             return self.dd[piece].copy()
         raise ValueError(f"order must be 0, 1 or 2, got {order}")
 
-    def blend_bend(self, piece: int, parts: int = BLEND_BEND_PARTS) -> Curve:
-        """Blend ``piece`` as ``parts`` bent segments (:data:`Curve`): ends, no chord deviation, and each part's
-        bend ``½·h²·p''`` (h its length in σ): on it ``p = (1 - t)·p(start) + t·p(end) + (t² - t)·bend``."""
-        s0, s1 = self.starts[piece], self.starts[piece + 1]
-        ends = self.at(np.linspace(s0, s1, parts + 1), np.full(parts + 1, piece), 0)
-        bend = 0.5 * ((s1 - s0) / parts) ** 2 * self.dd[piece]
-        return ends, np.zeros(self.dof), np.repeat(bend[None], parts, axis=0)
-
-    def blend_chords(self, piece: int, step: float) -> tuple[np.ndarray, np.ndarray]:
-        """Points along blend ``piece`` at most ``step`` apart (|p'| ≤ 1, so a path step bounds the joint
-        step) and, per joint, how far the parabola leaves the chords between them (|p''|·h²/8)."""
-        s0, s1 = self.starts[piece], self.starts[piece + 1]
-        ss = np.linspace(s0, s1, max(2, math.ceil((s1 - s0) / step) + 1))
-        h = ss[1] - ss[0]
-        return self.at(ss, np.full(len(ss), piece), 0), np.abs(self.dd[piece]) * h * h / 8.0
-
     def grid(self) -> tuple[np.ndarray, np.ndarray]:
         """toppra grid points (every piece boundary included) and the piece of each grid interval."""
         length = self.starts[-1]
@@ -306,11 +290,33 @@ def _units(waypoints: np.ndarray) -> np.ndarray:
     return delta / np.linalg.norm(delta, axis=1)[:, None]
 
 
-def blend_half_length(waypoints: np.ndarray, k: int, deviation: float) -> float:
-    """Blend size ``l`` at interior waypoint k for a corner deviation ≤ ``deviation`` (0: stop there)."""
+def parabola_parts(start: np.ndarray, velocity: np.ndarray, acceleration: np.ndarray, length: float,
+                   parts: int = BLEND_BEND_PARTS) -> Curve:  # fmt: skip
+    """``p(σ) = start + velocity·σ + ½·acceleration·σ²`` on ``[0, length]`` as ``parts`` bent segments
+    (:data:`Curve`): ends, no chord deviation, and each part's bend ``½·h²·p''`` (h its length in σ): on it
+    ``p = (1 - t)·p(start) + t·p(end) + (t² - t)·bend``."""
+    sigma = np.linspace(0.0, length, parts + 1)[:, None]
+    ends = start + velocity * sigma + 0.5 * acceleration * sigma**2
+    bend = 0.5 * (length / parts) ** 2 * acceleration
+    return ends, np.zeros(len(start)), np.repeat(bend[None], parts, axis=0)
+
+
+def parabola_chords(start: np.ndarray, velocity: np.ndarray, acceleration: np.ndarray, length: float,
+                    step: float) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """Points along the parabola of :func:`parabola_parts` at most ``step`` apart in σ (|p'| ≤ 1 on a blend, so a
+    path step bounds the joint step) and, per joint, how far it leaves the chords between them (|p''|·h²/8)."""
+    sigma = np.linspace(0.0, length, max(2, math.ceil(length / step) + 1))
+    h = sigma[1] - sigma[0]
+    points = start + velocity * sigma[:, None] + 0.5 * acceleration * sigma[:, None] ** 2
+    return points, np.abs(acceleration) * h * h / 8.0
+
+
+def blend_half_length(waypoints: np.ndarray, k: int, deviation: float, units: np.ndarray | None = None) -> float:
+    """Blend size ``l`` at interior waypoint k for a corner deviation ≤ ``deviation`` (0: stop there); ``units``:
+    the path's :func:`_units` if at hand."""
     if deviation <= 0.0:
         return 0.0
-    u_in, u_out = _units(waypoints[k - 1 : k + 2])
+    u_in, u_out = _units(waypoints[k - 1 : k + 2]) if units is None else units[k - 1 : k + 1]
     if np.linalg.norm(u_in + u_out) < MIN_BLEND_SPEED:
         return 0.0
     turn = np.linalg.norm(u_out - u_in)
@@ -442,13 +448,14 @@ def _certified_half_lengths(
     t0 = time.monotonic()
     deviation = np.full(len(waypoints), float(max_deviation))
     pending = list(range(1, len(waypoints) - 1))
+    units = _units(waypoints)
     for _ in range(BLEND_RETRIES + 1):  # all pending corners in one check: they share the certification's work
         for k in pending:
-            half[k] = blend_half_length(waypoints, k, deviation[k])
+            half[k] = blend_half_length(waypoints, k, deviation[k], units)
         pending = [k for k in pending if half[k] > 0.0]
         if not pending:
             break
-        curves = [_blend_curve(_single_blend(waypoints, k, half[k]), check) for k in pending]
+        curves = [_corner_curve(waypoints, units, k, half[k], check) for k in pending]
         report.certify_checks += sum(len(curve[0]) for curve in curves)
         failed = [k for k, free in zip(pending, check.many(curves), strict=True) if not free]
         for k in failed:
@@ -461,17 +468,14 @@ def _certified_half_lengths(
     return half
 
 
-def _blend_curve(path: BlendedPath, check: _Check) -> Curve:
-    """Blend piece 1 of ``path`` as ``check`` takes it: :data:`BLEND_BEND_PARTS` bent segments, else chords
-    ``check.step`` apart."""
-    return path.blend_bend(1) if takes_bends(check.curve_free) else path.blend_chords(1, check.step)
-
-
-def _single_blend(waypoints: np.ndarray, k: int, half_length: float) -> BlendedPath:
-    """The corner k alone (pieces: line, blend, line) for checking it on its own."""
-    local = np.zeros(3)
-    local[1] = half_length
-    return BlendedPath(waypoints[k - 1 : k + 2], local)
+def _corner_curve(waypoints: np.ndarray, units: np.ndarray, k: int, half_length: float, check: _Check) -> Curve:
+    """The blend of corner k (the parabola a :class:`BlendedPath` puts there) as ``check`` takes it:
+    :data:`BLEND_BEND_PARTS` bent segments, else chords ``check.step`` apart."""
+    u_in, u_out = units[k - 1], units[k]
+    start, acceleration = waypoints[k] - half_length * u_in, (u_out - u_in) / (2.0 * half_length)
+    if takes_bends(check.curve_free):
+        return parabola_parts(start, u_in, acceleration, 2.0 * half_length)
+    return parabola_chords(start, u_in, acceleration, 2.0 * half_length, check.step)
 
 
 def _count_corners(waypoints: np.ndarray, half: np.ndarray, report: TimingReport) -> None:
