@@ -9,12 +9,15 @@ and edge checks at the facade's motion resolution never leave compiled code, exc
   when the checker confirms on the exact model (``confirm=True``, its default), those states go to
   ``checker.first_invalid``.
 
-So a state's answer is always the sphere checker's own. ``exact_near`` (L∞, rad; unset by default)
-restricts the exact decisions to states near the start or goal: farther away an ambiguous state
-counts as colliding (the pure, conservative sphere model, as everywhere when ``confirm=False``),
-which keeps the search off near contacts that certification with a safety margin rejects, but
-makes narrow passages harder. On 28 MotionBenchMaker problems (3 s budget, this loaded machine)
-unset solved 23, 0.3 rad 21 and 0.1 rad 20, mostly losing to time-outs in narrow passages.
+So a state's answer is always the sphere checker's own. ``exact_near`` (L∞, rad; default
+:data:`EXACT_NEAR`) restricts the exact decisions to states near the start or goal: farther away an
+ambiguous state counts as colliding (the pure, conservative sphere model, as everywhere when
+``confirm=False``), which keeps the search off near contacts that certification with a safety
+margin rejects, and saves the exact model's queries, but makes narrow passages harder. Before
+balanced trees and dynamic domains, on 28 MotionBenchMaker problems (3 s budget, a loaded machine)
+unset solved 23, 0.3 rad 21 and 0.1 rad 20. With them, on 696 MotionBenchMaker problems (1 s, 1 cm
+margin) 1 rad solved as many as unset (692), p95 63–82 ms instead of 77–130 ms on four quarters of
+the set; 0 (spheres only) lost 18 of 174 goals close to obstacles.
 
 Balanced trees and dynamic domains (VAMP's ``RRTCSettings`` defaults: radius 4 rad, alpha 1e-4,
 smallest 1 rad) are on by default: on the 4 MotionBenchMaker problems that timed out at 1 s
@@ -50,6 +53,7 @@ from maru_planner.planning.space import EdgeChecker
 # rad. OMPL's automatic range is 2.6 rad for the Panda: on MotionBenchMaker (1 s budget, 0.01 m margin) it timed
 # out on 72 of 92 cage and shelf problems that 1 rad solves, and the median of the others fell 80 -> 50 ms.
 DEFAULT_RANGE = 1.0
+EXACT_NEAR = 1.0  # rad, L-inf: ambiguous states farther from the start and goal count as colliding (module doc)
 COMPILED_RRTC_PARAMS: dict[str, ParamSpec] = {
     spec.name: spec
     for spec in (
@@ -57,7 +61,7 @@ COMPILED_RRTC_PARAMS: dict[str, ParamSpec] = {
                   lower=0.0),  # fmt: skip
         ParamSpec(
             "exact_near",
-            None,
+            EXACT_NEAR,
             "L-inf distance (rad) from the start or goal within which states the spheres leave ambiguous are "
             "decided on the exact model, farther away they count as colliding; unset: everywhere (module doc)",
             lower=0.0,
