@@ -11,9 +11,10 @@ a sphere plan at ``verify_step``):
   planner, ``--seeds`` seeds;
 - ``mbm``: the 700 MotionBenchMaker Panda problems (RRTConnect, seed 0).
 
-Each collision model of ``--models`` plans every suite. Every returned path is re-checked independently
-on a fresh exact checker at ``--fine`` rad (default 0.001): a colliding path is one with a state in
-collision there. Reported: success rate, colliding paths, median/p95 certification time and its share
+Each collision model of ``--models`` plans every suite. Every returned motion (the trajectory's samples joined
+by straight lines; the path for a plan without one) is re-checked independently on a fresh exact checker at
+``--fine`` rad (default 0.001): a colliding path is one with a state in collision there. Reported: success
+rate, colliding paths, median/p95 certification time and its share
 of the median plan time (and what certification adds to the baseline's median), min clearance, repairs.
 
 Writes bench/results/certify.{json,md,png}; progress on stderr.
@@ -78,11 +79,14 @@ def mbm(robot, per_set: int | None) -> list[Case]:
 
 # ------------------------------------------------------------------------------------------- running --
 def fine_collides(robot, scene: Scene, request: MotionRequest, result, step: float) -> bool:
-    """Whether the returned path has a state in collision at ``step`` rad on a fresh exact checker."""
+    """Whether the returned motion has a state in collision at ``step`` rad on a fresh exact checker: the
+    trajectory's samples joined by straight lines (as a controller interpolates them; certification proves the
+    trajectory's curve, which leaves the path at the corners its blends round)."""
     q = np.asarray(robot.neutral(), dtype=float).copy()
     q[robot.joint_indices(list(request.start))] = list(request.start.values())
-    path = np.repeat(q[None], len(result.path), axis=0)
-    path[:, robot.joint_indices(list(result.joint_names))] = result.path
+    motion = result.trajectory.positions if result.trajectory is not None else result.path
+    path = np.repeat(q[None], len(motion), axis=0)
+    path[:, robot.joint_indices(list(result.joint_names))] = motion
     states, _ = densify(path, step)
     return CollisionChecker(robot, scene).first_invalid(states) >= 0
 
