@@ -34,10 +34,11 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
 from _common import RESULTS, Progress, log, write_results  # noqa: E402
-from peers_arm import mbm_cases, panda_robot  # noqa: E402
+from peers_arm import mbm_cases  # noqa: E402
 
 from maru_planner.collision import CollisionChecker  # noqa: E402
 from maru_planner.collision.spheres import densify  # noqa: E402
+from maru_planner.moveit_scene import mbm_panda  # noqa: E402
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig  # noqa: E402
 from maru_planner.planning.problems import PROBLEMS  # noqa: E402
 from maru_planner.planning.registry import planner_ids  # noqa: E402
@@ -303,7 +304,7 @@ def main(argv: list[str] | None = None) -> int:
     if "paper" in args.suites:
         suites["paper"] = (paper_cases(RobotModel.maru1()), [(p, s) for p in planner_ids() for s in range(seeds)])
     if "mbm" in args.suites:
-        suites["mbm"] = (mbm(panda_robot(), per_set), [("RRTConnect", 0)])
+        suites["mbm"] = (mbm(mbm_panda(), per_set), [("RRTConnect", 0)])
     total = sum(len(cases) * len(jobs) for cases, jobs in suites.values()) * len(args.models)
     log(f"{total} problem x planner x seed x model runs, each planned certified and baseline")
     results: dict = {"config": {k: (str(v) if isinstance(v, Path) else v) for k, v in vars(args).items()},
