@@ -69,23 +69,6 @@ def pytest_configure(config):
     worker = getattr(config, "workerinput", None)
     configure_loopback_dds(domain_id=worker["ros_domain_id"] if worker else _unused_domain_id())
     os.environ.setdefault("MPLBACKEND", "Agg")
-    if worker is None and getattr(config.option, "numprocesses", None):
-        _warm_numba_caches()
-
-
-def _warm_numba_caches() -> None:
-    """pytest-xdist controller, before the workers start: plan the 13-DOF problem on the sphere checker, certified,
-    with the compiled kernel and OMPL's, so the planning kernels are in numba's on-disk cache. In a fresh clone
-    each worker (and every node it starts) would otherwise compile them at once, inside some test's time budget."""
-    from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig
-    from maru_planner.scene import Scene
-
-    problem = PROBLEMS["maru13"]
-    planner = MotionPlanner.from_scene(RobotModel.maru1(), Scene.from_yaml(problem.scene_path),
-                                       PlannerConfig(collision_model="spheres"))  # fmt: skip
-    for planner_id in ("CompiledRRTConnect", "RRTConnect"):
-        planner.plan(MotionRequest(problem.group, start=PAPER_START, goal_joints=PAPER_GOAL, planner_id=planner_id,
-                                   time_budget=60.0, seed=1))  # fmt: skip
 
 
 @pytest.fixture(scope="module")
