@@ -30,9 +30,8 @@ interfaces: $(STAMP)
 demo: setup
 	@$(PY) -m maru_planner.ros.demo
 
-# Two workers, a test file each at a time (module fixtures stay per file): the ROS tests mostly wait on DDS.
 test: setup
-	@$(PY) -m pytest -p no:cacheprovider -n 2 --dist loadfile test
+	@$(PY) -m pytest -p no:cacheprovider test
 
 lint: setup
 	@$(VENV)/bin/ruff check maru_planner bench test scripts launch

@@ -3,8 +3,7 @@
 Every process that starts rclpy in the suite (this one and the node
 subprocesses it spawns, which inherit ``os.environ``) talks DDS on 127.0.0.1
 only, on a domain id picked at random for this run among those no other DDS
-participant on this machine is using (test runs may share a machine); under
-pytest-xdist (``make test``) each worker gets its own.
+participant on this machine is using (test runs may share a machine).
 """
 
 from __future__ import annotations
@@ -46,28 +45,15 @@ def _domain_in_use(domain: int, participants: int = 4) -> bool:
     return False
 
 
-def _unused_domain_id(taken: frozenset[int] = frozenset()) -> int:
-    """A random ROS domain id in 1..100 that no other run on this machine uses and not in ``taken`` (any one not
-    taken if all are in use)."""
-    domains = [d for d in range(1, 101) if d not in taken]
+def _unused_domain_id() -> int:
+    """A random ROS domain id in 1..100 that no other run on this machine uses (any one if all are taken)."""
+    domains = list(range(1, 101))
     random.SystemRandom().shuffle(domains)
     return next((d for d in domains if not _domain_in_use(d)), domains[0])
 
 
-_WORKER_DOMAINS: set[int] = set()  # pytest-xdist controller: the domain given to each worker so far
-
-
-@pytest.hookimpl(optionalhook=True)
-def pytest_configure_node(node):
-    """pytest-xdist controller: a domain of its own for each worker (two picking at once could take the same)."""
-    domain = _unused_domain_id(frozenset(_WORKER_DOMAINS))
-    _WORKER_DOMAINS.add(domain)
-    node.workerinput["ros_domain_id"] = domain
-
-
 def pytest_configure(config):
-    worker = getattr(config, "workerinput", None)
-    configure_loopback_dds(domain_id=worker["ros_domain_id"] if worker else _unused_domain_id())
+    configure_loopback_dds(domain_id=_unused_domain_id())
     os.environ.setdefault("MPLBACKEND", "Agg")
 
 
