@@ -247,12 +247,12 @@ def _volume_bounds_nb(centers, config_of, pair, first, second, obstacle, box_cen
 
 @njit(cache=True)
 def _assess_rows_nb(configs, config_of, seg, pair, half, run_arrays, pair_arrays, robot_arrays, cover_arrays,
-                    primitives, use_cover, bound, rate, need, refine):  # fmt: skip
-    """Per row, at the middle of its piece (one call per round of :meth:`PathCertifier._check_rows`): the distance
-    bound (bounding volumes, then the sphere cover where they fall short), the rate (configuration-free, tightened
-    at the middle where the bound falls short of it), ``need`` = margin + half * rate, and whether coal is to refine
-    the bound (module doc: where it may prove the row, and wherever the bounds leave no slack; on a covered pair
-    only then)."""
+                    primitives, use_cover, margin, bound, rate, need, refine):  # fmt: skip
+    """Per row, at the middle of its piece (one call per round of :meth:`PathCertifier._check_rows`): its pair's
+    margin on its segment, the distance bound (bounding volumes, then the sphere cover where they fall short), the
+    rate (configuration-free, tightened at the middle where the bound falls short of it), ``need`` = margin + half *
+    rate, and whether coal is to refine the bound (module doc: where it may prove the row, and wherever the bounds
+    leave no slack; on a covered pair only then)."""
     pair_margin, rate_free, motion, downstream = run_arrays
     first, second, obstacle, other, covered, moves_first, moves_other, gap, box_center, box_rot, box_half = pair_arrays
     parent, kind, axis, prot, ppos, idx_q, g_joint, g_local, g_radius, q_joint, levers, prismatic = robot_arrays
@@ -263,7 +263,6 @@ def _assess_rows_nb(configs, config_of, seg, pair, half, run_arrays, pair_arrays
     volume = np.empty(n_rows)
     _volume_bounds_nb(centers, config_of, pair, first, second, obstacle, box_center, box_rot, box_half, g_radius,
                       volume)  # fmt: skip
-    margin = np.empty(n_rows)
     enough = np.empty(n_rows)  # a bound this large proves the whole piece even with the configuration-free rate
     n_cover = 0
     cover_rows = np.empty(n_rows, dtype=np.int64)
@@ -648,11 +647,11 @@ class PathCertifier:
         seg, pair = run.seg, run.pair
         configs, config_of, half = _round_configs_nb(run.path, run.delta, run.bend, seg, run.a, run.b)
         cert.checks += len(configs)
-        margin = run.pair_margin[seg, pair]
         n_rows = len(seg)
-        bound, rate, need, refine = np.empty(n_rows), np.empty(n_rows), np.empty(n_rows), np.empty(n_rows, dtype=bool)
+        margin, bound, rate, need = (np.empty(n_rows) for _ in range(4))
+        refine = np.empty(n_rows, dtype=bool)
         _assess_rows_nb(configs, config_of, seg, pair, half, run.arrays, run.pairs.arrays, self._robot_arrays,
-                        self._cover_arrays, run.pairs.primitives, self._cover is not None, bound, rate, need,
+                        self._cover_arrays, run.pairs.primitives, self._cover is not None, margin, bound, rate, need,
                         refine)  # fmt: skip
         exact = self._refine(configs, run.pairs, config_of, pair, refine, margin, bound, cert)
         run.seg, run.pair, run.a, run.b = _finish_round_nb(
@@ -677,7 +676,7 @@ class PathCertifier:
                        np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros((0, 3)))  # fmt: skip
         _assess_rows_nb(np.zeros((1, nq)), none, none, none, np.zeros(0), run_arrays, pair_arrays, self._robot_arrays,
                         self._cover_arrays, _kernel_primitives([]), self._cover is not None, np.zeros(0),
-                        np.zeros(0), np.zeros(0), no)  # fmt: skip
+                        np.zeros(0), np.zeros(0), np.zeros(0), no)  # fmt: skip
         _volume_bounds_nb(np.zeros((1, n_geoms, 3)), none, none, *pair_arrays[:3], *pair_arrays[8:], self._radius,
                           np.zeros(0))  # fmt: skip  # clearance() calls it from Python
         path, rows = np.zeros((2, nq)), np.zeros(0)
