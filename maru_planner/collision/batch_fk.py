@@ -177,6 +177,32 @@ joint_poses_nb = njit(cache=True, fastmath=False)(_joint_poses_py)
 sphere_centers_nb = njit(cache=True)(_sphere_centers_py)
 
 
+@njit(cache=True, inline="always")
+def point_in_world(rot, pos, joint, local, i):
+    """World position of ``local[i]``, fixed in the frame of joint ``joint[i]`` (sphere_centers_nb's arithmetic)."""
+    j = joint[i]
+    x = pos[j, 0] + rot[j, 0, 0] * local[i, 0] + rot[j, 0, 1] * local[i, 1] + rot[j, 0, 2] * local[i, 2]
+    y = pos[j, 1] + rot[j, 1, 0] * local[i, 0] + rot[j, 1, 1] * local[i, 1] + rot[j, 1, 2] * local[i, 2]
+    z = pos[j, 2] + rot[j, 2, 0] * local[i, 0] + rot[j, 2, 1] * local[i, 1] + rot[j, 2, 2] * local[i, 2]
+    return x, y, z
+
+
+@njit(cache=True, inline="always")
+def place_points(rot, pos, joint, local, first, end, world):
+    """World positions of ``local[first:end]`` into ``world[first:end]``."""
+    for i in range(first, end):
+        world[i, 0], world[i, 1], world[i, 2] = point_in_world(rot, pos, joint, local, i)
+
+
+@njit(cache=True, inline="always")
+def place_members(owner, start, placed, rot, pos, joint, local, world):
+    """Place the members ``start[owner]:start[owner + 1]`` of a group (its clusters) or of a cluster (its spheres),
+    unless ``placed[owner]`` says they already are for this state."""
+    if not placed[owner]:
+        placed[owner] = True
+        place_points(rot, pos, joint, local, start[owner], start[owner + 1], world)
+
+
 def tree_arrays(tree: KinematicTree) -> tuple:
     """The argument tuple the numba kernels take after ``q``."""
     return (tree.parent, tree.kind, tree.axis, tree.placement_rot, tree.placement_pos, tree.idx_q)

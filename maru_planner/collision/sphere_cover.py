@@ -16,6 +16,7 @@ import numpy as np
 import pinocchio as pin
 from numba import njit
 
+from maru_planner.collision.batch_fk import place_members
 from maru_planner.collision.sphere_kernels import obstacle_distance
 from maru_planner.collision.sphere_model import SphereModel
 from maru_planner.collision.sphere_model import bounding_sphere as balls_bound
@@ -43,7 +44,7 @@ def cover_bounds_nb(rots, poss, rows, config_of, first, second, obstacle, enough
     """
     sphere_world = np.empty((s_center.shape[0], 3))
     cluster_world = np.empty((c_center.shape[0], 3))
-    cluster_placed = np.zeros(c_center.shape[0], dtype=np.bool_)
+    cluster_placed = np.zeros(g_clusters.shape[0] - 1, dtype=np.bool_)  # per geometry: its clusters placed
     balls_placed = np.zeros(c_center.shape[0], dtype=np.bool_)
     current = -1
     for r in rows:
@@ -54,8 +55,10 @@ def cover_bounds_nb(rots, poss, rows, config_of, first, second, obstacle, enough
             current = c
         rot, pos = rots[c], poss[c]
         g, h, best, skipped = first[r], second[r], np.inf, np.inf
+        place_members(g, g_clusters, cluster_placed, rot, pos, c_joint, c_center, cluster_world)
+        if not obstacle[r]:
+            place_members(h, g_clusters, cluster_placed, rot, pos, c_joint, c_center, cluster_world)
         for ca in range(g_clusters[g], g_clusters[g + 1]):
-            _place_cluster(ca, rot, pos, c_joint, c_center, cluster_world, cluster_placed)
             a = cluster_world[ca]
             if obstacle[r]:
                 k = primitive[h]
@@ -66,7 +69,7 @@ def cover_bounds_nb(rots, poss, rows, config_of, first, second, obstacle, enough
                 if lower >= enough[r]:
                     skipped = min(skipped, lower)
                     continue
-                _place_balls(ca, rot, pos, c_start, s_joint, s_center, sphere_world, balls_placed)
+                place_members(ca, c_start, balls_placed, rot, pos, s_joint, s_center, sphere_world)
                 for sa in range(c_start[ca], c_start[ca + 1]):
                     p = sphere_world[sa]
                     d = obstacle_distance(p[0], p[1], p[2], k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a,
@@ -74,44 +77,19 @@ def cover_bounds_nb(rots, poss, rows, config_of, first, second, obstacle, enough
                     best = min(best, d)
                 continue
             for cb in range(g_clusters[h], g_clusters[h + 1]):
-                _place_cluster(cb, rot, pos, c_joint, c_center, cluster_world, cluster_placed)
                 lower = center_distance(a, cluster_world[cb]) - c_radius[ca] - c_radius[cb]
                 if lower >= best:
                     continue
                 if lower >= enough[r]:
                     skipped = min(skipped, lower)
                     continue
-                _place_balls(ca, rot, pos, c_start, s_joint, s_center, sphere_world, balls_placed)
-                _place_balls(cb, rot, pos, c_start, s_joint, s_center, sphere_world, balls_placed)
+                place_members(ca, c_start, balls_placed, rot, pos, s_joint, s_center, sphere_world)
+                place_members(cb, c_start, balls_placed, rot, pos, s_joint, s_center, sphere_world)
                 for sa in range(c_start[ca], c_start[ca + 1]):
                     for sb in range(c_start[cb], c_start[cb + 1]):
                         gap = center_distance(sphere_world[sa], sphere_world[sb]) - s_radius[sa] - s_radius[sb]
                         best = min(best, gap)
         bound[r] = max(bound[r], min(best, skipped) - DISTANCE_TOLERANCE)
-
-
-@njit(cache=True, inline="always")
-def _place_cluster(c, rot, pos, c_joint, c_center, world, placed):
-    """World centre of cluster ``c``'s bounding sphere into ``world``, unless it is there for this configuration."""
-    if not placed[c]:
-        placed[c] = True
-        _place(c_joint[c], c_center[c], rot, pos, world[c])
-
-
-@njit(cache=True, inline="always")
-def _place_balls(c, rot, pos, c_start, s_joint, s_center, world, placed):
-    """World centres of cluster ``c``'s balls into ``world``, unless they are there for this configuration."""
-    if not placed[c]:
-        placed[c] = True
-        for s in range(c_start[c], c_start[c + 1]):
-            _place(s_joint[s], s_center[s], rot, pos, world[s])
-
-
-@njit(cache=True, inline="always")
-def _place(j, local, rot, pos, out):
-    """``out`` = the point ``local`` of joint ``j``'s frame in the world (as ``batch_fk.sphere_centers_nb``)."""
-    for a in range(3):
-        out[a] = pos[j, a] + rot[j, a, 0] * local[0] + rot[j, a, 1] * local[1] + rot[j, a, 2] * local[2]
 
 
 @njit(cache=True, inline="always")

@@ -33,7 +33,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from maru_planner.collision.batch_fk import joint_poses_nb
+from maru_planner.collision.batch_fk import joint_poses_nb, place_members, place_points
 from maru_planner.collision.sphere_kernels import (
     AMBIGUOUS,
     COLLIDING,
@@ -166,32 +166,6 @@ def bisection_order(n):
     return out
 
 
-@njit(cache=True, inline="always")
-def _world(rot, pos, joint, local, i):
-    """World position of ``local[i]``, fixed in the frame of joint ``joint[i]`` (sphere_centers_nb's arithmetic)."""
-    j = joint[i]
-    x = pos[j, 0] + rot[j, 0, 0] * local[i, 0] + rot[j, 0, 1] * local[i, 1] + rot[j, 0, 2] * local[i, 2]
-    y = pos[j, 1] + rot[j, 1, 0] * local[i, 0] + rot[j, 1, 1] * local[i, 1] + rot[j, 1, 2] * local[i, 2]
-    z = pos[j, 2] + rot[j, 2, 0] * local[i, 0] + rot[j, 2, 1] * local[i, 1] + rot[j, 2, 2] * local[i, 2]
-    return x, y, z
-
-
-@njit(cache=True, inline="always")
-def _place(rot, pos, joint, local, first, end, world):
-    """World positions of ``local[first:end]`` into ``world[first:end]``."""
-    for i in range(first, end):
-        world[i, 0], world[i, 1], world[i, 2] = _world(rot, pos, joint, local, i)
-
-
-@njit(cache=True, inline="always")
-def _place_members(owner, start, placed, rot, pos, joint, local, world):
-    """Place the members ``start[owner]:start[owner + 1]`` of a group (its clusters) or of a cluster (its spheres),
-    unless ``placed[owner]`` says they already are for this state."""
-    if not placed[owner]:
-        placed[owner] = True
-        _place(rot, pos, joint, local, start[owner], start[owner + 1], world)
-
-
 @njit(cache=True)
 def obstacle_bounds(scene):
     """World axis-aligned bounds (n, 6: lo, hi) of an unpack_scene tuple's obstacles, widened by a nanometre so
@@ -258,13 +232,13 @@ def _group_vs_obstacle(g, k, robot, scene, work, stop_at_touch):
      c_start, c_joint, c_center, c_radius, g_clusters) = robot  # fmt: skip
     rot, pos, _, cworld, sworld, clusters_placed, spheres_placed, bounds = work
     exact = scene[9]
-    _place_members(g, g_clusters, clusters_placed, rot, pos, c_joint, c_center, cworld)
+    place_members(g, g_clusters, clusters_placed, rot, pos, c_joint, c_center, cworld)
     touched = 0
     for c in range(g_clusters[g], g_clusters[g + 1]):
         reach = c_radius[c] + padding
         if _beyond(cworld, c, reach, bounds, k) or _to_obstacle(cworld, c, k, scene) >= reach:
             continue
-        _place_members(c, c_start, spheres_placed, rot, pos, s_joint, s_center, sworld)
+        place_members(c, c_start, spheres_placed, rot, pos, s_joint, s_center, sworld)
         for s in range(c_start[c], c_start[c + 1]):
             d = _to_obstacle(sworld, s, k, scene)
             if (exact[k] and d < s_inner[s] + padding) or (stop_at_touch and d < s_radius[s] + padding):
@@ -281,8 +255,8 @@ def _pair_vs_pair(ga, gb, robot, work, stop_at_touch):
     (_, _, _, _, _, _, s_joint, s_center, s_radius, s_inner, _, _, _, g_radius, _, padding,
      c_start, c_joint, c_center, c_radius, g_clusters) = robot  # fmt: skip
     rot, pos, gworld, cworld, sworld, clusters_placed, spheres_placed, _ = work
-    _place_members(ga, g_clusters, clusters_placed, rot, pos, c_joint, c_center, cworld)
-    _place_members(gb, g_clusters, clusters_placed, rot, pos, c_joint, c_center, cworld)
+    place_members(ga, g_clusters, clusters_placed, rot, pos, c_joint, c_center, cworld)
+    place_members(gb, g_clusters, clusters_placed, rot, pos, c_joint, c_center, cworld)
     touched = 0
     for ca in range(g_clusters[ga], g_clusters[ga + 1]):
         if _gap(cworld, ca, gworld, gb) >= c_radius[ca] + g_radius[gb] + padding:
@@ -290,8 +264,8 @@ def _pair_vs_pair(ga, gb, robot, work, stop_at_touch):
         for cb in range(g_clusters[gb], g_clusters[gb + 1]):
             if _gap(cworld, ca, cworld, cb) >= c_radius[ca] + c_radius[cb] + padding:
                 continue
-            _place_members(ca, c_start, spheres_placed, rot, pos, s_joint, s_center, sworld)
-            _place_members(cb, c_start, spheres_placed, rot, pos, s_joint, s_center, sworld)
+            place_members(ca, c_start, spheres_placed, rot, pos, s_joint, s_center, sworld)
+            place_members(cb, c_start, spheres_placed, rot, pos, s_joint, s_center, sworld)
             for sa in range(c_start[ca], c_start[ca + 1]):
                 if _gap(sworld, sa, cworld, cb) >= s_radius[sa] + c_radius[cb] + padding:
                     continue
@@ -364,7 +338,7 @@ def classify(q, robot, scene, work, stop_at_touch):
     g_joint, g_center = robot[11], robot[12]
     rot, pos, gworld, _, _, clusters_placed, spheres_placed, _ = work
     joint_poses_nb(q, parent, kind, axis, prot, ppos, idx_q, rot, pos)
-    _place(rot, pos, g_joint, g_center, 0, g_joint.shape[0], gworld)
+    place_points(rot, pos, g_joint, g_center, 0, g_joint.shape[0], gworld)
     clusters_placed[:] = False
     spheres_placed[:] = False
     scene_hit = _vs_scene(robot, scene, work, stop_at_touch)
