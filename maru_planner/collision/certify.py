@@ -284,7 +284,7 @@ def _assess_rows_nb(configs, config_of, seg, pair, half, run_arrays, pair_arrays
     has_axis = np.zeros((n_configs, n_geoms), dtype=np.bool_)
     for r in range(n_rows):
         s, p, c = seg[r], pair[r], config_of[r]
-        if bound[r] < margin[r] + half[r] * rate[r]:  # tighten the levers with the configuration at the middle
+        if bound[r] < enough[r]:  # tighten the levers with the configuration at the middle
             g, o, total = first[p], other[p], 0.0
             for b in (g, o):
                 if not has_axis[c, b]:
