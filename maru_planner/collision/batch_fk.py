@@ -118,26 +118,22 @@ def batch_joint_poses(tree: KinematicTree, qs: np.ndarray) -> tuple[np.ndarray, 
 def _joint_poses_py(q, parent, kind, axis, prot, ppos, idx_q, rot, pos):
     """One configuration's joint world poses, written into ``rot`` (nj,3,3) and ``pos`` (nj,3).
 
-    Plain loops on purpose: this is compiled by numba (3x3 products unrolled beat BLAS calls).
+    Plain loops on purpose: this is compiled by numba (3x3 products unrolled beat BLAS calls; the parent's rotation
+    times the placement is kept in scalars, not a scratch array allocated per call).
     """
     nj = parent.shape[0]
     for a in range(3):
         pos[0, a] = 0.0
         for b in range(3):
             rot[0, a, b] = 1.0 if a == b else 0.0
-    m = np.empty((3, 3))
     for j in range(1, nj):
         par = parent[j]
         for a in range(3):
-            pos[j, a] = pos[par, a]
-            for b in range(3):
-                pos[j, a] += rot[par, a, b] * ppos[j, b]
-                acc = 0.0
-                for c in range(3):
-                    acc += rot[par, a, c] * prot[j, c, b]
-                m[a, b] = acc
+            pos[j, a] = (pos[par, a] + rot[par, a, 0] * ppos[j, 0] + rot[par, a, 1] * ppos[j, 1]
+                         + rot[par, a, 2] * ppos[j, 2])  # fmt: skip
         k = kind[j]
-        if k == REVOLUTE or k == REVOLUTE_UNBOUNDED:
+        revolute = k == REVOLUTE or k == REVOLUTE_UNBOUNDED
+        if revolute:
             i = idx_q[j]
             ang = q[i] if k == REVOLUTE else np.arctan2(q[i + 1], q[i])
             x, y, z = axis[j, 0], axis[j, 1], axis[j, 2]
@@ -146,18 +142,18 @@ def _joint_poses_py(q, parent, kind, axis, prot, ppos, idx_q, rot, pos):
             r00, r01, r02 = t * x * x + c, t * x * y - s * z, t * x * z + s * y
             r10, r11, r12 = t * x * y + s * z, t * y * y + c, t * y * z - s * x
             r20, r21, r22 = t * x * z - s * y, t * y * z + s * x, t * z * z + c
-            for a in range(3):
-                rot[j, a, 0] = m[a, 0] * r00 + m[a, 1] * r10 + m[a, 2] * r20
-                rot[j, a, 1] = m[a, 0] * r01 + m[a, 1] * r11 + m[a, 2] * r21
-                rot[j, a, 2] = m[a, 0] * r02 + m[a, 1] * r12 + m[a, 2] * r22
-        else:
-            for a in range(3):
-                for b in range(3):
-                    rot[j, a, b] = m[a, b]
-            if k == PRISMATIC:
-                d = q[idx_q[j]]
-                for a in range(3):
-                    pos[j, a] += d * (m[a, 0] * axis[j, 0] + m[a, 1] * axis[j, 1] + m[a, 2] * axis[j, 2])
+        for a in range(3):
+            m0 = rot[par, a, 0] * prot[j, 0, 0] + rot[par, a, 1] * prot[j, 1, 0] + rot[par, a, 2] * prot[j, 2, 0]
+            m1 = rot[par, a, 0] * prot[j, 0, 1] + rot[par, a, 1] * prot[j, 1, 1] + rot[par, a, 2] * prot[j, 2, 1]
+            m2 = rot[par, a, 0] * prot[j, 0, 2] + rot[par, a, 1] * prot[j, 1, 2] + rot[par, a, 2] * prot[j, 2, 2]
+            if revolute:
+                rot[j, a, 0] = m0 * r00 + m1 * r10 + m2 * r20
+                rot[j, a, 1] = m0 * r01 + m1 * r11 + m2 * r21
+                rot[j, a, 2] = m0 * r02 + m1 * r12 + m2 * r22
+            else:
+                rot[j, a, 0], rot[j, a, 1], rot[j, a, 2] = m0, m1, m2
+                if k == PRISMATIC:
+                    pos[j, a] += q[idx_q[j]] * (m0 * axis[j, 0] + m1 * axis[j, 1] + m2 * axis[j, 2])
 
 
 def _sphere_centers_py(rot, pos, sphere_joint, sphere_local, out):
