@@ -204,8 +204,10 @@ def _beyond(world, i, reach, bounds, k):
     """Whether ``world[i]`` is at least ``reach`` outside obstacle ``k``'s axis-aligned bounds along some axis
     (then it is that far from the obstacle: a test without the obstacle's rotation or a square root)."""
     x, y, z = world[i, 0], world[i, 1], world[i, 2]
-    return (x + reach <= bounds[k, 0] or x - reach >= bounds[k, 3] or y + reach <= bounds[k, 1]
-            or y - reach >= bounds[k, 4] or z + reach <= bounds[k, 2] or z - reach >= bounds[k, 5])  # fmt: skip
+    # one comparison of the largest excess, not six short-circuited ones: their branches mispredict
+    excess = max(max(bounds[k, 0] - x, x - bounds[k, 3]), max(bounds[k, 1] - y, y - bounds[k, 4]),
+                 max(bounds[k, 2] - z, z - bounds[k, 5]))  # fmt: skip
+    return excess >= reach
 
 
 @njit(cache=True, inline="always")
