@@ -144,26 +144,37 @@ def _steer(q_from, q_to, max_range, out):
 def bisection_order(n):
     """Indices 0..n-1: the last (the edge's end), then midpoints of ever finer halves (checker.bisection_order
     with include_first=False)."""
-    out = np.empty(n, dtype=np.int64)
+    order, queue = edge_buffers(n)
+    _bisection_order_into(n, order, queue)
+    return order
+
+
+@njit(cache=True)
+def edge_buffers(n):
+    """Work arrays of :func:`_bisection_order_into` for edges of up to ``n`` states: the order and a queue."""
+    return np.empty(n, dtype=np.int64), np.empty((2 * n + 1, 2), dtype=np.int64)
+
+
+@njit(cache=True, inline="always")
+def _bisection_order_into(n, out, queue):
+    """:func:`bisection_order` of ``n`` into ``out[:n]``; ``queue`` holds the segments still to halve (each midpoint
+    adds two)."""
     out[0] = n - 1
     filled = 1
-    lo = np.empty(2 * n + 1, dtype=np.int64)  # a queue of segments: each midpoint adds two
-    hi = np.empty(2 * n + 1, dtype=np.int64)
-    lo[0], hi[0] = -1, n - 1
+    queue[0, 0], queue[0, 1] = -1, n - 1
     head, tail = 0, 1
     while head < tail:
-        a, b = lo[head], hi[head]
+        a, b = queue[head, 0], queue[head, 1]
         head += 1
         if b - a < 2:
             continue
         m = (a + b) // 2
         out[filled] = m
         filled += 1
-        lo[tail], hi[tail] = a, m
+        queue[tail, 0], queue[tail, 1] = a, m
         tail += 1
-        lo[tail], hi[tail] = m, b
+        queue[tail, 0], queue[tail, 1] = m, b
         tail += 1
-    return out
 
 
 @njit(cache=True)
@@ -291,11 +302,22 @@ def _vs_scene(robot, scene, work, stop_at_touch):
     """
     g_joint, g_radius, padding = robot[11], robot[13], robot[15]  # unpack_robot's order
     gworld, bounds = work[2], work[7]
-    touched = 0
+    lo0 = lo1 = lo2 = np.inf  # the moving groups' bounds, padded: an obstacle beyond this box is beyond all of them
+    hi0 = hi1 = hi2 = -np.inf
     for g in range(g_joint.shape[0]):
-        if g_joint[g] == 0:  # fixed to the world: like the exact checker, never tested against the scene
+        if g_joint[g] != 0:
+            reach = g_radius[g] + padding
+            lo0, hi0 = min(lo0, gworld[g, 0] - reach), max(hi0, gworld[g, 0] + reach)
+            lo1, hi1 = min(lo1, gworld[g, 1] - reach), max(hi1, gworld[g, 1] + reach)
+            lo2, hi2 = min(lo2, gworld[g, 2] - reach), max(hi2, gworld[g, 2] + reach)
+    touched = 0
+    for k in range(bounds.shape[0]):
+        if max(max(bounds[k, 0] - hi0, lo0 - bounds[k, 3]), max(bounds[k, 1] - hi1, lo1 - bounds[k, 4]),
+               max(bounds[k, 2] - hi2, lo2 - bounds[k, 5])) >= 0.0:  # fmt: skip
             continue
-        for k in range(bounds.shape[0]):
+        for g in range(g_joint.shape[0]):
+            if g_joint[g] == 0:  # fixed to the world: like the exact checker, never tested against the scene
+                continue
             reach = g_radius[g] + padding
             if _beyond(gworld, g, reach, bounds, k) or _to_obstacle(gworld, g, k, scene) >= reach:
                 continue
@@ -379,27 +401,65 @@ def check_edge(
     ``amb_states`` (``st[N_AMB]`` of them) and the edge is AMBIGUOUS if no state collides; other
     ambiguous states collide (the pure, conservative sphere model, everywhere without ``confirm``).
     """
+    robot, scene = unpack_robot(ri, rf), unpack_scene(sf)
+    order, queue = edge_buffers(1)
+    return _check_edge(qa, qb, resolution, base, indices, robot, scene, work_arrays(robot, scene), order, queue,
+                       np.empty(base.shape[0]), ri, rf, sf, grid_i, grid_f, amb, mark, confirm, amb_states, st, roots,
+                       exact_near)  # fmt: skip
+
+
+@njit(cache=True)
+def _check_edge(qa, qb, resolution, base, indices, robot, scene, work, order, queue, q, ri, rf, sf, grid_i, grid_f,
+                amb, mark, confirm, amb_states, st, roots, exact_near):  # fmt: skip
+    """:func:`check_edge` on the robot and scene unpacked once per :func:`run` call, its :func:`work_arrays`, edge
+    buffers (:func:`edge_buffers`; larger ones are made for a longer edge) and a configuration buffer ``q``.
+
+    Without a grid each state is made when its turn comes: most edges of a search end at their first states.
+    """
     dim = qa.shape[0]
     steps = 0.0
     for a in range(dim):
         steps = max(steps, abs(qb[a] - qa[a]))
     n = max(1, int(np.ceil(steps / resolution)))
+    if order.shape[0] < n:
+        order, queue = edge_buffers(n)
+    _bisection_order_into(n, order, queue)
+    if grid_i[0] > 0:
+        return _check_edge_by_grid(qa, qb, n, order, base, indices, ri, rf, sf, grid_i, grid_f, amb, mark, confirm,
+                                   amb_states, st, roots, exact_near)  # fmt: skip
+    n_amb = 0
+    for row in range(n):
+        t = (order[row] + 1) / n
+        q[:] = base
+        for a in range(dim):
+            q[indices[a]] = qa[a] + t * (qb[a] - qa[a])
+        exact = confirm and _near_roots(q, indices, roots, exact_near)
+        status = classify(q, robot, scene, work, not exact)
+        st[CHECKS] += 1
+        if status == COLLIDING or (status == AMBIGUOUS and not exact):
+            return COLLIDING
+        if status == AMBIGUOUS:
+            for a in range(dim):
+                amb_states[n_amb, a] = q[indices[a]]
+            n_amb += 1
+    st[N_AMB] = n_amb
+    return AMBIGUOUS if n_amb > 0 else VALID
+
+
+@njit(cache=True)
+def _check_edge_by_grid(qa, qb, n, order, base, indices, ri, rf, sf, grid_i, grid_f, amb, mark, confirm, amb_states,
+                        st, roots, exact_near):  # fmt: skip
+    """:func:`check_edge` of an edge of ``n`` states in ``order`` through the checker's grid scan (``scan_nb``)."""
+    dim = qa.shape[0]
     states = np.empty((n, base.shape[0]))
-    order = bisection_order(n)
     for r in range(n):
         t = (order[r] + 1) / n
         states[r] = base
         for a in range(dim):
             states[r, indices[a]] = qa[a] + t * (qb[a] - qa[a])
-    robot, scene = unpack_robot(ri, rf), unpack_scene(sf)
-    work = work_arrays(robot, scene)
     n_amb, row = 0, 0
     while row < n:
-        if grid_i[0] > 0:
-            hit, status, _ = scan_nb(states, row, ri, rf, sf, grid_i, grid_f, amb, mark, True)
-        else:
-            exact = confirm and _near_roots(states[row], indices, roots, exact_near)
-            hit, status = row, classify(states[row], robot, scene, work, not exact)
+        hit, status, _ = scan_nb(states, row, ri, rf, sf, grid_i, grid_f, amb, mark, True)
         if hit < 0:
             st[CHECKS] += n - row
             break
@@ -530,6 +590,10 @@ def run(nodes, parent, radius, verdict, max_edges, st, q_new, amb_states, tuning
         if _apply(nodes, parent, radius, st, q_new, verdict, tuning) == SOLVED:
             return SOLVED
     cap = nodes.shape[1]
+    robot, scene = unpack_robot(ri, rf), unpack_scene(sf)
+    work = work_arrays(robot, scene)
+    order, queue = edge_buffers(int(np.ceil(max_range / resolution)) + 1)  # an extension's edge (L∞ <= L2 range)
+    q = np.empty(base.shape[0])
     for _ in range(max_edges):
         if st[N0] >= cap or st[N1] >= cap:
             return FULL
@@ -537,8 +601,9 @@ def run(nodes, parent, radius, verdict, max_edges, st, q_new, amb_states, tuning
             st[TREE] = _next_extension(st, st[TREE], tuning)
             continue
         tree = st[TREE]
-        status = check_edge(nodes[tree, st[FROM]], q_new, resolution, base, indices, ri, rf, sf, grid_i, grid_f,
-                            amb, mark, confirm, amb_states, st, nodes[:, 0], exact_near)  # fmt: skip
+        status = _check_edge(nodes[tree, st[FROM]], q_new, resolution, base, indices, robot, scene, work, order,
+                             queue, q, ri, rf, sf, grid_i, grid_f, amb, mark, confirm, amb_states, st, nodes[:, 0],
+                             exact_near)  # fmt: skip
         if status == AMBIGUOUS:
             st[PENDING] = 1
             return NEED_EXACT
