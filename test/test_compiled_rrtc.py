@@ -82,8 +82,11 @@ def random_edges(gs: GroupSpace, n: int, seed: int) -> list[tuple[np.ndarray, np
 
 
 # --- the kernel agrees with the sphere checker ---------------------------------------------
-def test_edge_answers_equal_the_pure_sphere_model(panda):
-    checker = SphereCollisionChecker(panda, clutter(1), confirm=False)
+@pytest.mark.parametrize("grid", [False, True], ids=["classify", "grid"])
+def test_edge_answers_equal_the_pure_sphere_model(panda, grid):
+    """Both of the kernel's edge checks: its own classify per state, and the checker's grid scan (large scenes)."""
+    checker = SphereCollisionChecker(panda, clutter(1), confirm=False, grid_min_obstacles=1 if grid else 10**6)
+    assert checker.uses_grid == grid
     gs = arm_space(panda)
     edges = EdgeChecker(gs, checker, RESOLUTION)
     answers = [kernel_edge(checker, gs, qa, qb)[0] for qa, qb in random_edges(gs, 120, 2)]
