@@ -592,7 +592,8 @@ def run(nodes, parent, radius, verdict, max_edges, st, q_new, amb_states, tuning
     cap = nodes.shape[1]
     robot, scene = unpack_robot(ri, rf), unpack_scene(sf)
     work = work_arrays(robot, scene)
-    order, queue = edge_buffers(int(np.ceil(max_range / resolution)) + 1)  # an extension's edge (L∞ <= L2 range)
+    longest = min(max_range, np.max(upper - lower))  # an extension's edge: L∞ <= its L2 range, within the bounds
+    order, queue = edge_buffers(int(np.ceil(longest / resolution)) + 1)
     q = np.empty(base.shape[0])
     for _ in range(max_edges):
         if st[N0] >= cap or st[N1] >= cap:
