@@ -199,6 +199,14 @@ def place_members(owner, start, placed, rot, pos, joint, local, world):
         place_points(rot, pos, joint, local, start[owner], start[owner + 1], world)
 
 
+@njit(cache=True, inline="always")
+def row_distance(world_a, a, world_b, b):
+    """Distance between the points ``world_a[a]`` and ``world_b[b]``, indexed: row views in a kernel's inner loop
+    cost more than the distance (numba counts their references)."""
+    dx, dy, dz = world_a[a, 0] - world_b[b, 0], world_a[a, 1] - world_b[b, 1], world_a[a, 2] - world_b[b, 2]
+    return np.sqrt(dx * dx + dy * dy + dz * dz)
+
+
 def tree_arrays(tree: KinematicTree) -> tuple:
     """The argument tuple the numba kernels take after ``q``."""
     return (tree.parent, tree.kind, tree.axis, tree.placement_rot, tree.placement_pos, tree.idx_q)

@@ -43,13 +43,12 @@ import pinocchio as pin
 from numba import njit
 
 from maru_planner import errors
-from maru_planner.collision.batch_fk import KinematicTree, joint_poses_nb, sphere_centers_nb, tree_arrays
+from maru_planner.collision.batch_fk import KinematicTree, joint_poses_nb, row_distance, sphere_centers_nb, tree_arrays
 from maru_planner.collision.checker import CollisionChecker, hull_or_self, robot_hull, self_collision_pairs
 from maru_planner.collision.sphere_cover import (
     DISTANCE_TOLERANCE,
     NO_COVER,
     SphereCover,
-    center_distance,
     cover_bounds_nb,
 )
 from maru_planner.collision.sphere_model import SphereModel
@@ -242,7 +241,7 @@ def _volume_bounds_nb(centers, config_of, pair, first, second, obstacle, box_cen
                     outside += excess * excess
             out[r] = np.sqrt(outside) - radius[g]
         else:
-            out[r] = center_distance(centers[c, g], centers[c, h]) - radius[g] - radius[h]
+            out[r] = row_distance(centers[c], g, centers[c], h) - radius[g] - radius[h]
 
 
 @njit(cache=True)

@@ -16,7 +16,7 @@ import numpy as np
 import pinocchio as pin
 from numba import njit
 
-from maru_planner.collision.batch_fk import place_members
+from maru_planner.collision.batch_fk import place_members, row_distance
 from maru_planner.collision.sphere_kernels import obstacle_distance
 from maru_planner.collision.sphere_model import SphereModel
 from maru_planner.collision.sphere_model import bounding_sphere as balls_bound
@@ -59,12 +59,11 @@ def cover_bounds_nb(rots, poss, rows, config_of, first, second, obstacle, enough
         if not obstacle[r]:
             place_members(h, g_clusters, cluster_placed, rot, pos, c_joint, c_center, cluster_world)
         for ca in range(g_clusters[g], g_clusters[g + 1]):
-            # centres as scalars, never row views: the views took more than half of this kernel's time
-            ax, ay, az = cluster_world[ca, 0], cluster_world[ca, 1], cluster_world[ca, 2]
+            # centres by index, never row views: the views took more than half of this kernel's time
             if obstacle[r]:
                 k = primitive[h]
-                lower = obstacle_distance(ax, ay, az, k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h,
-                                          cyl_r) - c_radius[ca]  # fmt: skip
+                lower = obstacle_distance(cluster_world[ca, 0], cluster_world[ca, 1], cluster_world[ca, 2], k, box_c,
+                                          box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r) - c_radius[ca]
                 if lower >= best:
                     continue
                 if lower >= enough[r]:
@@ -77,7 +76,7 @@ def cover_bounds_nb(rots, poss, rows, config_of, first, second, obstacle, enough
                     best = min(best, d)
                 continue
             for cb in range(g_clusters[h], g_clusters[h + 1]):
-                lower = _gap(ax, ay, az, cluster_world, cb) - c_radius[ca] - c_radius[cb]
+                lower = row_distance(cluster_world, ca, cluster_world, cb) - c_radius[ca] - c_radius[cb]
                 if lower >= best:
                     continue
                 if lower >= enough[r]:
@@ -86,22 +85,10 @@ def cover_bounds_nb(rots, poss, rows, config_of, first, second, obstacle, enough
                 place_members(ca, c_start, balls_placed, rot, pos, s_joint, s_center, sphere_world)
                 place_members(cb, c_start, balls_placed, rot, pos, s_joint, s_center, sphere_world)
                 for sa in range(c_start[ca], c_start[ca + 1]):
-                    sx, sy, sz = sphere_world[sa, 0], sphere_world[sa, 1], sphere_world[sa, 2]
                     for sb in range(c_start[cb], c_start[cb + 1]):
-                        gap = _gap(sx, sy, sz, sphere_world, sb) - s_radius[sa] - s_radius[sb]
+                        gap = row_distance(sphere_world, sa, sphere_world, sb) - s_radius[sa] - s_radius[sb]
                         best = min(best, gap)
         bound[r] = max(bound[r], min(best, skipped) - DISTANCE_TOLERANCE)
-
-
-@njit(cache=True, inline="always")
-def center_distance(a, b):
-    return np.sqrt((a[0] - b[0]) ** 2 + (a[1] - b[1]) ** 2 + (a[2] - b[2]) ** 2)
-
-
-@njit(cache=True, inline="always")
-def _gap(x, y, z, world, i):
-    """:func:`center_distance` from (x, y, z) to ``world[i]``, without a view of the row."""
-    return np.sqrt((x - world[i, 0]) ** 2 + (y - world[i, 1]) ** 2 + (z - world[i, 2]) ** 2)
 
 
 def solid_inside_spheres(geometry: coal.CollisionGeometry, placement: pin.SE3, centers: np.ndarray,
