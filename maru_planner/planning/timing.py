@@ -43,19 +43,12 @@ import ruckig
 import toppra.algorithm
 import toppra.constraint
 import toppra.interpolator
-import toppra.solverwrapper
 
 from maru_planner import errors
 from maru_planner.planning import postprocess
 from maru_planner.planning.config import TIME_PARAMETERIZATIONS
 from maru_planner.planning.space import full_configurations
 from maru_planner.planning.types import Trajectory
-
-# Every toppra.algorithm.TOPPRA() searches the import path for optional QP solvers (0.05 ms here, more with the long
-# sys.path of a ROS install) although we always pass solver_wrapper="seidel": what is installed does not change while
-# the process runs, so ask once.
-if not hasattr(toppra.solverwrapper.available_solvers, "cache_info"):
-    toppra.solverwrapper.available_solvers = functools.cache(toppra.solverwrapper.available_solvers)
 
 METHODS = TIME_PARAMETERIZATIONS
 JERK_RAMP_TIME = 0.1  # s: default jerk limit = acceleration limit / this (full acceleration in 0.1 s)
