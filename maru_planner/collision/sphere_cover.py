@@ -28,6 +28,8 @@ NO_COVER = (np.zeros(0, np.int64), np.zeros((0, 3)), np.zeros(0), np.zeros(1, np
             np.zeros((0, 3)), np.zeros(0), np.zeros(1, np.int64))  # fmt: skip
 CLUSTER_BALLS = 6  # balls of a generated cover per cluster (the sphere model's own clustering)
 MAX_SOLID_PARTS = 16  # pieces per axis of a box or cylinder covered by balls
+MAX_REMEMBERED_COVERS = 4096  # solid_inside_spheres answers _model_covers keeps (by their inputs)
+_SOLID_COVERS: dict[bytes, bool] = {}
 
 
 @njit(cache=True)
@@ -109,7 +111,10 @@ def solid_inside_spheres(geometry: coal.CollisionGeometry, placement: pin.SE3, c
     for n in cells:
         axes = [np.linspace(-h, h, n + 1) for h in half]
         grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1)  # (n+1, n+1, n+1, 3) corners
-        inside = np.linalg.norm(grid[..., None, :] - local, axis=-1) <= radii  # (..., balls)
+        # |corner - centre|² <= radius² as one matrix product (10x faster than the norms); the 1e-9 m rounding
+        # slack of ``radii`` is far above this expansion's error
+        square = (grid * grid).sum(axis=-1)[..., None] - 2.0 * grid @ local.T + (local * local).sum(axis=1)
+        inside = square <= radii * radii  # (..., balls)
         corners = [inside[i : i + n, j : j + n, k : k + n] for i in (0, 1) for j in (0, 1) for k in (0, 1)]
         cell_covered = np.logical_and.reduce(corners).any(axis=-1)  # (n, n, n)
         if isinstance(geometry, coal.Cylinder):  # a cell whose nearest point is off the disc needs no ball
@@ -175,11 +180,31 @@ class SphereCover:
 
 def _model_covers(spheres: SphereModel, g: int, obj: pin.GeometryObject) -> bool:
     """Whether the sphere model's spheres of geometry ``g`` hold all of it: a mesh's by construction, a solid's
-    when :func:`solid_inside_spheres` proves it."""
+    when :func:`solid_inside_spheres` proves it (remembered: every planner, worker and attachment of a robot asks
+    again, and for Maru-1's 34 solids the proof takes ~0.9 s)."""
+    if isinstance(obj.geometry, coal.BVHModelBase):
+        return True
     mine = slice(spheres.group_start[g], spheres.group_start[g + 1])
-    return isinstance(obj.geometry, coal.BVHModelBase) or solid_inside_spheres(
-        obj.geometry, obj.placement, spheres.center[mine], spheres.radius[mine]
-    )
+    centers, radii = spheres.center[mine], spheres.radius[mine]
+    key = b"".join(np.ascontiguousarray(a, dtype=float).tobytes()
+                   for a in (_solid_size(obj.geometry), obj.placement.homogeneous, centers, radii))  # fmt: skip
+    key = type(obj.geometry).__name__.encode() + key
+    if key not in _SOLID_COVERS:
+        if len(_SOLID_COVERS) >= MAX_REMEMBERED_COVERS:
+            _SOLID_COVERS.clear()
+        _SOLID_COVERS[key] = solid_inside_spheres(obj.geometry, obj.placement, centers, radii)
+    return _SOLID_COVERS[key]
+
+
+def _solid_size(geometry: coal.CollisionGeometry) -> list[float]:
+    """The dimensions :func:`solid_inside_spheres` reads (none for a shape it does not take)."""
+    if isinstance(geometry, coal.Sphere):
+        return [geometry.radius]
+    if isinstance(geometry, coal.Box):
+        return list(geometry.halfSide)
+    if isinstance(geometry, coal.Cylinder):
+        return [geometry.radius, geometry.halfLength]
+    return []
 
 
 def solid_balls(geometry: coal.CollisionGeometry) -> tuple[np.ndarray, np.ndarray] | None:
