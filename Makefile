@@ -13,7 +13,8 @@ export PIP_DISABLE_PIP_VERSION_CHECK := 1
 
 .PHONY: setup demo test lint bench bench-deps interfaces clean
 
-setup: $(STAMP) interfaces
+KERNELS := $(VENV)/.kernels.stamp
+setup: $(STAMP) interfaces $(KERNELS)
 
 PACKAGE_DIR := packaging/maru_planner
 
@@ -23,6 +24,13 @@ $(STAMP): requirements.txt $(PACKAGE_DIR)/setup.py $(PACKAGE_DIR)/package.xml
 	@$(PY) -m pip install --progress-bar off -q -r requirements.txt
 	@$(PY) -m pip install --progress-bar off -q --no-deps -e $(PACKAGE_DIR)
 	@touch $(STAMP)
+
+# numba compiles the planning kernels at first use and caches them on disk: done here once per source change, so
+# no node start, request or test pays the ~1 min compile (maru_planner/planning/warm_up.py)
+$(KERNELS): $(STAMP) $(shell find maru_planner -name '*.py')
+	@echo "[setup] compiling the planning kernels (about a minute after an install or a source change)"
+	@$(PY) -m maru_planner.planning.warm_up
+	@touch $@
 
 interfaces: $(STAMP)
 	@VENV=$(VENV) bash scripts/build_interfaces.sh

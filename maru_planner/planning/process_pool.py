@@ -46,6 +46,7 @@ from maru_planner.monitor import PlanMonitor, Progress
 from maru_planner.planning.config import PlannerConfig
 from maru_planner.planning.motion_planner import MotionPlanner
 from maru_planner.planning.types import MotionRequest, MotionResult
+from maru_planner.planning.warm_up import warm_up
 from maru_planner.robot import RobotModel
 from maru_planner.scene import Scene
 
@@ -155,6 +156,7 @@ def _worker_main(conn: Connection, robot: RobotSource, scene: dict, config: Plan
     except Exception as exc:  # noqa: BLE001 - reported to the pool, which refuses to start
         send(("broken", errors.one_line(f"{type(exc).__name__}: {exc}")))
         return
+    warm_up(model, config)  # no request pays numba's compile or cache load (its module doc)
     send(("ready",))
     while (message := inbox.next()) is not None:
         kind = message[0]
@@ -162,6 +164,7 @@ def _worker_main(conn: Connection, robot: RobotSource, scene: dict, config: Plan
             planner.set_scene(Scene.from_dict(message[1]))
         elif kind == "config":
             planner = MotionPlanner.from_scene(model, planner.scene, message[1])
+            warm_up(model, message[1])
         elif kind == "plan":
             _, job, request, monitor = message
             result = planner.plan(request, monitor)

@@ -70,6 +70,7 @@ from maru_planner.planning.config import PLANNER_CONFIG_PARAMS
 from maru_planner.planning.process_pool import ProcessPool, RobotSource
 from maru_planner.planning.queries import query_planners
 from maru_planner.planning.registry import PLANNERS
+from maru_planner.planning.warm_up import warm_up
 from maru_planner.robot import RobotModel
 from maru_planner.robot.ik import solve_ik
 from maru_planner.ros import manipulation, parameters
@@ -426,7 +427,9 @@ class PlanningNode(ManagedNode):
         processes = self._reconfigured_processes(config, settings)
         contexts = [self._make_context(config, processes) for _ in range(settings.workers)]
         if processes is not None:
-            processes.wait_ready()  # the workers build their planners meanwhile, in parallel
+            processes.wait_ready()  # the workers build their planners and warm up meanwhile, in parallel
+        else:  # no request pays numba's compile or cache load (warm_up module doc)
+            self.get_logger().info(warm_up(contexts[0].planner.robot, config).summary())
         return WorkerPool(contexts, settings.queue_size)
 
     def _reconfigured_processes(self, config: PlannerConfig, settings: NodeSettings) -> ProcessPool | None:
