@@ -59,6 +59,9 @@ from maru_planner.scene import Obstacle, Scene
 DEFAULT_SAFETY_MARGIN = 0.01  # m (PlannerConfig.safety_margin's default too)
 UNBOUNDED = 1e6  # m: an obstacle bounding box this large is treated as infinite
 MIN_INTERVAL = 1e-9  # rad: a piece of segment this short that is still unproven fails as "unproven"
+# An unproven end is split into up to this many dyadic pieces at once, each no longer than twice the radius its
+# piece's middle proved (bisecting one level per round took ~10 rounds a path, each a batch's fixed cost)
+MAX_SPLIT = 8
 NEAR_PATH_MIN_OBSTACLES = 64  # reachable obstacles from which a certification only builds pairs for those near its path
 NEAR_TABLES = 4  # pair tables of near obstacles kept (blends and repairs certify around the same path)
 CLEARANCE_WINDOW = 0.05  # m: clearance() measures the obstacles whose bound is this close to the nearest one first
@@ -351,13 +354,15 @@ def _fail_nb(segment, reason, config, alive, curve, failure, witness):
 
 @njit(cache=True)
 def _finish_round_nb(configs, config_of, seg, pair, a, b, half, margin, bound, rate, need, refine, exact, span,
-                     timed_out, min_interval, alive, curve, clearance, failure, witness):  # fmt: skip
+                     timed_out, min_interval, max_split, alive, curve, clearance, failure, witness):  # fmt: skip
     """After a round's bounds (:meth:`PathCertifier._check_rows`): each segment's clearance, the failures, and the
     rows still unproven, as (seg, pair, a, b) of the next round.
 
     At the middle of its piece ``[a, b]`` a row's pair is proven for ``|t - m| <= (bound - margin) / rate``; each
     unproven end of the piece is widened to the dyadic piece that holds it, so that the pieces of all pairs share
-    their middles, hence their forward kinematics (4x fewer configurations).
+    their middles, hence their forward kinematics (4x fewer configurations), and cut into up to ``max_split`` equal
+    dyadic pieces, none longer than twice that radius where it can (a row near an obstacle skips the levels that
+    one halving per round would spend a round each on).
     """
     n = seg.shape[0]
     for r in range(n):
@@ -377,21 +382,26 @@ def _finish_round_nb(configs, config_of, seg, pair, a, b, half, margin, bound, r
             short = half[r] * span[seg[r]] < min_interval
             if short or timed_out:
                 _fail_nb(seg[r], 2 if short else 3, configs[config_of[r]], alive, curve, failure, witness)
-    keep = 0
+    size, step = np.empty(n), np.empty(n)
+    count = 0
     for r in range(n):
         if open_[r] and alive[seg[r]]:
-            keep += 1
-    seg2, pair2 = np.empty(2 * keep, dtype=np.int64), np.empty(2 * keep, dtype=np.int64)
-    a2, b2 = np.empty(2 * keep), np.empty(2 * keep)
+            size[r] = min(half[r], 2.0 ** np.ceil(np.log2(half[r] - reach[r])))
+            step[r] = size[r]
+            while step[r] > 2.0 * reach[r] and step[r] > size[r] / max_split:
+                step[r] *= 0.5
+            count += 2 * int(round(size[r] / step[r]))
+    seg2, pair2 = np.empty(count, dtype=np.int64), np.empty(count, dtype=np.int64)
+    a2, b2 = np.empty(count), np.empty(count)
     k = 0
     for r in range(n):
         if open_[r] and alive[seg[r]]:
-            size = min(half[r], 2.0 ** np.ceil(np.log2(half[r] - reach[r])))
-            seg2[k] = seg2[k + keep] = seg[r]
-            pair2[k] = pair2[k + keep] = pair[r]
-            a2[k], b2[k] = a[r], a[r] + size
-            a2[k + keep], b2[k + keep] = b[r] - size, b[r]
-            k += 1
+            for start in (a[r], b[r] - size[r]):
+                for i in range(int(round(size[r] / step[r]))):
+                    seg2[k], pair2[k] = seg[r], pair[r]
+                    a2[k] = start + i * step[r]
+                    b2[k] = a2[k] + step[r]
+                    k += 1
     return seg2, pair2, a2, b2
 
 
@@ -655,7 +665,7 @@ class PathCertifier:
         exact = self._refine(configs, run.pairs, config_of, pair, refine, margin, bound, cert)
         run.seg, run.pair, run.a, run.b = _finish_round_nb(
             configs, config_of, seg, pair, run.a, run.b, half, margin, bound, rate, need, refine, exact, run.span,
-            time.monotonic() > run.deadline, MIN_INTERVAL, run.alive, run.curve, run.clearance, run.failure,
+            time.monotonic() > run.deadline, MIN_INTERVAL, MAX_SPLIT, run.alive, run.curve, run.clearance, run.failure,
             run.witness_config,
         )  # fmt: skip
 
@@ -681,7 +691,7 @@ class PathCertifier:
         path, rows = np.zeros((2, nq)), np.zeros(0)
         configs, config_of, half = _round_configs_nb(path, np.diff(path, axis=0), np.zeros((1, nq)), none, rows, rows)
         _finish_round_nb(configs, config_of, none, none, rows, rows, half, rows, rows, rows, rows, no, no, np.zeros(1),
-                         False, MIN_INTERVAL, np.ones(1, dtype=bool), np.zeros(1, dtype=np.int64), np.zeros(1),
+                         False, MIN_INTERVAL, MAX_SPLIT, np.ones(1, dtype=bool), np.zeros(1, dtype=np.int64), np.zeros(1),
                          np.array([1, -1], dtype=np.int64), np.zeros(nq))  # fmt: skip
 
     def _bounds(self, centers: np.ndarray, pairs: _Pairs, config_of: np.ndarray, pair: np.ndarray) -> np.ndarray:
