@@ -20,7 +20,8 @@ from maru_planner.collision.certify import (
 )
 from maru_planner.collision.checker import convex_hull
 from maru_planner.collision.spheres import densify, verify_path
-from maru_planner.paths import config_path
+from maru_planner.moveit_scene import PANDA_FINGERS_OPEN, iter_mbm_problems, mbm_panda
+from maru_planner.paths import benchmarks_dir, config_path
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig, PlanStatus
 from maru_planner.planning.types import PlanStats
 from maru_planner.robot import RobotModel, load_example_robot
@@ -516,3 +517,38 @@ def test_set_scene_builds_the_pair_table_so_requests_do_not(arm, monkeypatch):
     result = planner.plan(MotionRequest("all", start={"j1": 0.0, "j2": 0.0}, goal_joints={"j1": 0.5, "j2": 0.2},
                                         planner_id="RRTConnect", time_budget=10.0, seed=1))  # fmt: skip
     assert result.success and result.stats.certified, result.message
+
+
+MBM_TARBALL = benchmarks_dir() / "motionbenchmaker" / "vamp_panda_problems.tar.bz2"
+# table_pick/0032's first path (CompiledRRTConnect, seed 0) and the blends its trajectory rounds two corners with
+TABLE_PICK_0032_PATH = [
+    [0.0, -0.785, 0.0, -2.356,
+     0.0, 1.571, 0.785, 0.065, 0.065],
+    [-0.35946044465145166, -0.6516321081095878, -0.30144916186321, -1.8822532858921375,
+     -0.4544217041821061, 1.8227246946624673, 0.26747778724679117, 0.065, 0.065],
+    [-0.22843466933248938, -0.273506451403041, -0.6690281795492115, -1.6589918485712294,
+     -1.0990985186794773, 2.0200455117376017, 0.7150819989148978, 0.065, 0.065],
+    [-0.09740889401352706, 0.10461920530350594, -1.0366071972352129, -1.4357304112503213,
+     -1.7437753331768486, 2.2173663288127363, 1.1626862105830045, 0.065, 0.065],
+    [0.03361688130543525, 0.48274486201005284, -1.4041862149212143, -1.2124689739294132,
+     -2.38845214767422, 2.4146871458878705, 1.6102904222511114, 0.065, 0.065],
+    [0.13262647159495106, 0.768475408212371, -1.68194719631223, -1.0437615315748063,
+     -2.875602001335856, 2.5637925658454517, 1.948522418980287, 0.065, 0.065],
+    [-0.1054362293336927, 1.076964073326781, -1.033834373191109, -1.08025009533616,
+     -2.8973, 2.925467589995654, 1.40492365067501, 0.065, 0.065],
+]
+TABLE_PICK_0032_BLENDS = [0.0, 1.0, 0.0, 0.0, 0.0, 0.49257368626932035, 0.0]
+
+
+@pytest.mark.skipif(not MBM_TARBALL.is_file(), reason="MotionBenchMaker tarball not present")
+def test_a_cover_bound_touching_the_margin_goes_to_coal_instead_of_splitting_forever():
+    """On this path a sphere-cover bound tends to the margin from above at one point: every piece's middle proved
+    less than its piece, so splitting on the cover went on down to 1e-9 rad and failed "unproven". A cover bound
+    proving under 1/16 of its piece is measured by coal (the exact distance there is larger)."""
+    problems = iter_mbm_problems(MBM_TARBALL, sets=["table_pick"], limit_per_set=32, fixed_joints=PANDA_FINGERS_OPEN)
+    (problem,) = [p for p in problems if p.name == "table_pick/0032"]
+    planner = MotionPlanner.from_scene(mbm_panda(), problem.scene, PlannerConfig(collision_model="spheres"))
+    cert = planner.certifier.certify_path(np.array(TABLE_PICK_0032_PATH), margin=0.01,
+                                          corner_blends=np.array(TABLE_PICK_0032_BLENDS))  # fmt: skip
+    assert cert.valid, (cert.reason, cert.first_failing_segment)
+    assert cert.exact_queries + cert.hull_queries > 0

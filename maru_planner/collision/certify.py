@@ -62,6 +62,7 @@ MIN_INTERVAL = 1e-9  # rad: a piece of segment this short that is still unproven
 # An unproven end is split into up to this many dyadic pieces at once, each no longer than twice the radius its
 # piece's middle proved (bisecting one level per round took ~10 rounds a path, each a batch's fixed cost)
 MAX_SPLIT = 8
+COVER_SLACK_SPLIT = 2 * MAX_SPLIT  # see _assess_rows_nb
 NEAR_PATH_MIN_OBSTACLES = 64  # reachable obstacles from which a certification only builds pairs for those near its path
 NEAR_TABLES = 4  # pair tables of near obstacles kept (blends and repairs certify around the same path)
 CLEARANCE_WINDOW = 0.05  # m: clearance() measures the obstacles whose bound is this close to the nearest one first
@@ -304,7 +305,11 @@ def _assess_rows_nb(configs, config_of, seg, pair, half, run_arrays, pair_arrays
             rate[r] = total
         need[r] = margin[r] + half[r] * rate[r]
         no_slack = bound[r] <= margin[r]
-        refine[r] = bound[r] < need[r] and (volume[r] + gap[p] >= need[r] or no_slack) and (no_slack or not covered[p])
+        # a cover bound proving under 1/COVER_SLACK_SPLIT of the piece: coal (splitting on it may never end, e.g.
+        # where the cover touches the margin at one point: each piece's middle then proves less than the piece)
+        thin = (bound[r] - margin[r]) * COVER_SLACK_SPLIT < half[r] * rate[r]
+        refine[r] = bound[r] < need[r] and (volume[r] + gap[p] >= need[r] or no_slack) and (
+            no_slack or thin or not covered[p])
 
 
 FAILURE_REASONS = ("collision", "margin", "unproven", "timeout")  # Certificate.reason by the round kernels' codes
