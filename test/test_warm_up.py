@@ -54,5 +54,6 @@ def test_a_failed_warm_up_is_reported_not_raised_and_retried_next_time(maru1, fr
 def test_cli_warms_both_checkers(capsys, fresh_process):
     assert warm.main([]) == 0
     lines = capsys.readouterr().out.splitlines()
-    assert [line.split(":")[0] for line in lines] == ["[warm-up] exact checker", "[warm-up] spheres checker"]
+    assert [line.split(":")[0] for line in lines] == [
+        "[warm-up] exact checker", "[warm-up] spheres checker", "[warm-up] base planners"]
     assert all("kernels warmed up" in line for line in lines)

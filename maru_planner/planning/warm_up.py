@@ -125,7 +125,8 @@ def _free_pair(planner: MotionPlanner, group: str) -> tuple[dict[str, float], di
 
 def main(argv: list[str] | None = None) -> int:
     """``python -m maru_planner.planning.warm_up``: fill numba's disk cache, with Maru-1 on both checkers (the
-    kernels' argument types are the same for every robot, so any robot's first plan then only loads them)."""
+    kernels' argument types are the same for every robot, so any robot's first plan then only loads them) and
+    every mobile-base planner."""
     argparse.ArgumentParser(description=__doc__.splitlines()[0]).parse_args(argv)
     robot = RobotModel.maru1()
     for model in COLLISION_MODELS:
@@ -133,6 +134,11 @@ def main(argv: list[str] | None = None) -> int:
         print(f"[warm-up] {model} checker: {done.summary()}", flush=True)
         if done.error:
             return 1
+    from maru_planner.base import registry as base_registry  # lazy: the arm planning nodes never load the base's
+
+    t0 = time.monotonic()
+    base_registry.warm_up()  # the mobile-base planners' kernels (base_planner_node warms up the same way)
+    print(f"[warm-up] base planners: kernels warmed up in {time.monotonic() - t0:.1f} s", flush=True)
     return 0
 
 
