@@ -167,6 +167,11 @@ def _good_request_still_succeeds(client):
 # ---------------------------------------------------------------- state that must come first
 
 
+def test_each_worker_process_warmed_its_kernels_up_at_configure(client, planner_node):
+    log = planner_node.log()
+    assert "worker process 0: kernels warmed up" in log and "worker process 1: kernels warmed up" in log, log
+
+
 def test_empty_start_without_joint_states_is_no_start_state(client):
     response = client.plan(PAPER_GOAL, start=None, time_budget=2.0)
     assert response.error.code == _codes().NO_START_STATE

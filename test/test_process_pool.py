@@ -106,6 +106,12 @@ def test_same_seed_gives_the_in_process_path_and_stages(pool, local):
     assert there.stages == here.stages
 
 
+def test_every_worker_warms_its_kernels_up_before_it_is_ready(pool):
+    summaries = pool.warm_ups()
+    assert len(summaries) == pool.workers, summaries
+    assert all(s.startswith("kernels warmed up") and "RRTConnect in one box: SUCCESS" in s for s in summaries)
+
+
 def test_errors_keep_their_class_status_and_message(pool, local):
     bad = _request(group="no_such_group")
     expected = local.plan(bad)

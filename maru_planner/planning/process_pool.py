@@ -19,7 +19,8 @@ hands it, one at a time; the same seed gives the same path as planning in the ca
 
 Messages on a worker's pipe: to the worker ``("plan", job, request, forward_progress)``,
 ``("cancel", job)``, ``("scene", scene_dict)``, ``("config", config)``, ``("stop",)``; from it
-``("ready",)``, ``("broken", message)``, ``("progress", job, stage, info)``, ``("result", job, result)``.
+``("ready", warm_up_summary)``, ``("broken", message)``, ``("progress", job, stage, info)``,
+``("result", job, result)``.
 """
 
 from __future__ import annotations
@@ -156,8 +157,8 @@ def _worker_main(conn: Connection, robot: RobotSource, scene: dict, config: Plan
     except Exception as exc:  # noqa: BLE001 - reported to the pool, which refuses to start
         send(("broken", errors.one_line(f"{type(exc).__name__}: {exc}")))
         return
-    warm_up(model, config)  # no request pays numba's compile or cache load (its module doc)
-    send(("ready",))
+    warmed = warm_up(model, config)  # no request pays numba's compile or cache load (its module doc)
+    send(("ready", warmed.summary()))
     while (message := inbox.next()) is not None:
         kind = message[0]
         if kind == "scene":
@@ -208,6 +209,7 @@ class _Worker:
         self.job: _Job | None = None
         self.ready = threading.Event()
         self.failure = ""  # why it could not start
+        self.warm_up = ""  # its kernel warm-up, one line (warm_up.WarmUp.summary)
         self.retiring = False
         self.reader: threading.Thread | None = None
         self._send_lock = threading.Lock()
@@ -305,6 +307,11 @@ class ProcessPool:
         if failures:
             self.close()
             raise errors.MaruError(f"planning worker failed to start: {failures[0]}", source="workers")
+
+    def warm_ups(self) -> list[str]:
+        """Each ready worker's kernel warm-up, one line (``warm_up.WarmUp.summary``)."""
+        with self._lock:
+            return [w.warm_up for w in self._workers if w.ready.is_set() and not w.failure]
 
     def resize(self, workers: int) -> None:
         """Start or retire workers until ``workers`` plan (a retiring one finishes its request first)."""
@@ -449,6 +456,7 @@ class ProcessPool:
                 return
             kind = message[0]
             if kind == "ready":
+                worker.warm_up = message[1]
                 worker.ready.set()
                 self._next_job(worker)
             elif kind == "broken":

@@ -428,6 +428,8 @@ class PlanningNode(ManagedNode):
         contexts = [self._make_context(config, processes) for _ in range(settings.workers)]
         if processes is not None:
             processes.wait_ready()  # the workers build their planners and warm up meanwhile, in parallel
+            for n, summary in enumerate(processes.warm_ups()):
+                self.get_logger().info(f"worker process {n}: {summary}")
         else:  # no request pays numba's compile or cache load (warm_up module doc)
             self.get_logger().info(warm_up(contexts[0].planner.robot, config).summary())
         return WorkerPool(contexts, settings.queue_size)
