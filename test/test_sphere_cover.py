@@ -56,6 +56,54 @@ def test_without_its_sphere_model_only_primitives_are_covered():
     assert SphereCover.of(maru, None).covered.all()  # Maru-1: boxes, cylinders and spheres only
 
 
+def _points_inside(geometry, placement: pin.SE3, rng: np.random.Generator, n: int) -> np.ndarray:
+    """``n`` random points of a box, cylinder or sphere, in the frame ``placement`` places it in."""
+    if isinstance(geometry, coal.Box):
+        local = rng.uniform(-1.0, 1.0, (n, 3)) * np.asarray(geometry.halfSide)
+    else:
+        radius = geometry.radius
+        local = rng.uniform(-radius, radius, (4 * n, 3))
+        if isinstance(geometry, coal.Cylinder):
+            local[:, 2] = rng.uniform(-geometry.halfLength, geometry.halfLength, len(local))
+            local = local[np.hypot(local[:, 0], local[:, 1]) <= radius][:n]
+        else:
+            local = local[np.linalg.norm(local, axis=1) <= radius][:n]
+    return local @ placement.rotation.T + placement.translation
+
+
+def test_a_solid_proven_inside_the_balls_has_every_sampled_point_in_one():
+    """Soundness on random solids and balls: a proof is never wrong (2,000 points each); and the answer is
+    remembered by its inputs, for the next planner of the same robot."""
+    rng = np.random.default_rng(7)
+    proven = 0
+    for i in range(150):
+        geometry = [coal.Box(*rng.uniform(0.02, 0.2, 3)), coal.Cylinder(rng.uniform(0.02, 0.1), rng.uniform(0.02, 0.2)),
+                    coal.Sphere(rng.uniform(0.02, 0.1))][i % 3]  # fmt: skip
+        placement = pin.SE3(pin.exp3(rng.normal(size=3)), rng.normal(size=3) * 0.02)
+        k = int(rng.integers(1, 12))
+        centers, radii = rng.normal(size=(k, 3)) * 0.05, rng.uniform(0.05, 0.25, k)
+        if solid_inside_spheres(geometry, placement, centers, radii):
+            proven += 1
+            points = _points_inside(geometry, placement, rng, 2000)
+            inside = (np.linalg.norm(points[:, None] - centers, axis=2) <= radii + 1e-9).any(axis=1)
+            assert inside.all(), (i, geometry, k)
+    assert 20 < proven < 150  # both answers occur
+
+
+def test_the_cover_of_a_robot_is_proven_once_and_remembered(monkeypatch):
+    from maru_planner.collision import sphere_cover
+
+    maru = RobotModel.maru1()
+    spheres = sphere_model(maru)
+    monkeypatch.setattr(sphere_cover, "_SOLID_COVERS", {})
+    first = SphereCover.of(maru, spheres)
+    calls = []
+    monkeypatch.setattr(sphere_cover, "solid_inside_spheres", lambda *args: calls.append(args) or True)
+    again = SphereCover.of(maru, spheres)
+    assert not calls and np.array_equal(first.covered, again.covered)
+    assert all(np.array_equal(a, b) for a, b in zip(first.arrays, again.arrays, strict=True))
+
+
 def test_a_solid_counts_as_covered_only_when_its_whole_volume_is_in_the_balls():
     box, here = coal.Box(0.2, 0.1, 0.1), pin.SE3.Identity()
     assert solid_inside_spheres(box, here, np.zeros((1, 3)), [np.linalg.norm([0.1, 0.05, 0.05])])

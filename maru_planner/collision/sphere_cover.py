@@ -189,11 +189,13 @@ def _model_covers(spheres: SphereModel, g: int, obj: pin.GeometryObject) -> bool
     key = b"".join(np.ascontiguousarray(a, dtype=float).tobytes()
                    for a in (_solid_size(obj.geometry), obj.placement.homogeneous, centers, radii))  # fmt: skip
     key = type(obj.geometry).__name__.encode() + key
-    if key not in _SOLID_COVERS:
+    covered = _SOLID_COVERS.get(key)
+    if covered is None:  # planners of several threads may get here at once: each answer is the same
+        covered = solid_inside_spheres(obj.geometry, obj.placement, centers, radii)
         if len(_SOLID_COVERS) >= MAX_REMEMBERED_COVERS:
             _SOLID_COVERS.clear()
-        _SOLID_COVERS[key] = solid_inside_spheres(obj.geometry, obj.placement, centers, radii)
-    return _SOLID_COVERS[key]
+        _SOLID_COVERS[key] = covered
+    return covered
 
 
 def _solid_size(geometry: coal.CollisionGeometry) -> list[float]:
