@@ -12,6 +12,7 @@ from maru_planner import errors
 from maru_planner.collision import CollisionChecker
 from maru_planner.collision.certify import (
     MIN_ANCHOR_CLEARANCE,
+    Certificate,
     PathCertifier,
     _without_corners,
     certify_and_repair,
@@ -552,3 +553,26 @@ def test_a_cover_bound_touching_the_margin_goes_to_coal_instead_of_splitting_for
                                           corner_blends=np.array(TABLE_PICK_0032_BLENDS))  # fmt: skip
     assert cert.valid, (cert.reason, cert.first_failing_segment)
     assert cert.exact_queries + cert.hull_queries > 0
+
+
+def test_a_hull_bound_proving_too_little_of_its_piece_is_measured_on_the_mesh(monkeypatch):
+    """A hull distance just above the margin is only split on when it proves enough of the piece: one touching the
+    margin at a point would be split on without end (as the cover's was), so the mesh decides."""
+    robot = load_example_robot("panda")
+    certifier = PathCertifier(robot, Scene([Obstacle("box", "box", size=(0.1, 0.1, 0.1), pose=[0.5, 0.0, 0.3])]))
+    pairs = certifier._pair_table()
+    row_pair = int(np.flatnonzero(pairs.has_hull & pairs.obstacle)[0])
+    hull, mesh = {}, 0.05
+
+    def distance(_pairs, _pair, on_hull, _placed):
+        return hull["value"] if on_hull else mesh
+
+    monkeypatch.setattr(certifier, "_distance", distance)
+    margin, need = np.array([0.01]), np.array([0.01 + 0.016])  # the piece needs 16 mm more than the margin
+    for hull_value, measured_on_mesh in ((0.0105, True), (0.0125, False), (0.009, True)):
+        hull["value"], bound = hull_value, np.array([0.0])
+        cert = Certificate(valid=True, margin=0.01)
+        exact = certifier._refine(robot.neutral()[None], pairs, np.zeros(1, dtype=int), np.array([row_pair]),
+                                  np.ones(1, dtype=bool), margin, bound, need, cert)  # fmt: skip
+        assert exact[0] == measured_on_mesh, hull_value
+        assert bound[0] == (mesh if measured_on_mesh else hull_value)

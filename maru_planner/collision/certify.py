@@ -667,7 +667,7 @@ class PathCertifier:
         _assess_rows_nb(configs, config_of, seg, pair, half, run.arrays, run.pairs.arrays, self._robot_arrays,
                         self._cover_arrays, run.pairs.primitives, self._cover is not None, margin, bound, rate, need,
                         refine)  # fmt: skip
-        exact = self._refine(configs, run.pairs, config_of, pair, refine, margin, bound, cert)
+        exact = self._refine(configs, run.pairs, config_of, pair, refine, margin, bound, need, cert)
         run.seg, run.pair, run.a, run.b = _finish_round_nb(
             configs, config_of, seg, pair, run.a, run.b, half, margin, bound, rate, need, refine, exact, run.span,
             time.monotonic() > run.deadline, MIN_INTERVAL, MAX_SPLIT, run.alive, run.curve, run.clearance, run.failure,
@@ -696,8 +696,8 @@ class PathCertifier:
         path, rows = np.zeros((2, nq)), np.zeros(0)
         configs, config_of, half = _round_configs_nb(path, np.diff(path, axis=0), np.zeros((1, nq)), none, rows, rows)
         _finish_round_nb(configs, config_of, none, none, rows, rows, half, rows, rows, rows, rows, no, no, np.zeros(1),
-                         False, MIN_INTERVAL, MAX_SPLIT, np.ones(1, dtype=bool), np.zeros(1, dtype=np.int64), np.zeros(1),
-                         np.array([1, -1], dtype=np.int64), np.zeros(nq))  # fmt: skip
+                         False, MIN_INTERVAL, MAX_SPLIT, np.ones(1, dtype=bool), np.zeros(1, dtype=np.int64),
+                         np.zeros(1), np.array([1, -1], dtype=np.int64), np.zeros(nq))  # fmt: skip
 
     def _bounds(self, centers: np.ndarray, pairs: _Pairs, config_of: np.ndarray, pair: np.ndarray) -> np.ndarray:
         """Bounding-volume lower bound of each row's pair distance at its configuration."""
@@ -706,11 +706,13 @@ class PathCertifier:
                           pairs.box_rot, pairs.box_half, self._radius, bound)  # fmt: skip
         return bound
 
-    def _refine(self, configs, pairs: _Pairs, config_of, pair, refine, margin, bound, cert: Certificate) -> np.ndarray:
+    def _refine(self, configs, pairs: _Pairs, config_of, pair, refine, margin, bound, need, cert: Certificate
+                ) -> np.ndarray:  # fmt: skip
         """Replace ``bound`` on the ``refine`` rows by a coal distance; returns where it is the exact one.
 
         A pair with a mesh is first measured on the convex hulls (a lower bound, ~100x cheaper than the
-        mesh); the mesh itself only where the hull distance is within the margin: exact geometry decides.
+        mesh); the mesh itself where the hull distance is within the margin (exact geometry decides) or proves
+        under 1/COVER_SLACK_SPLIT of the piece (splitting on a hull touching the margin would never end).
         """
         exact = np.zeros(len(pair), dtype=bool)
         rows = np.flatnonzero(refine)
@@ -726,7 +728,8 @@ class PathCertifier:
             if pairs.has_hull[p]:
                 cert.hull_queries += 1
                 bound[row] = max(bound[row], self._distance(pairs, p, True, placed))
-                if bound[row] > margin[row]:
+                slack = bound[row] - margin[row]
+                if slack > 0.0 and slack * COVER_SLACK_SPLIT >= need[row] - margin[row]:
                     continue
             cert.exact_queries += 1
             bound[row] = self._distance(pairs, p, False, placed)
