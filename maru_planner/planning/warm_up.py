@@ -35,7 +35,10 @@ from maru_planner.scene import Obstacle, Scene
 
 SAMPLE_TRIES = 200  # random starts tried for a free start and goal
 STEP = 0.3  # rad: the goal is at most this far from the start in each joint of the group
-BUDGET = 300.0  # s per warm-up plan: its kernels' first compile cannot be interrupted, and this is no request's budget
+EDGE_STEP = 0.01  # rad: the straight motion from start to goal is checked free at states this far apart
+# s per warm-up plan: a first compile (~35 s here) cannot be interrupted and this is no request's budget; the search
+# itself ends at once (a free straight motion), so the whole warm-up stays well inside a worker's start-up timeout
+BUDGET = 120.0
 SEED = 1
 BOX = 0.02  # m: edge of the warm-up boxes
 MANY_BOXES = 80  # boxes of the large scene: above certify.NEAR_PATH_MIN_OBSTACLES and the sphere grid's threshold
@@ -108,8 +111,8 @@ def _boxes(robot: RobotModel, count: int) -> Scene:
 
 
 def _free_pair(planner: MotionPlanner, group: str) -> tuple[dict[str, float], dict[str, float]]:
-    """A collision-free start (all joints) and a free goal of ``group``'s joints a short step away (solved at once,
-    whatever the robot), sampled with a fixed seed."""
+    """A start (all joints) and a goal of ``group``'s joints a short step away with the straight motion between
+    them free (sampled every :data:`EDGE_STEP`), so every warm-up search ends at once; drawn with a fixed seed."""
     robot, rng = planner.robot, np.random.default_rng(SEED)
     names = robot.joint_names
     indices = robot.group_joint_indices(group)
@@ -118,7 +121,8 @@ def _free_pair(planner: MotionPlanner, group: str) -> tuple[dict[str, float], di
         goal = start.copy()
         goal[indices] += rng.uniform(-STEP, STEP, len(indices))
         goal = np.clip(goal, robot.lower_limits, robot.upper_limits)
-        if planner.checker.is_valid(start) and planner.checker.is_valid(goal):
+        states = np.linspace(start, goal, int(np.ceil(np.abs(goal - start).max() / EDGE_STEP)) + 1)
+        if planner.checker.first_invalid(states) < 0:
             return dict(zip(names, map(float, start), strict=True)), {names[i]: float(goal[i]) for i in indices}
     raise errors.InvalidRequest(f"warm-up: no free start and goal of {robot.name} in {SAMPLE_TRIES} samples")
 
