@@ -62,7 +62,7 @@ MIN_INTERVAL = 1e-9  # rad: a piece of segment this short that is still unproven
 # An unproven end is split into up to this many dyadic pieces at once, each no longer than twice the radius its
 # piece's middle proved (bisecting one level per round took ~10 rounds a path, each a batch's fixed cost)
 MAX_SPLIT = 8
-COVER_SLACK_SPLIT = 2 * MAX_SPLIT  # see _assess_rows_nb
+COVER_SLACK_SPLIT = 2 * MAX_SPLIT  # see proves_too_little
 NEAR_PATH_MIN_OBSTACLES = 64  # reachable obstacles from which a certification only builds pairs for those near its path
 NEAR_TABLES = 4  # pair tables of near obstacles kept (blends and repairs certify around the same path)
 CLEARANCE_WINDOW = 0.05  # m: clearance() measures the obstacles whose bound is this close to the nearest one first
@@ -248,6 +248,15 @@ def _volume_bounds_nb(centers, config_of, pair, first, second, obstacle, box_cen
             out[r] = row_distance(centers[c], g, centers[c], h) - radius[g] - radius[h]
 
 
+@njit(cache=True, inline="always")
+def proves_too_little(slack, needed):
+    """Whether a bound ``slack`` above the margin proves under 1/COVER_SLACK_SPLIT of a piece that needs ``needed``
+    (half its length times its rate): then the next finer measure takes it (cover -> coal, hull -> mesh) rather than
+    the splitting, which may never end where a bound touches the margin at one point (each piece's middle then
+    proves less than its piece)."""
+    return slack * COVER_SLACK_SPLIT < needed
+
+
 @njit(cache=True)
 def _assess_rows_nb(configs, config_of, seg, pair, half, run_arrays, pair_arrays, robot_arrays, cover_arrays,
                     primitives, use_cover, margin, bound, rate, need, refine):  # fmt: skip
@@ -305,9 +314,7 @@ def _assess_rows_nb(configs, config_of, seg, pair, half, run_arrays, pair_arrays
             rate[r] = total
         need[r] = margin[r] + half[r] * rate[r]
         no_slack = bound[r] <= margin[r]
-        # a cover bound proving under 1/COVER_SLACK_SPLIT of the piece: coal (splitting on it may never end, e.g.
-        # where the cover touches the margin at one point: each piece's middle then proves less than the piece)
-        thin = (bound[r] - margin[r]) * COVER_SLACK_SPLIT < half[r] * rate[r]
+        thin = proves_too_little(bound[r] - margin[r], half[r] * rate[r])
         refine[r] = bound[r] < need[r] and (volume[r] + gap[p] >= need[r] or no_slack) and (
             no_slack or thin or not covered[p])
 
@@ -711,8 +718,8 @@ class PathCertifier:
         """Replace ``bound`` on the ``refine`` rows by a coal distance; returns where it is the exact one.
 
         A pair with a mesh is first measured on the convex hulls (a lower bound, ~100x cheaper than the
-        mesh); the mesh itself where the hull distance is within the margin (exact geometry decides) or proves
-        under 1/COVER_SLACK_SPLIT of the piece (splitting on a hull touching the margin would never end).
+        mesh); the mesh itself where the hull distance is within the margin (exact geometry decides) or
+        :func:`proves_too_little` of the piece.
         """
         exact = np.zeros(len(pair), dtype=bool)
         rows = np.flatnonzero(refine)
@@ -729,7 +736,7 @@ class PathCertifier:
                 cert.hull_queries += 1
                 bound[row] = max(bound[row], self._distance(pairs, p, True, placed))
                 slack = bound[row] - margin[row]
-                if slack > 0.0 and slack * COVER_SLACK_SPLIT >= need[row] - margin[row]:
+                if slack > 0.0 and not proves_too_little(slack, need[row] - margin[row]):
                     continue
             cert.exact_queries += 1
             bound[row] = self._distance(pairs, p, False, placed)
