@@ -211,14 +211,20 @@ def work_arrays(robot, scene):
 
 
 @njit(cache=True, inline="always")
+def _box_gap(bounds, k, lo0, lo1, lo2, hi0, hi1, hi2):
+    """How far the box ``[lo, hi]`` lies outside obstacle ``k``'s axis-aligned bounds along the axis where it lies
+    farthest (<= 0: they overlap). One comparison of the largest excess, not six short-circuited ones: their
+    branches mispredict."""
+    return max(max(bounds[k, 0] - hi0, lo0 - bounds[k, 3]), max(bounds[k, 1] - hi1, lo1 - bounds[k, 4]),
+               max(bounds[k, 2] - hi2, lo2 - bounds[k, 5]))  # fmt: skip
+
+
+@njit(cache=True, inline="always")
 def _beyond(world, i, reach, bounds, k):
     """Whether ``world[i]`` is at least ``reach`` outside obstacle ``k``'s axis-aligned bounds along some axis
     (then it is that far from the obstacle: a test without the obstacle's rotation or a square root)."""
     x, y, z = world[i, 0], world[i, 1], world[i, 2]
-    # one comparison of the largest excess, not six short-circuited ones: their branches mispredict
-    excess = max(max(bounds[k, 0] - x, x - bounds[k, 3]), max(bounds[k, 1] - y, y - bounds[k, 4]),
-                 max(bounds[k, 2] - z, z - bounds[k, 5]))  # fmt: skip
-    return excess >= reach
+    return _box_gap(bounds, k, x, y, z, x, y, z) >= reach
 
 
 @njit(cache=True, inline="always")
@@ -305,8 +311,7 @@ def _vs_scene(robot, scene, work, stop_at_touch):
             lo2, hi2 = min(lo2, gworld[g, 2] - reach), max(hi2, gworld[g, 2] + reach)
     touched = 0
     for k in range(bounds.shape[0]):
-        if max(max(bounds[k, 0] - hi0, lo0 - bounds[k, 3]), max(bounds[k, 1] - hi1, lo1 - bounds[k, 4]),
-               max(bounds[k, 2] - hi2, lo2 - bounds[k, 5])) >= 0.0:  # fmt: skip
+        if _box_gap(bounds, k, lo0, lo1, lo2, hi0, hi1, hi2) >= 0.0:
             continue
         for g in range(g_joint.shape[0]):
             if g_joint[g] == 0:  # fixed to the world: like the exact checker, never tested against the scene
