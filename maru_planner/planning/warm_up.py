@@ -85,9 +85,10 @@ def warm_up(robot: RobotModel, config: PlannerConfig | None = None) -> WarmUp:
 
 def _plan_short_motions(robot: RobotModel, config: PlannerConfig) -> tuple[tuple[str, str, str], ...]:
     group = max(robot.groups, key=lambda name: len(robot.groups[name]))
+    planner = MotionPlanner.from_scene(robot, None, config)
     plans = []
     for scene_name, scene in (("one box", _boxes(robot, 1)), ("many boxes", _boxes(robot, MANY_BOXES))):
-        planner = MotionPlanner.from_scene(robot, scene, config)
+        planner.set_scene(scene)
         start, goal = _free_pair(planner, group)
         for planner_id in _planner_ids(planner):
             request = MotionRequest(group, start=start, goal_joints=goal, planner_id=planner_id, time_budget=BUDGET,
