@@ -19,7 +19,8 @@ from pathlib import Path
 
 import pytest
 
-from maru_planner.paths import config_path
+from maru_planner.moveit_scene import PANDA_FINGERS_OPEN, iter_mbm_problems
+from maru_planner.paths import benchmarks_dir, config_path
 from maru_planner.planning.problems import PROBLEMS
 from maru_planner.robot import RobotModel, load_example_robot
 from maru_planner.ros.env import configure_loopback_dds
@@ -29,6 +30,17 @@ REPO_ROOT = Path(__file__).resolve().parent.parent
 GROUP_JOINTS = ["waist_yaw"] + [f"r_arm_j{i}" for i in range(1, 7)] + [f"l_arm_j{i}" for i in range(1, 7)]
 PAPER_START = PROBLEMS["maru13"].start_dict(GROUP_JOINTS)
 PAPER_GOAL = PROBLEMS["maru13"].goal_dict(GROUP_JOINTS)
+MBM_TARBALL = benchmarks_dir() / "motionbenchmaker" / "vamp_panda_problems.tar.bz2"
+needs_mbm = pytest.mark.skipif(not MBM_TARBALL.is_file(), reason="MotionBenchMaker tarball not present")
+
+
+def mbm_problem(name: str):
+    """One MotionBenchMaker Panda problem by name ("cage/0073"), fingers open as the benchmark has them."""
+    set_name, number = name.split("/")
+    problems = iter_mbm_problems(MBM_TARBALL, sets=[set_name], limit_per_set=int(number),
+                                 fixed_joints=PANDA_FINGERS_OPEN)  # fmt: skip
+    (problem,) = [p for p in problems if p.name == name]
+    return problem
 
 
 def _domain_in_use(domain: int, participants: int = 4) -> bool:

@@ -7,6 +7,7 @@ import dataclasses
 import numpy as np
 import pinocchio as pin
 import pytest
+from conftest import mbm_problem, needs_mbm
 
 from maru_planner import errors
 from maru_planner.collision import CollisionChecker
@@ -21,8 +22,8 @@ from maru_planner.collision.certify import (
 )
 from maru_planner.collision.checker import convex_hull
 from maru_planner.collision.spheres import densify, verify_path
-from maru_planner.moveit_scene import PANDA_FINGERS_OPEN, iter_mbm_problems, mbm_panda
-from maru_planner.paths import benchmarks_dir, config_path
+from maru_planner.moveit_scene import mbm_panda
+from maru_planner.paths import config_path
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig, PlanStatus
 from maru_planner.planning.types import PlanStats
 from maru_planner.robot import RobotModel, load_example_robot
@@ -520,7 +521,6 @@ def test_set_scene_builds_the_pair_table_so_requests_do_not(arm, monkeypatch):
     assert result.success and result.stats.certified, result.message
 
 
-MBM_TARBALL = benchmarks_dir() / "motionbenchmaker" / "vamp_panda_problems.tar.bz2"
 # table_pick/0032's first path (CompiledRRTConnect, seed 0) and the blends its trajectory rounds two corners with
 TABLE_PICK_0032_PATH = [
     [0.0, -0.785, 0.0, -2.356,
@@ -541,13 +541,12 @@ TABLE_PICK_0032_PATH = [
 TABLE_PICK_0032_BLENDS = [0.0, 1.0, 0.0, 0.0, 0.0, 0.49257368626932035, 0.0]
 
 
-@pytest.mark.skipif(not MBM_TARBALL.is_file(), reason="MotionBenchMaker tarball not present")
+@needs_mbm
 def test_a_cover_bound_touching_the_margin_goes_to_coal_instead_of_splitting_forever():
     """On this path a sphere-cover bound tends to the margin from above at one point: every piece's middle proved
     less than its piece, so splitting on the cover went on down to 1e-9 rad and failed "unproven". A cover bound
     proving under 1/16 of its piece is measured by coal (the exact distance there is larger)."""
-    problems = iter_mbm_problems(MBM_TARBALL, sets=["table_pick"], limit_per_set=32, fixed_joints=PANDA_FINGERS_OPEN)
-    (problem,) = [p for p in problems if p.name == "table_pick/0032"]
+    problem = mbm_problem("table_pick/0032")
     planner = MotionPlanner.from_scene(mbm_panda(), problem.scene, PlannerConfig(collision_model="spheres"))
     cert = planner.certifier.certify_path(np.array(TABLE_PICK_0032_PATH), margin=0.01,
                                           corner_blends=np.array(TABLE_PICK_0032_BLENDS))  # fmt: skip

@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
+from conftest import mbm_problem, needs_mbm
 from ompl import base as ob
 from ompl import geometric as og
 
@@ -13,8 +14,7 @@ from maru_planner.collision import CollisionChecker
 from maru_planner.collision.checker import bisection_order
 from maru_planner.collision.sphere_kernels import scan_nb, unpack_robot, unpack_scene
 from maru_planner.collision.spheres import SphereCollisionChecker, verify_path
-from maru_planner.moveit_scene import PANDA_FINGERS_OPEN, iter_mbm_problems, mbm_panda
-from maru_planner.paths import benchmarks_dir
+from maru_planner.moveit_scene import mbm_panda
 from maru_planner.planning import PLANNERS, MotionPlanner, MotionRequest, PlannerConfig, PlanStatus
 from maru_planner.planning import rrtc_kernel as kernel
 from maru_planner.planning.compiled_rrtc import CompiledRRTConnect
@@ -284,10 +284,7 @@ def test_balancing_extends_the_smaller_tree_until_the_other_has_less_than_twice_
     assert kernel._next_extension(st, 1, balanced) == 0
 
 
-MBM_TARBALL = benchmarks_dir() / "motionbenchmaker" / "vamp_panda_problems.tar.bz2"
-
-
-@pytest.mark.skipif(not MBM_TARBALL.is_file(), reason="MotionBenchMaker tarball not present")
+@needs_mbm
 def test_certification_repairs_search_with_the_kernel_on_padded_spheres(monkeypatch):
     """cage/0073: the search's last edge into a goal ~13 mm from the bars passes closer than the 10 mm margin.
 
@@ -295,8 +292,7 @@ def test_certification_repairs_search_with_the_kernel_on_padded_spheres(monkeypa
     the exact checker spent the whole budget on that narrow approach and failed the request.
     """
     robot = mbm_panda()
-    (problem,) = [p for p in iter_mbm_problems(MBM_TARBALL, sets=["cage"], limit_per_set=73,
-                                               fixed_joints=PANDA_FINGERS_OPEN) if p.name == "cage/0073"]  # fmt: skip
+    problem = mbm_problem("cage/0073")
     config = PlannerConfig(collision_model="spheres", verify_resolution=0.025, safety_margin=0.01)
     planner = MotionPlanner.from_scene(robot, problem.scene, config)
     searches = []

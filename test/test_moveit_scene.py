@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import MBM_TARBALL, needs_mbm
 
 from maru_planner.collision import CollisionChecker
 from maru_planner.errors import InvalidRequest, InvalidScene
@@ -14,10 +15,7 @@ from maru_planner.moveit_scene import (
     request_from_moveit,
     scene_from_moveit,
 )
-from maru_planner.paths import benchmarks_dir
 from maru_planner.robot import load_example_robot
-
-TARBALL = benchmarks_dir() / "motionbenchmaker" / "vamp_panda_problems.tar.bz2"
 
 SCENE = """
 robot_state:
@@ -115,9 +113,9 @@ def test_request_without_joint_goal_is_rejected():
         request_from_moveit("/nonexistent/request.yaml")
 
 
-@pytest.mark.skipif(not TARBALL.is_file(), reason="MotionBenchMaker tarball not present")
+@needs_mbm
 def test_motionbenchmaker_problems_load_and_start_goal_are_free():
-    problems = list(iter_mbm_problems(TARBALL, sets=["box", "cage", "table_pick"], limit_per_set=2,
+    problems = list(iter_mbm_problems(MBM_TARBALL, sets=["box", "cage", "table_pick"], limit_per_set=2,
                                       fixed_joints=PANDA_FINGERS_OPEN))
     assert [p.name for p in problems] == ["box/0001", "box/0002", "cage/0001", "cage/0002",
                                          "table_pick/0001", "table_pick/0002"]

@@ -72,8 +72,7 @@ def _points_inside(geometry, placement: pin.SE3, rng: np.random.Generator, n: in
 
 
 def test_a_solid_proven_inside_the_balls_has_every_sampled_point_in_one():
-    """Soundness on random solids and balls: a proof is never wrong (2,000 points each); and the answer is
-    remembered by its inputs, for the next planner of the same robot."""
+    """Soundness on random solids and balls: a proof is never wrong (2,000 sampled points of each proven solid)."""
     rng = np.random.default_rng(7)
     proven = 0
     for i in range(150):
