@@ -700,6 +700,7 @@ class PathCertifier:
                         np.zeros(0), np.zeros(0), np.zeros(0), no)  # fmt: skip
         _volume_bounds_nb(np.zeros((1, n_geoms, 3)), none, none, *pair_arrays[:3], *pair_arrays[8:], self._radius,
                           np.zeros(0))  # fmt: skip  # clearance() calls it from Python
+        proves_too_little(0.0, 0.0)  # so does _refine
         path, rows = np.zeros((2, nq)), np.zeros(0)
         configs, config_of, half = _round_configs_nb(path, np.diff(path, axis=0), np.zeros((1, nq)), none, rows, rows)
         _finish_round_nb(configs, config_of, none, none, rows, rows, half, rows, rows, rows, rows, no, no, np.zeros(1),
