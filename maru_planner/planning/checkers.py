@@ -3,9 +3,9 @@
 ``make_checkers(robot, scene, model)`` is the one place that turns ``PlannerConfig.collision_model``
 into checkers (used by ``MotionPlanner.from_scene``, ``maru-plan``, ``planning_node`` and the benches):
 
+- "spheres" (the default): the batched :class:`~maru_planner.collision.SphereCollisionChecker` to plan on,
+  plus an exact checker on the same scene to re-check the final path (``docs/fast_collision.md``).
 - "exact": the pinocchio + coal :class:`~maru_planner.collision.CollisionChecker`; nothing to verify.
-- "spheres": the batched :class:`~maru_planner.collision.SphereCollisionChecker` to plan on, plus an
-  exact checker on the same scene to re-check the final path (``docs/fast_collision.md``).
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ import sys
 from dataclasses import dataclass
 
 from maru_planner.collision import CollisionChecker
-from maru_planner.planning.config import COLLISION_MODELS
+from maru_planner.planning.config import COLLISION_MODELS, PlannerConfig
 
 
 @dataclass(frozen=True)
@@ -25,8 +25,8 @@ class Checkers:
     exact: object | None
 
 
-def make_checkers(robot, scene=None, model: str = "exact") -> Checkers:
-    """Checkers for ``model`` ("exact" | "spheres") on ``scene`` (None = empty scene)."""
+def make_checkers(robot, scene=None, model: str = PlannerConfig.collision_model) -> Checkers:
+    """Checkers for ``model`` ("spheres" | "exact"; default: ``PlannerConfig``'s) on ``scene`` (None = empty scene)."""
     if model == "exact":
         return Checkers(CollisionChecker(robot, scene), None)
     if model == "spheres":
@@ -70,3 +70,8 @@ def is_sphere_checker(checker) -> bool:
 
 def collision_model_of(checker) -> str:
     return "spheres" if is_sphere_checker(checker) else "exact"
+
+
+def is_compiled_sphere_checker(checker) -> bool:
+    """True for a sphere checker with numba kernels: the compiled search and shortcuts can run on it."""
+    return is_sphere_checker(checker) and bool(checker.use_numba)

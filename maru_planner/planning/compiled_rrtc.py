@@ -46,7 +46,7 @@ from ompl import geometric as og
 from ompl import util as ou
 
 from maru_planner.params import ParamSpec
-from maru_planner.planning.checkers import is_sphere_checker
+from maru_planner.planning.checkers import is_compiled_sphere_checker
 from maru_planner.planning.planner_params import PlannerParams, stored_params
 from maru_planner.planning.space import EdgeChecker
 
@@ -120,8 +120,7 @@ class CompiledRRTConnect(ob.Planner):
     @property
     def compiled(self) -> bool:
         """Whether solve() runs the compiled kernel (a sphere checker) rather than the OMPL fallback."""
-        edges = self._edges
-        return edges is not None and is_sphere_checker(edges.checker) and edges.checker.use_numba
+        return self._edges is not None and is_compiled_sphere_checker(self._edges.checker)
 
     # --- hooks the MotionPlanner facade reads (maru_planner.planning.registry) ----------------
     def graph_size(self) -> tuple[int, int]:

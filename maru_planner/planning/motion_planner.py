@@ -40,6 +40,7 @@ from maru_planner.planning.cartesian import CartesianRequest, CartesianResult, c
 from maru_planner.planning.checkers import (
     collision_model_of,
     default_exact_checker,
+    is_compiled_sphere_checker,
     is_sphere_checker,
     make_checkers,
     padded_checker,
@@ -742,14 +743,20 @@ class MotionPlanner:
         if not getattr(req, "simplify", True) or len(raw) <= 2:
             return raw
         t_simp = time.monotonic()
-        rng = np.random.default_rng(seed)
         monitor = self._monitor
+        max_tries = self.config.simplify_max_tries
+        if is_compiled_sphere_checker(edges.checker):
+            # lazy: numba is loaded already (a sphere checker exists); exact-only callers never need it
+            from maru_planner.planning.compiled_shortcut import shortcut
 
-        def edge_valid(qa: np.ndarray, qb: np.ndarray) -> bool:
-            monitor.check()
-            return edges.edge_valid(qa, qb)
+            path = shortcut(raw, edges, seed, deadline, max_tries, monitor.check)
+        else:
 
-        path, _checks = postprocess.shortcut(raw, edge_valid, rng, deadline, self.config.simplify_max_tries)
+            def edge_valid(qa: np.ndarray, qb: np.ndarray) -> bool:
+                monitor.check()
+                return edges.edge_valid(qa, qb)
+
+            path, _checks = postprocess.shortcut(raw, edge_valid, np.random.default_rng(seed), deadline, max_tries)
         stats.simplify_time = time.monotonic() - t_simp
         return path
 

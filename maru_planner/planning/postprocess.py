@@ -66,8 +66,9 @@ def drop_collinear(path: np.ndarray, tol: float = 1e-9) -> np.ndarray:
 def shortcut(path: np.ndarray, edge_valid, rng: np.random.Generator, deadline: float, max_tries: int = 200):
     """Random shortcutting: join two random waypoints when the straight edge between them is free.
 
-    ``edge_valid(qa, qb)`` is the batched motion check. The direct start→goal edge is tried first.
-    Returns (path, edge checks made).
+    ``edge_valid(qa, qb)`` is the batched motion check. The direct start→goal edge is tried first. Stops after
+    ``max_tries`` failed tries in a row, at ``deadline``, or once every pair of the path has failed (a pair that
+    failed is not checked again: its edge is the same). Returns (path, edge checks made).
     """
     path = drop_collinear(np.asarray(path, float))
     checks = 0
@@ -75,19 +76,32 @@ def shortcut(path: np.ndarray, edge_valid, rng: np.random.Generator, deadline: f
         checks += 1
         if edge_valid(path[0], path[-1]):
             return path[[0, -1]], checks
+    live = list(range(len(path)))  # the kept waypoints, as indices into path
+    failed = {(0, len(path) - 1)}
+    untried = _untried_pairs(live, failed)
     failures = 0
-    while len(path) > 2 and failures < max_tries and time.monotonic() < deadline:
-        i, j = sorted(rng.choice(len(path), size=2, replace=False))
-        if j - i < 2:
+    while untried and failures < max_tries and time.monotonic() < deadline:
+        i, j = sorted(rng.choice(len(live), size=2, replace=False))
+        pair = (live[i], live[j])
+        if j - i < 2 or pair in failed:
             failures += 1
             continue
         checks += 1
-        if edge_valid(path[i], path[j]):
-            path = np.vstack([path[: i + 1], path[j:]])
+        if edge_valid(path[pair[0]], path[pair[1]]):
+            live = live[: i + 1] + live[j:]
+            untried = _untried_pairs(live, failed)
             failures = 0
         else:
+            failed.add(pair)
+            untried -= 1
             failures += 1
-    return drop_collinear(path), checks
+    return drop_collinear(path[live]), checks
+
+
+def _untried_pairs(live: list[int], failed: set[tuple[int, int]]) -> int:
+    """Pairs of the path ``live`` that skip a waypoint and have not failed."""
+    m = len(live)
+    return sum((live[i], live[j]) not in failed for i in range(m) for j in range(i + 2, m))
 
 
 def _segment_profile(delta: np.ndarray, vmax: np.ndarray, amax: np.ndarray):

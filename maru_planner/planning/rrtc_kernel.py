@@ -92,7 +92,7 @@ def seed_rng(seed: int) -> np.ndarray:
 
 
 @njit(cache=True, inline="always")
-def _uniform(rng):
+def uniform(rng):
     """splitmix64 step → float in [0, 1)."""
     rng[0] += np.uint64(0x9E3779B97F4A7C15)
     z = rng[0]
@@ -401,16 +401,17 @@ def check_edge(
     """
     robot, scene = unpack_robot(ri, rf), unpack_scene(sf)
     order, queue = edge_buffers(1)
-    return _check_edge(qa, qb, resolution, base, indices, robot, scene, work_arrays(robot, scene), order, queue,
+    return edge_status(qa, qb, resolution, base, indices, robot, scene, work_arrays(robot, scene), order, queue,
                        np.empty(base.shape[0]), ri, rf, sf, grid_i, grid_f, amb, mark, confirm, amb_states, st, roots,
                        exact_near)  # fmt: skip
 
 
 @njit(cache=True)
-def _check_edge(qa, qb, resolution, base, indices, robot, scene, work, order, queue, q, ri, rf, sf, grid_i, grid_f,
+def edge_status(qa, qb, resolution, base, indices, robot, scene, work, order, queue, q, ri, rf, sf, grid_i, grid_f,
                 amb, mark, confirm, amb_states, st, roots, exact_near):  # fmt: skip
-    """:func:`check_edge` on the robot and scene unpacked once per :func:`run` call, its :func:`work_arrays`, edge
-    buffers (:func:`edge_buffers`; larger ones are made for a longer edge) and a configuration buffer ``q``.
+    """:func:`check_edge` on the robot and scene its caller unpacked once (:func:`run`, the shortcut kernel of
+    :mod:`~maru_planner.planning.compiled_shortcut`), their :func:`work_arrays`, edge buffers (:func:`edge_buffers`;
+    larger ones are made for a longer edge) and a configuration buffer ``q``.
 
     Without a grid each state is made when its turn comes: most edges of a search end at their first states.
     """
@@ -507,7 +508,7 @@ def _propose(nodes, radius, st, q_new, lower, upper, rng, max_range):
     if phase == EXTEND:
         sample = np.empty(lower.shape[0])
         for a in range(lower.shape[0]):
-            sample[a] = lower[a] + _uniform(rng) * (upper[a] - lower[a])
+            sample[a] = lower[a] + uniform(rng) * (upper[a] - lower[a])
         nearest, distance = _nearest_with_distance(nodes[tree], st[N0 + tree], sample)
         if distance > radius[tree, nearest]:
             return False
@@ -600,7 +601,7 @@ def run(nodes, parent, radius, verdict, max_edges, st, q_new, amb_states, tuning
             st[TREE] = _next_extension(st, st[TREE], tuning)
             continue
         tree = st[TREE]
-        status = _check_edge(nodes[tree, st[FROM]], q_new, resolution, base, indices, robot, scene, work, order,
+        status = edge_status(nodes[tree, st[FROM]], q_new, resolution, base, indices, robot, scene, work, order,
                              queue, q, ri, rf, sf, grid_i, grid_f, amb, mark, confirm, amb_states, st, nodes[:, 0],
                              exact_near)  # fmt: skip
         if status == AMBIGUOUS:

@@ -6,7 +6,7 @@ still spends ~0.2 s loading it in its first plan. :func:`warm_up` pays either on
 by planning two short motions of the robot's largest group: one in a scene of one box, one in a scene of more
 boxes than the checkers' large-scene paths start at (the grid of the sphere checker, certification's near-path
 pair tables), on the checker, certification and time parameterisation of the config, with OMPL's RRT-Connect and
-(on a sphere checker) the compiled kernel.
+(on a sphere checker) the compiled kernel and the compiled shortcut.
 
 ``planning_node`` warms up at configure (its in-process planners and each worker process before it reports
 ready); ``make setup`` runs ``python -m maru_planner.planning.warm_up`` after a source change, so the disk cache is
@@ -26,9 +26,10 @@ import numpy as np
 
 from maru_planner import errors
 from maru_planner.collision.broadphase import robot_reach
-from maru_planner.planning.checkers import is_sphere_checker
+from maru_planner.planning.checkers import is_compiled_sphere_checker, is_sphere_checker
 from maru_planner.planning.config import COLLISION_MODELS, PlannerConfig
 from maru_planner.planning.motion_planner import MotionPlanner
+from maru_planner.planning.space import EdgeChecker, GroupSpace
 from maru_planner.planning.types import MotionRequest
 from maru_planner.robot import RobotModel
 from maru_planner.scene import Obstacle, Scene
@@ -94,7 +95,26 @@ def _plan_short_motions(robot: RobotModel, config: PlannerConfig) -> tuple[tuple
             request = MotionRequest(group, start=start, goal_joints=goal, planner_id=planner_id, time_budget=BUDGET,
                                     seed=SEED)  # fmt: skip
             plans.append((planner_id, scene_name, planner.plan(request).status.value))
+        _shortcut_bent_path(planner, group, start, goal)
     return tuple(plans)
+
+
+def _shortcut_bent_path(planner: MotionPlanner, group: str, start: dict[str, float], goal: dict[str, float]) -> None:
+    """On a compiled sphere checker, the compiled shortcut of start → a point off the line → goal: the warm-up plans'
+    straight motions leave nothing to shortcut."""
+    if not is_compiled_sphere_checker(planner.checker):
+        return
+    from maru_planner.planning.compiled_shortcut import shortcut  # lazy: numba, loaded with the sphere checker
+
+    robot = planner.robot
+    indices = sorted(robot.group_joint_indices(group))
+    names = [robot.joint_names[i] for i in indices]
+    lower, upper = robot.lower_limits[indices], robot.upper_limits[indices]
+    base = np.array([start[name] for name in robot.joint_names])
+    a, b = base[indices], np.array([goal[name] for name in names])
+    path = np.array([a, np.clip(0.5 * (a + b) + 0.5 * EDGE_STEP, lower, upper), b])
+    edges = EdgeChecker(GroupSpace(names, indices, lower, upper, base), planner.checker, planner.config.resolution)
+    shortcut(path, edges, SEED, time.monotonic() + BUDGET, 1)
 
 
 def _planner_ids(planner: MotionPlanner) -> list[str]:
