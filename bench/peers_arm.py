@@ -9,6 +9,9 @@ Solvers, all RRT-Connect, on the same problems in one run:
   certifies the path on the exact pinocchio/coal model and repairs or re-plans what fails.
   Time = the whole ``MotionPlanner.plan`` call (validation, search, time parameterisation, certification).
 - ours-compiled: the same, planner "CompiledRRTConnect" (the RRT-Connect loop in one numba kernel).
+- ours-default: what a user gets without settings: ``PlannerConfig()`` and a request naming only the group, start,
+  goal, budget and seed (the default planner and collision model, motion resolution 0.02 rad, shortcut
+  simplification on). Its trajectories are the shortest to execute; the table gives their median duration.
 - naive OMPL: ``ompl.geometric.RRTConnect`` through ``SimpleSetup`` with OMPL's defaults, the state validity
   checker a plain Python function calling ``pinocchio.computeCollisions`` on the mesh model per state.
 - pyroboplan: ``RRTPlanner`` with ``rrt_connect=True, bidirectional_rrt=True`` (its RRT-Connect), default step.
@@ -44,7 +47,9 @@ TARBALL = benchmarks_dir() / "motionbenchmaker" / "vamp_panda_problems.tar.bz2"
 PANDA_ARM = [f"panda_joint{i}" for i in range(1, 8)]
 NAIVE_RES = "naive OMPL, our resolution"
 COMPILED = "ours-compiled"
-SOLVERS = ("ours", COMPILED, "naive OMPL", NAIVE_RES, "pyroboplan")
+DEFAULT = "ours-default"
+OURS = ("ours", COMPILED, DEFAULT)
+SOLVERS = (*OURS, "naive OMPL", NAIVE_RES, "pyroboplan")
 VAMP_PUBLISHED = {
     "source": "VAMP README / Thomason et al., ICRA 2024 (RRT-Connect, SIMD sphere checks, one desktop core)",
     "mbm_panda_median_s": 35e-6,
@@ -91,21 +96,36 @@ class Ours:
         config = PlannerConfig(resolution=resolution, collision_model="spheres", verify_resolution=0.5 * resolution,
                                safety_margin=margin)  # fmt: skip
         self.planner = MotionPlanner.from_scene(robot, None, config)
-        self.fast = self.planner.checker
         self.planner_id, self.name = planner_id, name
+
+    def request(self, case: Case, budget: float, seed: int) -> MotionRequest:
+        return MotionRequest(case.group, start=case.start, goal_joints=case.goal, planner_id=self.planner_id,
+                             time_budget=budget, seed=seed, simplify=False)  # fmt: skip
 
     def solve(self, case: Case, budget: float, seed: int) -> dict:
         self.planner.set_scene(case.scene)
-        self.fast.exact_pair_checks = 0
-        req = MotionRequest(case.group, start=case.start, goal_joints=case.goal, planner_id=self.planner_id,
-                            time_budget=budget, seed=seed, simplify=False)
-        res = self.planner.plan(req)
+        checker = self.planner.checker
+        if hasattr(checker, "exact_pair_checks"):
+            checker.exact_pair_checks = 0
+        res = self.planner.plan(self.request(case, budget, seed))
         st = res.stats
         verify_time = st.certify_time if st.certified else st.verify_time  # a certified plan reports it in both
         return {"success": res.success, "time": st.total_time, "status": res.status.value,
                 "fallback": st.replans + st.repairs > 0, "verify_time": verify_time,
                 "plan_time": st.total_time - verify_time, "checks": st.collision_checks,
-                "exact_pair_checks": self.fast.exact_pair_checks}
+                "exact_pair_checks": getattr(checker, "exact_pair_checks", 0),
+                "trajectory_s": res.trajectory.duration if res.success else None}
+
+
+class OursDefault(Ours):
+    """``PlannerConfig()`` and a request with nothing but the problem, budget and seed (module doc)."""
+
+    def __init__(self, robot):
+        self.planner = MotionPlanner.from_scene(robot, None, PlannerConfig())
+        self.planner_id, self.name = "", DEFAULT
+
+    def request(self, case: Case, budget: float, seed: int) -> MotionRequest:
+        return MotionRequest(case.group, start=case.start, goal_joints=case.goal, time_budget=budget, seed=seed)
 
 
 def peer_geometry(robot, scene, locked: dict | None):
@@ -241,10 +261,16 @@ def summarise(runs: list[dict], budget: float) -> dict:
         **({"median_verify_s": float(np.median([r.get("verify_time", 0.0) for r in runs])),
             "median_plan_s": float(np.median([r.get("plan_time", r["time"]) for r in runs])),
             "fallbacks": int(sum(r.get("fallback", False) for r in runs)),
-            "median_exact_pair_checks": float(np.median([r.get("exact_pair_checks", 0) for r in runs]))}
+            "median_exact_pair_checks": float(np.median([r.get("exact_pair_checks", 0) for r in runs])),
+            "median_trajectory_s": _median_of(r.get("trajectory_s") for r in runs)}
            if runs and "verify_time" in runs[0] else {}),
         "failures": sorted({f"{r['problem']}: {r['status']}" for r in runs if not r["success"]})[:40],
     }
+
+
+def _median_of(values) -> float | None:
+    kept = [v for v in values if v is not None]
+    return float(np.median(kept)) if kept else None
 
 
 def run(solver, cases, budget, seeds, label) -> list[dict]:
@@ -313,15 +339,16 @@ def main(argv=None) -> int:
     results: dict = {"config": vars(args) | {"out": str(args.out)}, "vamp_published": VAMP_PUBLISHED, "runs": {}}
     solvers = {
         "maru13": (Ours(maru, step, margin), Ours(maru, step, margin, "CompiledRRTConnect", COMPILED),
-                   NaiveOmpl(None), NaiveOmpl(None, args.resolution), Pyroboplan(None)),
+                   OursDefault(maru), NaiveOmpl(None), NaiveOmpl(None, args.resolution), Pyroboplan(None)),
         "mbm": (Ours(panda, step, margin), Ours(panda, step, margin, "CompiledRRTConnect", COMPILED),
-                NaiveOmpl(PANDA_FINGERS_OPEN), NaiveOmpl(PANDA_FINGERS_OPEN, args.resolution),
+                OursDefault(panda), NaiveOmpl(PANDA_FINGERS_OPEN), NaiveOmpl(PANDA_FINGERS_OPEN, args.resolution),
                 Pyroboplan(PANDA_FINGERS_OPEN)),
     }
     for family, cases, seeds in (("maru13", maru_cases, maru_seeds), ("mbm", panda_cases, [0])):
-        ours, compiled, naive, naive_res, pyro = solvers[family]
+        ours, compiled, default, naive, naive_res, pyro = solvers[family]
         subset = cases if family == "maru13" else [c for c in cases if c.name in pyro_names]
         plan = {"ours": (ours, cases, args.budget, seeds), COMPILED: (compiled, cases, args.budget, seeds),
+                DEFAULT: (default, cases, args.budget, seeds),
                 "naive OMPL": (naive, cases, args.peer_budget, seeds),
                 NAIVE_RES: (naive_res, subset, args.peer_budget, seeds),
                 "pyroboplan": (pyro, subset, args.peer_budget, seeds[:3] if family == "maru13" else seeds)}
@@ -404,19 +431,23 @@ def markdown(summary, args) -> str:
         f"Our motion resolution {args.resolution:g} rad (L-inf); naive OMPL uses OMPL's default (1 % of the space "
         "extent, L2); pyroboplan its default 0.05 rad step.",
         f"Ours: every path certified on the exact model with a {args.safety_margin:g} m safety margin and "
-        "time-parameterised (toppra); peers: discrete checks only, no margin, no timing.",
+        "time-parameterised (toppra); peers: discrete checks only, no margin, no timing. ours-default: "
+        "`PlannerConfig()` and a request with only the problem (motion resolution 0.02 rad, 0.01 m margin, "
+        "shortcut simplification).",
         "",
-        "| problems | solver | n | success | median ms | p95 ms | mean ms |",
-        "|---|---|---|---|---|---|---|",
+        "| problems | solver | n | success | median ms | p95 ms | mean ms | median trajectory s |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     for family in ("maru13", "mbm"):
         for name in SOLVERS:
             s = summary[family][name]
             if not s.get("n"):
                 continue
+            trajectory = s.get("median_trajectory_s")
             lines.append(f"| {family} | {name} | {s['n']} | {100 * s['success_rate']:.1f} % | {_ms(s['median_s'])} | "
-                         f"{_ms(s['p95_s'])} | {_ms(s['mean_s'])} |")
-    lines.append(f"| mbm | VAMP (published) | 700 | — | {1e3 * VAMP_PUBLISHED['mbm_panda_median_s']:.3f} | — | — |")
+                         f"{_ms(s['p95_s'])} | {_ms(s['mean_s'])} | "
+                         f"{'—' if trajectory is None else f'{trajectory:.2f}'} |")
+    lines.append(f"| mbm | VAMP (published) | 700 | — | {1e3 * VAMP_PUBLISHED['mbm_panda_median_s']:.3f} | — | — | — |")
     lines += ["", "| problems | naive/ours (median) | naive/ours (mean) | naive at our resolution/ours (median, "
               "subset) | pyroboplan/ours (median, subset) |", "|---|---|---|---|---|"]
     for family in ("maru13", "mbm"):
@@ -428,7 +459,7 @@ def markdown(summary, args) -> str:
               f"Re-plans at a finer resolution after a failed verification: maru13 {summary['maru13']['fallbacks']}, "
               f"mbm {summary['mbm']['fallbacks']}.", ""]
     for family in ("maru13", "mbm"):
-        for name in ("ours", COMPILED):
+        for name in OURS:
             o = summary[family][name]
             if not o.get("n"):
                 continue
@@ -452,7 +483,8 @@ def plot(results, path: Path, args) -> None:
 
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
     for ax, family in zip(axes, ("maru13", "mbm")):
-        for name, color in (("ours", "tab:green"), (COMPILED, "tab:olive"), ("naive OMPL", "tab:blue"),
+        for name, color in (("ours", "tab:green"), (COMPILED, "tab:olive"), (DEFAULT, "tab:purple"),
+                            ("naive OMPL", "tab:blue"),
                             (NAIVE_RES, "tab:cyan"), ("pyroboplan", "tab:red")):
             runs = results["runs"][family][name]
             if not runs:
