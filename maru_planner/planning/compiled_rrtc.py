@@ -87,9 +87,9 @@ COMPILED_RRTC_PARAMS: dict[str, ParamSpec] = {
 }
 
 _CAPACITY = 1024  # initial nodes per tree; doubled when full
-_FIRST_EDGES = 32  # edges of the first kernel call; later calls are sized to last about _CALL_SECONDS
+FIRST_EDGES = 32  # edges of the first kernel call; later calls are sized to last about CALL_SECONDS
 _MAX_EDGES = 4096
-_CALL_SECONDS = 0.002  # between two evaluations of the termination condition
+CALL_SECONDS = 0.002  # between two evaluations of the termination condition
 
 
 class CompiledRRTConnect(ob.Planner):
@@ -191,7 +191,7 @@ class CompiledRRTConnect(ob.Planner):
         amb_states = np.empty((int(np.ceil((gs.upper - gs.lower).max() / edges.resolution)) + 2, len(start)))
         fixed = (st, np.empty(len(start)), amb_states, self._tuning(kernel), *self._search_args(kernel, edges),
                  *checker.kernel_inputs(), checker.confirm, self._exact_near())  # fmt: skip
-        verdict, batch = False, _FIRST_EDGES
+        verdict, batch = False, FIRST_EDGES
         while True:
             t_call = time.perf_counter()
             code = kernel.run(nodes, parent, radius, verdict, batch, *fixed)
@@ -204,7 +204,7 @@ class CompiledRRTConnect(ob.Planner):
             elif code == kernel.FULL:
                 nodes, parent, radius = kernel.grow(nodes, parent, radius)
                 self._trees = (nodes, parent, st)
-            batch = _next_batch(batch, time.perf_counter() - t_call)
+            batch = next_batch(batch, time.perf_counter() - t_call)
             if ptc():
                 return None
 
@@ -245,9 +245,10 @@ class CompiledRRTConnect(ob.Planner):
         return state
 
 
-def _next_batch(batch: int, seconds: float) -> int:
-    """Edges for the next kernel call, so that it lasts about _CALL_SECONDS (at most doubling)."""
-    target = batch * _CALL_SECONDS / max(seconds, 1e-6)
+def next_batch(batch: int, seconds: float) -> int:
+    """Edges for the next kernel call after one of ``batch`` edges took ``seconds``, so that it lasts about
+    :data:`CALL_SECONDS` (at most doubling)."""
+    target = batch * CALL_SECONDS / max(seconds, 1e-6)
     return int(min(max(target, 1), 2 * batch, _MAX_EDGES))
 
 

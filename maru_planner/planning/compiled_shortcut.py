@@ -9,8 +9,9 @@ bisection order, on the sphere model), so a try costs microseconds instead of a 
 checker. States the spheres leave ambiguous go back to the checker's exact confirmation, as in the
 search: every answer is the checker's own (``EdgeChecker.edge_valid``'s).
 
-The kernel is resumable (:func:`run`): it returns every ``max_edges`` tries, so the caller can look at
-its deadline and the plan's cancel, and when an edge needs the exact model (:data:`NEED_EXACT`).
+The kernel is resumable (:func:`run`): it returns every ``max_edges`` tries (sized so that a call lasts about 2 ms,
+as the search's), so the caller can look at its deadline and the plan's cancel, and when an edge needs the exact
+model (:data:`NEED_EXACT`).
 Deterministic: same path, seed and scene, same result.
 """
 
@@ -24,11 +25,12 @@ import numpy as np
 from numba import njit
 
 from maru_planner.planning import rrtc_kernel as kernel
+from maru_planner.planning.compiled_rrtc import next_batch
 from maru_planner.planning.postprocess import drop_collinear
 from maru_planner.planning.space import EdgeChecker
 
 DONE, RUNNING, NEED_EXACT = 0, 1, 2  # what run() returns
-BATCH = 32  # tries between two looks at the deadline and the cancel
+FIRST_TRIES = 8  # tries of the first kernel call; later calls are sized to last about compiled_rrtc.CALL_SECONDS
 
 #: Fields of the int64 shortcut state ``sc`` (index = position).
 STATE_FIELDS = ("live", "failures", "first", "last", "pending", "direct_tried", "untried")
@@ -55,11 +57,13 @@ def shortcut(path: np.ndarray, edges: EdgeChecker, seed: int, deadline: float, m
     amb_states = np.empty((longest, gs.dim))
     fixed = (max_tries, sc, failed, edge_st, amb_states, kernel.seed_rng(int(seed)), edges.resolution, gs.base,
              gs.indices.astype(np.int64), *checker.kernel_inputs(), checker.confirm)  # fmt: skip
-    verdict = False
+    verdict, batch = False, FIRST_TRIES
     while True:
         if check is not None:
             check()
-        code = run(path, live, verdict, BATCH, *fixed)
+        t_call = time.perf_counter()
+        code = run(path, live, verdict, batch, *fixed)
+        batch = next_batch(batch, time.perf_counter() - t_call)
         checker.check_count += int(edge_st[kernel.CHECKS])
         edge_st[kernel.CHECKS] = 0
         if code == DONE:
