@@ -9,7 +9,8 @@ a sphere plan at ``verify_step``):
 
 - ``paper``: the 6-DOF and 13-DOF problems of paper 000 (``planning/problems.py``), every registered
   planner, ``--seeds`` seeds;
-- ``mbm``: the 700 MotionBenchMaker Panda problems (RRTConnect, seed 0).
+- ``mbm``: the 700 MotionBenchMaker Panda problems (the default planner, ``PlannerConfig().default_planner``:
+  CompiledRRTConnect, OMPL's RRTConnect on the exact checker; seed 0).
 
 Each collision model of ``--models`` plans every suite. Every returned motion (the trajectory's samples joined
 by straight lines; the path for a plan without one) is re-checked independently on a fresh exact checker at
@@ -219,7 +220,8 @@ def markdown(summary: dict, args) -> str:
         f"re-check of every returned path at {args.fine} rad on a fresh exact checker. Certified: "
         "`PlannerConfig.certify` (proof on the exact model, local repair); baseline: discrete checks only. "
         "Times are medians over successful runs; the certify columns of a baseline are its exact re-check "
-        "(spheres: discrete at `verify_step`; exact: none).",
+        "(spheres: discrete at `verify_step`; exact: none). Paper suite: every registered planner; MotionBenchMaker: "
+        f"the default planner ({PlannerConfig().default_planner}; OMPL's RRTConnect on the exact checker).",
         "",
         "| suite | model | problems | mode | success | colliding paths | median plan ms | median certify ms "
         "| p95 certify ms | certify share | adds to baseline | min clearance mm | repairs (runs) |",
@@ -304,7 +306,7 @@ def main(argv: list[str] | None = None) -> int:
     if "paper" in args.suites:
         suites["paper"] = (paper_cases(RobotModel.maru1()), [(p, s) for p in planner_ids() for s in range(seeds)])
     if "mbm" in args.suites:
-        suites["mbm"] = (mbm(mbm_panda(), per_set), [("RRTConnect", 0)])
+        suites["mbm"] = (mbm(mbm_panda(), per_set), [(PlannerConfig().default_planner, 0)])
     total = sum(len(cases) * len(jobs) for cases, jobs in suites.values()) * len(args.models)
     log(f"{total} problem x planner x seed x model runs, each planned certified and baseline")
     results: dict = {"config": {k: (str(v) if isinstance(v, Path) else v) for k, v in vars(args).items()},
