@@ -10,7 +10,8 @@ from maru_planner import errors
 from maru_planner.collision import CollisionChecker
 from maru_planner.collision.certify import PathCertifier
 from maru_planner.collision.spheres import SphereCollisionChecker
-from maru_planner.planning import MotionPlanner, MotionRequest, PlanStatus
+from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig, PlanStatus
+from maru_planner.planning.config import COLLISION_MODELS
 from maru_planner.robot import RobotModel
 from maru_planner.scene import Obstacle, Scene
 from maru_planner.scene_attached import robot_with_attached
@@ -80,9 +81,10 @@ def test_attached_object_collides_with_the_robot_unless_a_touch_link(robot):
     assert not any("rod" in pair for pair in pairs)
 
 
-def test_certifier_and_planner_see_the_attached_object(robot):
+@pytest.mark.parametrize("model", COLLISION_MODELS)
+def test_certifier_and_planner_see_the_attached_object(robot, model):
     scene, hand = _scene_with_bar(robot)
-    planner = MotionPlanner.from_scene(robot, scene)
+    planner = MotionPlanner.from_scene(robot, scene, PlannerConfig(collision_model=model))
     start = dict(zip(robot.joint_names, Q.tolist(), strict=True))
     # an obstacle where the bar is (not the hand): the start collides only because of the bar
     scene.add(Obstacle("post", "sphere", radius=0.03, pose=_offset(hand, 0.3)[:3, 3]))

@@ -25,6 +25,7 @@ from maru_planner.collision.spheres import densify, verify_path
 from maru_planner.moveit_scene import mbm_panda
 from maru_planner.paths import config_path
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig, PlanStatus
+from maru_planner.planning.config import COLLISION_MODELS
 from maru_planner.planning.types import PlanStats
 from maru_planner.robot import RobotModel, load_example_robot
 from maru_planner.scene import Obstacle, Scene
@@ -287,7 +288,8 @@ def test_a_repair_never_starts_at_a_waypoint_touching_an_obstacle(arm):
     assert np.array_equal(qa, path[0]) and np.array_equal(qb, path[2])
 
 
-def test_a_margin_0_repair_is_searched_padded(arm, monkeypatch):
+@pytest.mark.parametrize("model", COLLISION_MODELS)
+def test_a_margin_0_repair_is_searched_padded(arm, monkeypatch, model):
     """Twice a margin of 0 is 0: a repair's search is padded by up to MIN_REPAIR_PADDING, half-way to its anchors'
     clearance, so that its edges (checked at states) do not graze what certification just rejected."""
     from maru_planner.planning import motion_planner
@@ -303,9 +305,11 @@ def test_a_margin_0_repair_is_searched_padded(arm, monkeypatch):
     scene = Scene([Obstacle("plate", "box", size=(0.04, 0.002, 0.05), pose=[REACH + 0.01, 0.0, 0.0])])
     request = MotionRequest("all", start={"j1": -0.3, "j2": 0.0}, goal_joints={"j1": 0.4, "j2": 0.0},
                             planner_id="RRTConnect", time_budget=10.0, seed=1)  # fmt: skip
-    planner = MotionPlanner.from_scene(arm, scene, PlannerConfig(resolution=0.7, safety_margin=0.0))
+    planner = MotionPlanner.from_scene(arm, scene, PlannerConfig(resolution=0.7, safety_margin=0.0,
+                                                                 collision_model=model))  # fmt: skip
     result = planner.plan(request)
     assert result.success and result.stats.certified and result.stats.repairs >= 1, result.message
+    assert result.stats.collision_model == model
     assert paddings and all(0.0 < p <= motion_planner.REPAIR_MIN_PADDING for p in paddings)
 
 
@@ -324,10 +328,11 @@ def test_an_end_closer_than_the_margin_lowers_it_to_half_its_clearance(arm):
     assert repaired.certificate.margin == pytest.approx(0.002, abs=1e-5)
 
 
-def test_motion_planner_returns_only_certified_paths(arm):
+@pytest.mark.parametrize("model", COLLISION_MODELS)
+def test_motion_planner_returns_only_certified_paths(arm, model):
     # At a 0.7 rad motion step the search checks the goal alone and steps over the plate.
     scene = Scene([Obstacle("plate", "box", size=(0.04, 0.002, 0.05), pose=[REACH + 0.01, 0.0, 0.0])])
-    config = PlannerConfig(resolution=0.7, safety_margin=0.005)
+    config = PlannerConfig(resolution=0.7, safety_margin=0.005, collision_model=model)
     request = MotionRequest("all", start={"j1": -0.3, "j2": 0.0}, goal_joints={"j1": 0.4, "j2": 0.0},
                             planner_id="RRTConnect", time_budget=10.0, seed=1)  # fmt: skip
     uncertified = MotionPlanner.from_scene(arm, scene, dataclasses.replace(config, certify=False)).plan(request)
@@ -341,13 +346,14 @@ def test_motion_planner_returns_only_certified_paths(arm):
     assert result.to_json_dict()["stats"]["certified"]
 
 
-def test_motion_planner_searches_with_the_margin(arm):
+@pytest.mark.parametrize("model", COLLISION_MODELS)
+def test_motion_planner_searches_with_the_margin(arm, model):
     # The tip sweeps past the plate 5 mm away: free, but closer than the 10 mm margin.
     plate = Obstacle("plate", "box", size=(0.04, 0.002, 0.05), pose=[REACH + TIP_RADIUS + 0.005 + 0.02, 0.0, 0.0])
     scene = Scene([plate])
     request = MotionRequest("all", start={"j1": -0.3, "j2": 0.0}, goal_joints={"j1": 0.3, "j2": 0.0},
                             planner_id="RRTConnect", time_budget=10.0, seed=1)  # fmt: skip
-    config = PlannerConfig(safety_margin=0.01)
+    config = PlannerConfig(safety_margin=0.01, collision_model=model)
     uncertified = MotionPlanner.from_scene(arm, scene, dataclasses.replace(config, certify=False)).plan(request)
     assert uncertified.success and len(uncertified.path) == 2  # the search alone takes the straight sweep
     result = MotionPlanner.from_scene(arm, scene, config).plan(request)

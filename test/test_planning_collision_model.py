@@ -85,11 +85,27 @@ def test_a_planner_given_a_sphere_checker_verifies_by_itself(maru, maru13):
 
 def test_exact_model_plans_are_not_reverified(maru, maru13):
     scene, start, goal = maru13
-    planner = MotionPlanner.from_scene(maru, scene)
-    assert planner.exact_checker is None
+    planner = MotionPlanner.from_scene(maru, scene, PlannerConfig(collision_model="exact"))
+    assert isinstance(planner.checker, CollisionChecker) and planner.exact_checker is None
     res = planner.plan(MotionRequest("upper_body", start=start, goal_joints=goal, time_budget=20.0, seed=1))
     assert res.success and res.stats.collision_model == "exact"
+    assert res.stats.planner_id == "CompiledRRTConnect"  # the default id, run as OMPL's RRTConnect on this checker
     assert not res.stats.verified and res.verification is None and res.stats.verify_time == 0
+    assert res.stats.certified
+
+
+def test_the_default_is_compiled_rrtc_on_spheres_verified_on_the_exact_model(maru, maru13):
+    config = PlannerConfig()
+    assert (config.collision_model, config.default_planner) == ("spheres", "CompiledRRTConnect")
+    scene, start, goal = maru13
+    assert isinstance(make_checkers(maru, scene).checker, SphereCollisionChecker)
+    planner = MotionPlanner.from_scene(maru, scene)
+    assert isinstance(planner.checker, SphereCollisionChecker) and isinstance(planner.exact_checker, CollisionChecker)
+    res = planner.plan(MotionRequest("upper_body", start=start, goal_joints=goal, time_budget=20.0, seed=1))
+    assert res.success, res.message
+    assert (res.stats.planner_id, res.stats.collision_model) == ("CompiledRRTConnect", "spheres")
+    assert res.stats.verified and res.stats.certified
+    assert verify_path(CollisionChecker(maru, scene), full_path(maru, start, res.joint_names, res.path), FINE).valid
 
 
 def test_cli_plans_maru13_on_spheres(maru, maru13, tmp_path):
@@ -102,6 +118,16 @@ def test_cli_plans_maru13_on_spheres(maru, maru13, tmp_path):
     scene, start, _goal = maru13
     path = full_path(maru, start, data["joint_names"], data["path"])
     assert verify_path(CollisionChecker(maru, scene), path, FINE).valid
+
+
+def test_cli_defaults_to_compiled_rrtc_on_spheres_and_plans_on_the_exact_model_when_asked(tmp_path):
+    for extra, expected in (([], ("CompiledRRTConnect", "spheres")),
+                            (["--collision-model", "exact", "--planner", "RRTConnect"], ("RRTConnect", "exact"))):
+        out = tmp_path / "plan.json"
+        assert main(["--problem", "maru13", "--seed", "2", "--time", "20", "--json", str(out), "--quiet", *extra]) == 0
+        stats = json.loads(out.read_text())["stats"]
+        assert (stats["planner_id"], stats["collision_model"]) == expected
+        assert stats["certified"] and stats["verified"] == (expected[1] == "spheres")
 
 
 def test_cli_rejects_an_unknown_collision_model(capsys):

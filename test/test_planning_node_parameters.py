@@ -262,9 +262,13 @@ def test_a_planner_parameter_change_shows_in_the_next_plan(params, client):
 
 
 def test_collision_model_change_rebuilds_the_planning_contexts(params, client, arm_node):
-    with changed(params, collision_model="spheres"):
+    assert params.get("collision_model") == "spheres"  # the default (config/planner.yaml)
+    logged = len(arm_node.log())
+    with changed(params, collision_model="exact"):
         _assert_success(client.plan(_goal(0.2), start=PAPER_START, time_budget=10.0, seed=3))
-    assert "planning contexts rebuilt" in arm_node.log() and "on spheres" in arm_node.log()
+    log = arm_node.log()[logged:]
+    assert "collision_model='exact' (planning contexts rebuilt" in log, log
+    assert "CompiledRRTConnect on exact" in log, log  # the default planner id, run as OMPL's RRTConnect there
 
 
 def test_a_full_queue_answers_busy_after_workers_and_queue_size_change(params, client, tester):

@@ -38,8 +38,12 @@ def test_warm_up_scenes_reach_the_large_scene_paths(maru1):
 
     scene = warm._boxes(maru1, warm.MANY_BOXES)
     assert len(scene.obstacles) == warm.MANY_BOXES >= max(NEAR_PATH_MIN_OBSTACLES, GRID_MIN_OBSTACLES)
-    planner = warm.MotionPlanner.from_scene(maru1, scene, PlannerConfig())
-    assert len(planner.checker.reachable_obstacles) == warm.MANY_BOXES  # none dropped by the broad phase
+    planner = warm.MotionPlanner.from_scene(maru1, scene, PlannerConfig())  # the default: spheres, exact-verified
+    # none dropped by either checker's broad phase, and the sphere kernels look them up in their grid
+    assert len(planner.exact_checker.reachable_obstacles) == warm.MANY_BOXES
+    assert len(planner.checker.primitives.names) == warm.MANY_BOXES and planner.checker.uses_grid
+    exact = warm.MotionPlanner.from_scene(maru1, scene, PlannerConfig(collision_model="exact"))
+    assert len(exact.checker.reachable_obstacles) == warm.MANY_BOXES
 
 
 def test_a_failed_warm_up_is_reported_not_raised_and_retried_next_time(maru1, fresh_process, monkeypatch):

@@ -7,7 +7,7 @@ Examples::
         --start -0.9 -0.7 1.57 0.7 0.7 -0.9 -0.9 -0.8 1.57 2.0 0.7 -1.9 -1.25 \\
         --goal 0.9 -0.8 1.57 1.14 0.7 -1.24 -1.9 -0.7 1.57 2.44 0.7 -2.24 -1.25 --planner RRTConnect
     maru-plan --robot panda --group arm --start ... --goal ...     # example-robot-data robots
-    maru-plan --problem maru13 --collision-model spheres --seed 1  # fast sphere checker, exact-verified path
+    maru-plan --problem maru13 --collision-model exact --seed 1    # plan on pinocchio + coal instead of the spheres
     maru-plan --problem maru6 --planner RCRRT --param step=0.2     # a planner parameter
 
 ``--start``/``--goal`` values follow the group's joint order (``--list-groups`` prints it). The
@@ -124,7 +124,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--group", default=None, help="planning group (e.g. upper_body, right_arm)")
     p.add_argument("--start", type=float, nargs="+", help="start values in the group's joint order")
     p.add_argument("--goal", type=float, nargs="+", help="goal values in the group's joint order")
-    p.add_argument("--planner", default="RRTConnect", help=f"one of {', '.join(PLANNERS)} (see below)")
+    p.add_argument("--planner", default=PlannerConfig.default_planner,
+                   help=f"one of {', '.join(PLANNERS)} (see below); default: %(default)s")  # fmt: skip
     p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
                    help="a parameter of the chosen planner (repeatable; see below)")  # fmt: skip
     p.add_argument("--time", "--max-time", dest="time", type=_positive, default=5.0,
@@ -135,8 +136,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--collision-model",
         choices=COLLISION_MODELS,
-        default="exact",
-        help="exact: pinocchio + coal; spheres: batched sphere checker, the path then verified on the exact model",
+        default=PlannerConfig.collision_model,
+        help="spheres (default): batched sphere checker, near contacts decided and the path re-checked on the "
+        "exact model; exact: pinocchio + coal throughout",
     )
     p.add_argument("--safety-margin", type=_margin, default=PlannerConfig.safety_margin,
                    help="clearance (m) the certified path keeps from obstacles and link pairs (see "

@@ -19,10 +19,14 @@ class PlannerConfig:
     """Settings of :class:`~maru_planner.planning.MotionPlanner` (see each field's description).
 
     collision_model: the checker :func:`~maru_planner.planning.checkers.make_checkers` (and so
-    ``MotionPlanner.from_scene``, ``maru-plan``, ``planning_node``) builds: "exact" (pinocchio + coal
-    on the URDF's collision geometry) or "spheres" (the batched sphere checker; every path it plans
-    is re-checked on the exact model before it is returned). A planner given a checker directly
+    ``MotionPlanner.from_scene``, ``maru-plan``, ``planning_node``) builds: "spheres" (the default: the
+    batched sphere checker, whose near contacts are decided on the exact model, so each state gets the
+    exact model's answer; every path it plans is re-checked on the exact model before it is returned)
+    or "exact" (pinocchio + coal on the URDF's collision geometry). A planner given a checker directly
     plans on that checker; a sphere checker is always verified.
+
+    default_planner: "CompiledRRTConnect" (RRT-Connect in a numba kernel on the sphere model; on any
+    other checker it runs OMPL's RRTConnect instead, so it is a valid default for "exact" too).
 
     Out-of-range values raise InvalidRequest (a ValueError) naming the field.
     """
@@ -30,7 +34,11 @@ class PlannerConfig:
     resolution: float = param(
         0.02, "motion-check step: the largest joint move (rad) between two checked states", lower=1e-4, upper=3.0
     )
-    default_planner: str = param("RRTConnect", "planner id used when a request leaves planner_id empty")
+    default_planner: str = param(
+        "CompiledRRTConnect",
+        "planner id used when a request leaves planner_id empty (CompiledRRTConnect: the numba kernel on the "
+        "spheres, OMPL's RRTConnect on the exact checker)",
+    )
     planner_params: dict[str, dict] = param(
         default_factory=dict, description="per planner id, named parameters overriding the registry defaults"
     )
@@ -49,8 +57,9 @@ class PlannerConfig:
         800, "milestones a PRM roadmap is grown to before its first query (paper: ~780)", lower=0, upper=1000000
     )
     collision_model: str = param(
-        "exact",
-        "checker planned on: exact (coal on the URDF collision geometry) or spheres (fast; paths re-checked exactly)",
+        "spheres",
+        "checker planned on: spheres (fast; near contacts decided and paths re-checked on the exact model) or "
+        "exact (coal on the URDF collision geometry)",
         choices=COLLISION_MODELS,
     )
     verify_resolution: float | None = param(
