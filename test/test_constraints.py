@@ -7,7 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from maru_planner.planning import MotionPlanner, MotionRequest, PlanStatus
+from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig, PlanStatus
+from maru_planner.planning.config import COLLISION_MODELS
 from maru_planner.planning.constraints import OrientationConstraint, PathConstraints, PositionConstraint
 from maru_planner.planning.dual_arm import DUAL_CARRY, relative_pose_error
 from maru_planner.robot import RobotModel
@@ -66,11 +67,12 @@ def test_projection_lands_on_the_constraints(panda):
     assert landed >= 10
 
 
-def test_cbirrt_keeps_the_hand_upright_all_along(panda):
+@pytest.mark.parametrize("model", COLLISION_MODELS)
+def test_cbirrt_keeps_the_hand_upright_all_along(panda, model):
     robot, q0, idx = panda
     constraints = _upright(robot, q0)
     goal = _tilting_goal(robot, q0, idx, constraints)
-    planner = MotionPlanner.from_scene(robot, Scene())
+    planner = MotionPlanner.from_scene(robot, Scene(), PlannerConfig(collision_model=model))
     start = dict(zip(robot.joint_names, q0.tolist(), strict=True))
     goal_joints = {robot.joint_names[i]: float(goal[i]) for i in idx}
     result = planner.plan(
@@ -78,6 +80,7 @@ def test_cbirrt_keeps_the_hand_upright_all_along(panda):
     )
     assert result.status is PlanStatus.SUCCESS, result.message
     assert result.stats.planner_id == "CBiRRT" and result.stats.certified
+    assert result.stats.collision_model == model  # the checker CBiRRT searched on
     orientation, _ = _violation_along(robot, q0, idx, result.trajectory, constraints)
     assert orientation <= 1e-6
     assert np.allclose(result.trajectory.positions[-1], goal[idx], atol=1e-6)

@@ -26,6 +26,7 @@ from maru_planner import errors
 from maru_planner.params import ParamSpec
 from maru_planner.planning import postprocess
 from maru_planner.planning.cartesian import end_margin, time_dense_path
+from maru_planner.planning.checkers import collision_model_of
 from maru_planner.planning.constraints import PathConstraints
 from maru_planner.planning.space import edge_states, full_configurations
 from maru_planner.planning.types import MotionRequest, MotionResult, PlanStats, PlanStatus, set_failure
@@ -74,7 +75,7 @@ class _Problem:
 def plan_constrained(planner, request: MotionRequest, constraints: PathConstraints) -> MotionResult:
     """Plan ``request`` keeping ``constraints`` (module doc); never raises."""
     t0 = time.monotonic()
-    stats = PlanStats(planner_id=PLANNER_ID, collision_model="exact")
+    stats = PlanStats(planner_id=PLANNER_ID, collision_model=collision_model_of(planner.checker))
     result = MotionResult(status=PlanStatus.PLANNING_FAILED, stats=stats)
     try:
         _plan(planner, request, constraints, result, t0)
