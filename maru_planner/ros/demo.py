@@ -19,13 +19,15 @@ from types import SimpleNamespace
 import numpy as np
 
 from maru_planner.paths import config_path
+from maru_planner.planning.config import PlannerConfig
 from maru_planner.planning.problems import PROBLEMS
 from maru_planner.robot import RobotModel
 from maru_planner.ros.env import configure_loopback_dds
 from maru_planner.scene import Scene
 from maru_planner.viz.plans import plot_plan
 
-PLANNERS = ("RRTConnect", "GoalBiasedRRT", "RCRRT", "PRM", "RRT")
+# the default planner first (PlannerConfig.default_planner; the node plans on its default collision model)
+PLANNERS = ("CompiledRRTConnect", "RRTConnect", "GoalBiasedRRT", "RCRRT", "PRM", "RRT")
 COLUMNS = ("planner", "success", "time [s]", "round trip [s]", "nodes", "collision checks", "path length [rad]")
 
 
@@ -108,7 +110,7 @@ def draw_plan(rows, client, out_dir: Path) -> Path | None:
     solved = [r for r in rows if r["success"]]
     if not solved:
         return None
-    best = next((r for r in solved if r["planner"] == "RRTConnect"), solved[0])
+    best = next((r for r in solved if r["planner"] == PlannerConfig.default_planner), solved[0])
     scene = Scene.from_yaml(client.get_scene().scene_yaml)
     return plot_plan(RobotModel.maru1(), scene, trajectory_as_result(best["response"]), out_dir / "plan_13dof.png",
                      title=f"Maru-1 13-DOF, {best['planner']} via plan_motion")
