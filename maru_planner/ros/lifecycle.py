@@ -73,6 +73,10 @@ def inactive_response(response: Any, message: str) -> Any:
     return response
 
 
+class StartupInterrupted(Exception):
+    """The ROS context was shut down (Ctrl-C, SIGTERM) while the node configured or activated itself."""
+
+
 class ManagedNode(LifecycleNode):
     """A lifecycle node whose subclass implements ``configure`` (and optionally the other steps)."""
 
@@ -126,11 +130,33 @@ class ManagedNode(LifecycleNode):
         self._log_failures = False  # main() reports the one line
         try:
             for trigger in (self.trigger_configure, self.trigger_activate):
-                if trigger() != SUCCESS:
+                if self._trigger_unless_stopped(trigger) != SUCCESS:
                     assert self.transition_error is not None
                     raise self.transition_error
         finally:
             self._log_failures = True
+
+    def _trigger_unless_stopped(self, trigger: Callable[[], Any]) -> Any:
+        """``trigger()``; StartupInterrupted, with what ``configure`` built released, if a signal (Ctrl-C, SIGTERM)
+        stopped the node meanwhile (rcl then fails to publish the transition)."""
+        outcome = self._trigger_or_release(trigger)
+        if outcome is None:
+            raise StartupInterrupted
+        return outcome
+
+    def _trigger_or_release(self, trigger: Callable[[], Any]) -> Any:
+        """``trigger()``'s outcome, or None, with what ``configure`` built released, if a signal shut the context
+        down meanwhile: Ctrl-C raises in whatever step runs; after SIGTERM publishing the transition fails."""
+        try:
+            return trigger()
+        except KeyboardInterrupt:
+            pass
+        except RuntimeError:  # rcl's RCLError
+            if self.context.ok():
+                raise
+        if self.is_configured:
+            self._release_without_context()
+        return None
 
     @property
     def state_label(self) -> str:
@@ -237,10 +263,21 @@ class ManagedNode(LifecycleNode):
         return SUCCESS
 
     def destroy_node(self) -> None:
-        """Shut down through the lifecycle (a reactive node stops its base) before the handles go."""
+        """Shut down through the lifecycle (a reactive node stops its base) before the handles go; after a signal
+        shut the context down (no transition can be published) release what ``configure`` built directly."""
         if self.is_configured and self.context.ok():
-            self.trigger_shutdown()
+            self._trigger_or_release(self.trigger_shutdown)
+        elif self.is_configured:
+            self._release_without_context()
         super().destroy_node()
+
+    def _release_without_context(self) -> None:
+        """``cleanup`` (worker processes, temporary files) once the context is gone, quietly: the node is exiting."""
+        self.is_active = self.is_configured = False
+        try:
+            self.cleanup()
+        except Exception:  # noqa: BLE001 - exiting, and rosout is gone: nothing left to report it to
+            pass
 
     def _release(self) -> TransitionCallbackReturn:
         result = self._run("cleanup", self.cleanup)
@@ -301,7 +338,8 @@ def run_node(
 
     Bad start-up input (rcl's own errors, e.g. a params file that is not YAML, and ``startup_errors``
     raised while constructing the node: parameters, robot or scene files) is one stderr line
-    ``<name>: cannot start: ...`` and exit code 2, never a traceback. ``executor_threads`` spins the
+    ``<name>: cannot start: ...`` and exit code 2, never a traceback; Ctrl-C or SIGTERM while it starts is a quiet
+    stop (exit code 0), as while it spins. ``executor_threads`` spins the
     node on a multi-threaded executor of that size; ``farewell`` is logged when the node stops.
     """
     network = network_from_environment()
@@ -316,6 +354,9 @@ def run_node(
         print(f"{name}: cannot start: {one_line(exc)}", file=sys.stderr)
         rclpy.try_shutdown()
         return 2
+    except (KeyboardInterrupt, ExternalShutdownException, StartupInterrupted):  # stopped while starting
+        rclpy.try_shutdown()
+        return 0
     node.get_logger().info(network)
     executor = (
         MultiThreadedExecutor(num_threads=executor_threads(node)) if executor_threads else SingleThreadedExecutor()
@@ -325,6 +366,9 @@ def run_node(
         executor.spin()
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
+    except RuntimeError:  # rcl's RCLError: a signal shut the context down while the executor was between waits
+        if rclpy.ok():
+            raise
     finally:
         if farewell is not None:
             node.get_logger().info(farewell(node))
