@@ -94,8 +94,11 @@ def test_planning_node_runs_from_the_install_space(install_space, spinning_node,
     script = install_space / "maru_planner" / "lib" / "maru_planner" / "planning_node"
     log = open(tmp_path / "planning_node.log", "w")
     proc = subprocess.Popen(
-        # its own namespace: none of its services or actions (plan_motion) may answer another test's clients
-        [str(script), "--ros-args", "-r", "__ns:=/installed"],
+        # its own namespace: none of its services or actions (plan_motion) may answer another test's clients. The
+        # install space has no numba cache of its own: on the sphere checker (the default) its three processes took
+        # 65-85 s here to compile the kernels at configure, ~12 s on the exact one; the source tree's tests plan on
+        # both, this one is about the installed files
+        [str(script), "--ros-args", "-r", "__ns:=/installed", "-p", "collision_model:=exact"],
         stdout=log,
         stderr=subprocess.STDOUT,
         stdin=subprocess.DEVNULL,
