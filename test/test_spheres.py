@@ -213,3 +213,16 @@ def test_verify_path_finds_the_failing_segment(panda):
     assert segment.tolist() == [0] * 11
     with pytest.raises(ValueError):
         verify_path(exact, np.array([q0, q1]), resolution=0.0)
+
+
+def test_a_first_fit_is_announced_until_the_model_is_on_disk(panda, tmp_path, monkeypatch):
+    from maru_planner.collision import sphere_model
+
+    monkeypatch.setenv("MARU_PLANNER_CACHE", str(tmp_path))
+    notice = sphere_model.first_fit_notice("panda", panda.collision_model)
+    assert notice is not None and "fitting the sphere model of panda" in notice and str(tmp_path) in notice
+    path = sphere_model.cached_path(panda.collision_model)
+    assert path.parent == tmp_path / "spheres"
+    path.parent.mkdir(parents=True)
+    path.write_bytes(b"")  # where load_or_fit keeps it
+    assert sphere_model.first_fit_notice("panda", panda.collision_model) is None

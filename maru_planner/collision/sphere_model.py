@@ -171,10 +171,25 @@ def geometry_fingerprint(collision_model, options: SphereFitOptions) -> str:
     return h.hexdigest()
 
 
+def cached_path(collision_model, options: SphereFitOptions | None = None) -> Path:
+    """Where :func:`load_or_fit` keeps the sphere model of ``collision_model`` (the file may not exist yet)."""
+    return cache_dir() / f"{geometry_fingerprint(collision_model, options or SphereFitOptions())}.npz"
+
+
+def first_fit_notice(name: str, collision_model, options: SphereFitOptions | None = None) -> str | None:
+    """The line to show before building a sphere checker of robot ``name`` whose sphere model is not on disk yet
+    (the fit takes ~20 s for a 7-link arm), else None."""
+    path = cached_path(collision_model, options)
+    if path.is_file():
+        return None
+    return (f"fitting the sphere model of {name} (first use of its geometry, ~20 s for a 7-link arm; "
+            f"kept in {path.parent})")
+
+
 def load_or_fit(model, collision_model, options: SphereFitOptions | None = None, use_cache: bool = True):
-    """:func:`fit_sphere_model`, kept on disk keyed by :func:`geometry_fingerprint` (a fit takes seconds)."""
+    """:func:`fit_sphere_model`, kept on disk at :func:`cached_path` (a fit takes ~20 s for a 7-link arm)."""
     options = options or SphereFitOptions()
-    path = cache_dir() / f"{geometry_fingerprint(collision_model, options)}.npz"
+    path = cached_path(collision_model, options)
     if use_cache and path.is_file():
         try:
             return _from_npz(path)

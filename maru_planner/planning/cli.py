@@ -28,6 +28,7 @@ from typing import Any, NoReturn
 import numpy as np
 
 from maru_planner import errors
+from maru_planner.collision import sphere_model
 from maru_planner.planning.cartesian import CartesianRequest, CartesianResult, default_link
 from maru_planner.planning.config import COLLISION_MODELS, TIME_PARAMETERIZATIONS, PlannerConfig
 from maru_planner.planning.links import check_link
@@ -284,6 +285,9 @@ def run(args: argparse.Namespace, params: dict[str, Any], progress: _Progress) -
         planner_params={args.planner: params},
         safety_margin=args.safety_margin,
     )
+    notice = sphere_model.first_fit_notice(robot.name, robot.collision_model)
+    if args.collision_model == "spheres" and notice:
+        progress(notice)
     progress(f"building the {args.collision_model} collision model")
     planner = MotionPlanner.from_scene(robot, scene, config)
     rest = _rest_state(robot)

@@ -62,6 +62,7 @@ from trajectory_msgs.msg import JointTrajectory
 from visualization_msgs.msg import MarkerArray
 
 from maru_planner import errors
+from maru_planner.collision import sphere_model
 from maru_planner.monitor import PlanMonitor, Progress
 from maru_planner.params import ParamSpec, dataclass_params, param
 from maru_planner.paths import config_path, urdf_path
@@ -424,6 +425,8 @@ class PlanningNode(ManagedNode):
         return PlanningContext(planner, version, processes)
 
     def _make_pool(self, config: PlannerConfig, settings: NodeSettings) -> WorkerPool:
+        if config.collision_model == "spheres":
+            self._fit_spheres_once()
         processes = self._reconfigured_processes(config, settings)
         contexts = [self._make_context(config, processes) for _ in range(settings.workers)]
         if processes is not None:
@@ -433,6 +436,15 @@ class PlanningNode(ManagedNode):
         else:  # no request pays numba's compile or cache load (warm_up module doc)
             self.get_logger().info(warm_up(contexts[0].planner.robot, config).summary())
         return WorkerPool(contexts, settings.queue_size)
+
+    def _fit_spheres_once(self) -> None:
+        """Fit the robot's sphere model here, once per geometry (disk-cached), so the planners and worker processes
+        built next load it instead of each fitting it at the same time."""
+        robot = self._robot
+        notice = sphere_model.first_fit_notice(robot.name, robot.collision_model)
+        if notice:
+            self.get_logger().info(notice)
+        sphere_model.load_or_fit(robot.model, robot.collision_model)
 
     def _reconfigured_processes(self, config: PlannerConfig, settings: NodeSettings) -> ProcessPool | None:
         """The worker processes (``worker_processes``), started once, then given ``config`` and ``workers``."""
