@@ -43,6 +43,26 @@ def mbm_problem(name: str):
     return problem
 
 
+def panda_clutter(seed: int, count: int = 9):
+    """``count`` boxes, spheres and cylinders at random poses in the Panda's workspace (a Scene)."""
+    import numpy as np
+    import pinocchio as pin
+
+    from maru_planner.scene import Obstacle, Scene
+
+    rng = np.random.default_rng(seed)
+    obstacles = []
+    for i in range(count):
+        pose = np.eye(4)
+        pose[:3, :3] = pin.rpy.rpyToMatrix(*rng.uniform(-np.pi, np.pi, 3))
+        pose[:3, 3] = rng.uniform([-0.6, -0.6, 0.0], [0.6, 0.6, 0.9])
+        kind = ("box", "sphere", "cylinder")[i % 3]
+        dims = {"box": {"size": tuple(rng.uniform(0.05, 0.3, 3))}, "sphere": {"radius": rng.uniform(0.03, 0.12)},
+                "cylinder": {"radius": rng.uniform(0.03, 0.1), "length": rng.uniform(0.1, 0.4)}}[kind]  # fmt: skip
+        obstacles.append(Obstacle(f"o{i}", kind, pose=pose, **dims))
+    return Scene(obstacles)
+
+
 def _domain_in_use(domain: int, participants: int = 4) -> bool:
     """Whether a Fast DDS participant on this machine holds a discovery port of ``domain``.
 

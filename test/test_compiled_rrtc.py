@@ -4,9 +4,8 @@ paper problems through the facade with certified paths, and falls back to OMPL o
 from __future__ import annotations
 
 import numpy as np
-import pinocchio as pin
 import pytest
-from conftest import mbm_problem, needs_mbm
+from conftest import mbm_problem, needs_mbm, panda_clutter
 from ompl import base as ob
 from ompl import geometric as og
 
@@ -37,21 +36,6 @@ def compiled_kernel(panda):
     start = gs.base[gs.indices]
     ss.setStartAndGoalStates(gs.to_state(start), gs.to_state(0.9 * start + 0.05 * (gs.lower + gs.upper)))
     ss.solve(ob.timedPlannerTerminationCondition(60.0))
-
-
-def clutter(seed: int) -> Scene:
-    """Boxes, spheres and cylinders in the Panda's workspace."""
-    rng = np.random.default_rng(seed)
-    obstacles = []
-    for i in range(9):
-        pose = np.eye(4)
-        pose[:3, :3] = pin.rpy.rpyToMatrix(*rng.uniform(-np.pi, np.pi, 3))
-        pose[:3, 3] = rng.uniform([-0.6, -0.6, 0.0], [0.6, 0.6, 0.9])
-        kind = ("box", "sphere", "cylinder")[i % 3]
-        dims = {"box": {"size": tuple(rng.uniform(0.05, 0.3, 3))}, "sphere": {"radius": rng.uniform(0.03, 0.12)},
-                "cylinder": {"radius": rng.uniform(0.03, 0.1), "length": rng.uniform(0.1, 0.4)}}[kind]  # fmt: skip
-        obstacles.append(Obstacle(f"o{i}", kind, pose=pose, **dims))
-    return Scene(obstacles)
 
 
 def arm_space(robot) -> GroupSpace:
@@ -85,7 +69,7 @@ def random_edges(gs: GroupSpace, n: int, seed: int) -> list[tuple[np.ndarray, np
 @pytest.mark.parametrize("grid", [False, True], ids=["classify", "grid"])
 def test_edge_answers_equal_the_pure_sphere_model(panda, grid):
     """Both of the kernel's edge checks: its own classify per state, and the checker's grid scan (large scenes)."""
-    checker = SphereCollisionChecker(panda, clutter(1), confirm=False, grid_min_obstacles=1 if grid else 10**6)
+    checker = SphereCollisionChecker(panda, panda_clutter(1), confirm=False, grid_min_obstacles=1 if grid else 10**6)
     assert checker.uses_grid == grid
     gs = arm_space(panda)
     edges = EdgeChecker(gs, checker, RESOLUTION)
@@ -96,7 +80,7 @@ def test_edge_answers_equal_the_pure_sphere_model(panda, grid):
 
 
 def test_single_states_equal_the_sphere_checker(panda):
-    checker = SphereCollisionChecker(panda, clutter(3), confirm=False)
+    checker = SphereCollisionChecker(panda, panda_clutter(3), confirm=False)
     gs = arm_space(panda)
     rng = np.random.default_rng(4)
     states = rng.uniform(gs.lower, gs.upper, (150, gs.dim))
@@ -105,7 +89,7 @@ def test_single_states_equal_the_sphere_checker(panda):
 
 
 def test_with_confirmation_ambiguous_edges_get_the_checkers_exact_answer(panda):
-    checker = SphereCollisionChecker(panda, clutter(5))  # confirm=True: near contacts decided by coal
+    checker = SphereCollisionChecker(panda, panda_clutter(5))  # confirm=True: near contacts decided by coal
     gs = arm_space(panda)
     edges = EdgeChecker(gs, checker, RESOLUTION)
     seen = set()
@@ -122,8 +106,8 @@ def test_with_confirmation_ambiguous_edges_get_the_checkers_exact_answer(panda):
 
 def test_away_from_the_start_and_goal_ambiguous_states_collide(panda):
     """exact_near 0: only the roots themselves are decided exactly, so the answers are the pure sphere model's."""
-    confirmed = SphereCollisionChecker(panda, clutter(5))
-    pure = EdgeChecker(arm_space(panda), SphereCollisionChecker(panda, clutter(5), confirm=False), RESOLUTION)
+    confirmed = SphereCollisionChecker(panda, panda_clutter(5))
+    pure = EdgeChecker(arm_space(panda), SphereCollisionChecker(panda, panda_clutter(5), confirm=False), RESOLUTION)
     gs = arm_space(panda)
     for qa, qb in random_edges(gs, 80, 6):
         status = kernel_edge(confirmed, gs, qa, qb, exact_near=0.0)[0]
@@ -135,7 +119,7 @@ def test_classify_answers_each_state_like_the_sphere_checker(robot_name, request
     """VALID / COLLIDING / AMBIGUOUS of every state equal the checker's own scan of it (classify_state), with
     AMBIGUOUS as COLLIDING when the first touch decides, and the numpy path's answers on the pure sphere model."""
     robot = request.getfixturevalue(robot_name)
-    checker = SphereCollisionChecker(robot, clutter(9), confirm=False)
+    checker = SphereCollisionChecker(robot, panda_clutter(9), confirm=False)
     ri, rf, sf, grid_i, grid_f, amb, mark = checker.kernel_inputs()
     assert not checker.uses_grid  # classify is the grid-less path
     robot_arrays, scene_arrays = unpack_robot(ri, rf), unpack_scene(sf)
@@ -147,7 +131,7 @@ def test_classify_answers_each_state_like_the_sphere_checker(robot_name, request
     assert answers == expected
     first_touch = [kernel.classify(q, robot_arrays, scene_arrays, work, True) for q in states]
     assert first_touch == [kernel.VALID if e == kernel.VALID else kernel.COLLIDING for e in expected]
-    numpy_path = SphereCollisionChecker(robot, clutter(9), confirm=False, use_numba=False)  # slow: fewer states
+    numpy_path = SphereCollisionChecker(robot, panda_clutter(9), confirm=False, use_numba=False)  # slow: fewer states
     assert numpy_path.are_valid(states[:150]).tolist() == [e == kernel.VALID for e in expected[:150]]
     assert set(expected) == {kernel.VALID, kernel.COLLIDING, kernel.AMBIGUOUS}
 

@@ -7,39 +7,24 @@ import itertools
 import time
 
 import numpy as np
-import pinocchio as pin
 import pytest
+from conftest import panda_clutter
 
 from maru_planner.collision.spheres import SphereCollisionChecker
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig, postprocess
 from maru_planner.planning.compiled_shortcut import shortcut
 from maru_planner.planning.space import EdgeChecker, GroupSpace
-from maru_planner.scene import Obstacle, Scene
+from maru_planner.scene import Scene
 
 ARM = [f"panda_joint{i}" for i in range(1, 8)]
 RESOLUTION = 0.05
 FOREVER = 1e18
 
 
-def clutter(seed: int) -> Scene:
-    """Twelve boxes, spheres and cylinders in the Panda's workspace."""
-    rng = np.random.default_rng(seed)
-    obstacles = []
-    for i in range(12):
-        pose = np.eye(4)
-        pose[:3, :3] = pin.rpy.rpyToMatrix(*rng.uniform(-np.pi, np.pi, 3))
-        pose[:3, 3] = rng.uniform([-0.6, -0.6, 0.0], [0.6, 0.6, 0.9])
-        kind = ("box", "sphere", "cylinder")[i % 3]
-        dims = {"box": {"size": tuple(rng.uniform(0.05, 0.3, 3))}, "sphere": {"radius": rng.uniform(0.03, 0.12)},
-                "cylinder": {"radius": rng.uniform(0.03, 0.1), "length": rng.uniform(0.1, 0.4)}}[kind]  # fmt: skip
-        obstacles.append(Obstacle(f"o{i}", kind, pose=pose, **dims))
-    return Scene(obstacles)
-
-
 @pytest.fixture(scope="module")
 def setting(panda):
     """(edge checker on the arm, raw unsimplified paths) in clutter, confirmation on (near contacts decided exactly)."""
-    checker = SphereCollisionChecker(panda, clutter(5))
+    checker = SphereCollisionChecker(panda, panda_clutter(5, count=12))
     indices = panda.joint_indices(ARM)
     gs = GroupSpace(ARM, indices, panda.lower_limits[indices], panda.upper_limits[indices], panda.neutral())
     planner = MotionPlanner(panda, checker, PlannerConfig(resolution=RESOLUTION, certify=False))
