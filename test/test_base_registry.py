@@ -94,3 +94,15 @@ def test_footprint_only_for_planners_that_use_it():
         assert planner.inflation_radius == 0.0  # the footprint was not handed over
     finally:
         del registry.SPECS[entry.id]
+
+
+def test_warm_up_runs_every_grid_kernel_including_weighted_a_star(monkeypatch):
+    """The warm-up's open grid needs no MSPP guide path past a narrow passage: it runs the weighted A* kernel itself,
+    so no request compiles it."""
+    from maru_planner.base import astar, registry
+
+    calls = []
+    real = astar._astar_kernel
+    monkeypatch.setattr(astar, "_astar_kernel", lambda *args: calls.append(args[6]) or real(*args))
+    registry.warm_up()
+    assert calls == [True]  # use_cost: the cost-weighted variant MSPP's guide path takes
