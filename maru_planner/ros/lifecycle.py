@@ -130,19 +130,14 @@ class ManagedNode(LifecycleNode):
         self._log_failures = False  # main() reports the one line
         try:
             for trigger in (self.trigger_configure, self.trigger_activate):
-                if self._trigger_unless_stopped(trigger) != SUCCESS:
+                outcome = self._trigger_or_release(trigger)
+                if outcome is None:  # a signal (Ctrl-C, SIGTERM) stopped the node meanwhile
+                    raise StartupInterrupted
+                if outcome != SUCCESS:
                     assert self.transition_error is not None
                     raise self.transition_error
         finally:
             self._log_failures = True
-
-    def _trigger_unless_stopped(self, trigger: Callable[[], Any]) -> Any:
-        """``trigger()``; StartupInterrupted, with what ``configure`` built released, if a signal (Ctrl-C, SIGTERM)
-        stopped the node meanwhile (rcl then fails to publish the transition)."""
-        outcome = self._trigger_or_release(trigger)
-        if outcome is None:
-            raise StartupInterrupted
-        return outcome
 
     def _trigger_or_release(self, trigger: Callable[[], Any]) -> Any:
         """``trigger()``'s outcome, or None, with what ``configure`` built released, if a signal shut the context
