@@ -285,9 +285,10 @@ def run(args: argparse.Namespace, params: dict[str, Any], progress: _Progress) -
         planner_params={args.planner: params},
         safety_margin=args.safety_margin,
     )
-    notice = sphere_model.first_fit_notice(robot.name, robot.collision_model)
-    if args.collision_model == "spheres" and notice:
-        progress(notice)
+    if args.collision_model == "spheres":
+        notice = sphere_model.first_fit_notice(robot.name, robot.collision_model)
+        if notice:
+            progress(notice)
     progress(f"building the {args.collision_model} collision model")
     planner = MotionPlanner.from_scene(robot, scene, config)
     rest = _rest_state(robot)
