@@ -17,6 +17,8 @@ import threading
 import time
 from pathlib import Path
 
+import numpy as np
+import pinocchio as pin
 import pytest
 
 from maru_planner.moveit_scene import PANDA_FINGERS_OPEN, iter_mbm_problems
@@ -24,6 +26,7 @@ from maru_planner.paths import benchmarks_dir, config_path
 from maru_planner.planning.problems import PROBLEMS
 from maru_planner.robot import RobotModel, load_example_robot
 from maru_planner.ros.env import configure_loopback_dds
+from maru_planner.scene import Obstacle, Scene
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
 # planning_node's default group (upper_body) and paper 000's 13-DOF problem over it
@@ -43,13 +46,8 @@ def mbm_problem(name: str):
     return problem
 
 
-def panda_clutter(seed: int, count: int = 9):
-    """``count`` boxes, spheres and cylinders at random poses in the Panda's workspace (a Scene)."""
-    import numpy as np
-    import pinocchio as pin
-
-    from maru_planner.scene import Obstacle, Scene
-
+def panda_clutter(seed: int, count: int = 9) -> Scene:
+    """``count`` boxes, spheres and cylinders at random poses in the Panda's workspace."""
     rng = np.random.default_rng(seed)
     obstacles = []
     for i in range(count):

@@ -4,43 +4,29 @@ the next start."""
 
 from __future__ import annotations
 
-import os
-
-import pytest
 from conftest import PAPER_GOAL, PAPER_START, connected_planning_client
 
 
-@pytest.fixture(scope="module")
-def empty_cache(tmp_path_factory):
-    return tmp_path_factory.mktemp("sphere_cache")
-
-
-def start_node(node_process, namespace: str, cache):
+def start_node(node_process, namespace: str):
     from maru_planner.paths import config_path
 
-    saved = os.environ.get("MARU_PLANNER_CACHE")
-    os.environ["MARU_PLANNER_CACHE"] = str(cache)  # the process inherits it
-    try:
-        return node_process("maru_planner.ros.planning_node", ["--ros-args", "-r", f"__ns:={namespace}",
-                                                               "--params-file", str(config_path("planner.yaml"))])
-    finally:
-        if saved is None:
-            del os.environ["MARU_PLANNER_CACHE"]
-        else:
-            os.environ["MARU_PLANNER_CACHE"] = saved
+    return node_process("maru_planner.ros.planning_node", ["--ros-args", "-r", f"__ns:={namespace}",
+                                                           "--params-file", str(config_path("planner.yaml"))])
 
 
-def test_the_sphere_model_is_fitted_once_and_kept_for_the_next_start(node_process, rclpy_session, tester, empty_cache):
+def test_the_sphere_model_is_fitted_once_and_kept_for_the_next_start(node_process, rclpy_session, tester, tmp_path,
+                                                                     monkeypatch):  # fmt: skip
     from maru_planner_interfaces.msg import PlanningError
 
-    first = start_node(node_process, "/first_use", empty_cache)
+    monkeypatch.setenv("MARU_PLANNER_CACHE", str(tmp_path))  # an empty cache; the node processes inherit it
+    first = start_node(node_process, "/first_use")
     client = connected_planning_client(tester, first, namespace="/first_use")
     response = client.plan(PAPER_GOAL, start=PAPER_START, group="upper_body", time_budget=10.0, seed=1)
     assert response.error.code == PlanningError.SUCCESS, response.error.message
     assert first.log().count("fitting the sphere model of maru1") == 1, first.log()
-    assert len(list((empty_cache / "spheres").glob("*.npz"))) == 1
+    assert len(list((tmp_path / "spheres").glob("*.npz"))) == 1
 
-    second = start_node(node_process, "/second_use", empty_cache)
+    second = start_node(node_process, "/second_use")
     connected_planning_client(tester, second, namespace="/second_use")
     assert "fitting the sphere model" not in second.log(), second.log()
     assert first.alive() and second.alive()
