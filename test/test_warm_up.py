@@ -23,7 +23,7 @@ def test_warm_up_plans_with_each_planner_the_config_runs_once_per_process(maru1,
     assert done.plans == tuple(
         (planner_id, scene, "SUCCESS")
         for scene in ("one box", "many boxes")
-        for planner_id in ("RRTConnect", "CompiledRRTConnect")
+        for planner_id in ("RRTConnect", "CompiledRRTConnect", "RCRRT")
     )
     assert "kernels warmed up" in done.summary()
     again = warm.warm_up(maru1, dataclasses.replace(config, resolution=0.05))  # same kind of config: loaded already

@@ -25,6 +25,11 @@ Nearest neighbours come from a k-d tree (:mod:`maru_planner.planning.kdtree`). E
 through an :class:`~maru_planner.planning.space.EdgeChecker` (one batched call per edge) when
 given, else through the SpaceInformation's motion validator.
 
+On a sphere checker with numba kernels the whole loop runs compiled instead
+(:mod:`maru_planner.planning.rcrrt_kernel`: the same steps, brute-force nearest neighbours, a
+splitmix64 sampler), leaving it about every 2 ms for the termination condition and for states the
+spheres leave to the exact model. Same seed, same path on either loop, but not the same path on both.
+
 ``getPlannerData`` works when called from Python (``planner.getPlannerData(data)``); OMPL 2.0.1's
 nanobind trampoline cannot pass a ``PlannerData&`` from C++ to Python, so do not go through
 ``SimpleSetup.getPlannerData`` for this planner.
@@ -32,12 +37,15 @@ nanobind trampoline cannot pass a ``PlannerData&`` from C++ to Python, so do not
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 from ompl import base as ob
 from ompl import geometric as og
 from ompl import util as ou
 
 from maru_planner.params import ParamSpec
+from maru_planner.planning.checkers import is_compiled_sphere_checker
 from maru_planner.planning.kdtree import GrowingKDTree
 from maru_planner.planning.planner_params import PlannerParams, stored_params
 
@@ -55,6 +63,7 @@ RCRRT_PARAMS: dict[str, ParamSpec] = {
 }
 
 _SAMPLE_BATCH = 512
+COMPILED_CAPACITY = 1024  # initial nodes of the compiled loop's arrays; doubled when full
 
 
 class RCRRT(ob.Planner):
@@ -108,7 +117,14 @@ class RCRRT(ob.Planner):
             return ob.PlannerStatus(missing)
         start = np.array([start_state[i] for i in range(dim)])
         goal = np.array([goal_state[i] for i in range(dim)])
+        if self.compiled:
+            return self._search_compiled(start, goal, ptc)
         return self._search(start, goal, ptc)
+
+    @property
+    def compiled(self) -> bool:
+        """Whether solve() runs the compiled loop (a sphere checker with numba kernels; module doc)."""
+        return self._edges is not None and is_compiled_sphere_checker(self._edges.checker)
 
     def getPlannerData(self, data: ob.PlannerData) -> None:  # noqa: N802 (OMPL's name)
         """Tree vertices (start tagged as start, goal as goal) and parent→child edges."""
@@ -254,6 +270,53 @@ class RCRRT(ob.Planner):
                 return self._finish(new, goal)
         return ob.PlannerStatus(ob.PlannerStatus.TIMEOUT)
 
+    def _search_compiled(self, start: np.ndarray, goal: np.ndarray, ptc):
+        """:meth:`_search` in :mod:`~maru_planner.planning.rcrrt_kernel`; the tree ends in this planner's arrays."""
+        kernel = _kernel()
+        # lazy: numba loads with these, and only a sphere checker (which loaded it already) gets here
+        from maru_planner.planning.compiled_rrtc import FIRST_EDGES, next_batch
+        from maru_planner.planning.rrtc_kernel import CHECKS, N_AMB, seed_rng
+
+        p, edges = self._values, self._edges
+        checker, gs = edges.checker, edges.gs
+        seed = p["seed"] if p["seed"] is not None else self._seed_rng.uniformInt(0, 2**31 - 2)
+        conf = kernel.settings(float(p["goal_bias"]), float(p["step"]), float(p["goal_range"]))
+        tree = kernel.Tree(start, COMPILED_CAPACITY)
+        self.exhausted = False
+        longest = max(float(p["step"]), min(float(p["goal_range"]), float(np.max(self.upper - self.lower))))
+        amb_states = np.empty((int(np.ceil(longest / edges.resolution)) + 2, self.dim))
+        kernel.start(*tree.arrays, tree.st, goal, self.lower, self.upper, conf)
+        fixed = (goal, np.empty(self.dim), amb_states, conf, self.lower, self.upper, seed_rng(int(seed)),
+                 int(p["candidates"]), edges.resolution, gs.base, gs.indices.astype(np.int64),
+                 *checker.kernel_inputs(), checker.confirm)  # fmt: skip
+        verdict, batch, code = False, FIRST_EDGES, kernel.RUNNING
+        while code != kernel.SOLVED and code != kernel.EXHAUSTED and not ptc():
+            t_call = time.perf_counter()
+            code = kernel.run(*tree.arrays, tree.st, verdict, batch, tree.edge_st, *fixed)
+            checker.check_count += int(tree.edge_st[CHECKS])
+            tree.edge_st[CHECKS] = 0
+            if code == kernel.NEED_EXACT:
+                verdict = checker.first_invalid(gs.full(amb_states[: tree.edge_st[N_AMB]])) < 0
+            elif code == kernel.FULL:
+                tree.grow()
+            batch = next_batch(batch, time.perf_counter() - t_call)
+        self._keep_tree(tree)
+        if code == kernel.EXHAUSTED:
+            self.exhausted = True
+            return ob.PlannerStatus(ob.PlannerStatus.INFEASIBLE)
+        if code != kernel.SOLVED:
+            return ob.PlannerStatus(ob.PlannerStatus.TIMEOUT)
+        return self._finish_path(kernel.solution_path(tree.X, tree.parent, self.goal_node))
+
+    def _keep_tree(self, tree) -> None:
+        """The compiled search's tree as this planner's (graph_size, getPlannerData)."""
+        kernel = _kernel()
+        self.count = int(tree.st[kernel.COUNT])
+        self.X, self.parent, self.sigma = tree.X, tree.parent, tree.sigma
+        self.expanded, self.active = tree.expanded, tree.active
+        self.goal_node = int(tree.st[kernel.GOAL_NODE])
+        self.collisions = int(tree.st[kernel.COLLISIONS])
+
     def _select(self, target: np.ndarray, k: int, rng) -> int:
         """Modified NEAREST_NEIGHBOR: nearest nodes with untried inputs, accepted w.p. 1 − σ."""
         cands = self.nn.query(target, k, self.X, self.active, self.count)
@@ -298,9 +361,12 @@ class RCRRT(ob.Planner):
         while j >= 0:
             chain.append(j)
             j = self.parent[j]
+        return self._finish_path(self.X[chain[::-1]])
+
+    def _finish_path(self, waypoints: np.ndarray):
         path = og.PathGeometric(self._si)
-        for j in reversed(chain):
-            path.append(self._ompl_state(self.X[j]))
+        for q in waypoints:
+            path.append(self._ompl_state(q))
         self.getProblemDefinition().addSolutionPath(path, False, 0.0, self.getName())
         return ob.PlannerStatus(ob.PlannerStatus.EXACT_SOLUTION)
 
@@ -314,3 +380,10 @@ class RCRRT(ob.Planner):
         for d in range(self.dim):
             s[d] = float(x[d])
         return s
+
+
+def _kernel():
+    """The compiled loop's module: imported on first use (numba loads with it; exact-only callers never need it)."""
+    from maru_planner.planning import rcrrt_kernel  # lazy: numba, only once a sphere checker loaded it
+
+    return rcrrt_kernel

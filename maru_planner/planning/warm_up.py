@@ -6,7 +6,7 @@ still spends ~0.2 s loading it in its first plan. :func:`warm_up` pays either on
 by planning two short motions of the robot's largest group: one in a scene of one box, one in a scene of more
 boxes than the checkers' large-scene paths start at (the grid of the sphere checker, certification's near-path
 pair tables), on the checker, certification and time parameterisation of the config, with OMPL's RRT-Connect and
-(on a sphere checker) the compiled kernel and the compiled shortcut.
+(on a sphere checker) the compiled kernels of RRT-Connect and RC-RRT and the compiled shortcut.
 
 ``planning_node`` warms up at configure (its in-process planners and each worker process before it reports
 ready); ``make setup`` runs ``python -m maru_planner.planning.warm_up`` after a source change, so the disk cache is
@@ -119,7 +119,9 @@ def _shortcut_bent_path(planner: MotionPlanner, group: str, start: dict[str, flo
 
 def _planner_ids(planner: MotionPlanner) -> list[str]:
     """OMPL's RRT-Connect (the checker's kernels; other planners' own code is Python or OMPL's), and the compiled
-    kernel where it runs (a sphere checker)."""
+    loops where they run (a sphere checker with numba): CompiledRRTConnect's and RCRRT's."""
+    if is_compiled_sphere_checker(planner.checker):
+        return ["RRTConnect", "CompiledRRTConnect", "RCRRT"]
     return ["RRTConnect", "CompiledRRTConnect"] if is_sphere_checker(planner.checker) else ["RRTConnect"]
 
 
