@@ -3,7 +3,7 @@
 For each configuration a planning_node process starts (config/planner.yaml, ``-p workers:=K -p
 worker_processes:=B``, a queue deep enough that nothing is BUSY), then ``--clients`` client threads (each its own
 plan_motion client, one rclpy node spun in this process) send the same list of requests: the 13-DOF desk-and-box
-problem with RC-RRT (~0.2 s of search: planning keeps the cores busy) or RRTConnect (~10 ms), each request its own
+problem with RC-RRT (~80 ms of search: planning keeps the cores busy) or RRTConnect (~10 ms), each request its own
 seed (the same work in every configuration). Requests/s = answered requests / wall time
 from the first send to the last answer. Start-up = node process start until its first answer.
 
@@ -42,7 +42,7 @@ CALL_TIMEOUT = 600.0
 
 def configurations(workers: int, quick: bool) -> list[dict]:
     """(label, planner, workers, worker_processes). The target is judged on RC-RRT, whose requests keep a core busy
-    (~0.2 s of search each); an RRTConnect request plans in ~10 ms, so there the node's own per-request work and the
+    (~80 ms of search each); an RRTConnect request plans in ~10 ms, so there the node's own per-request work and the
     clients, on the same two cores, bound the rate."""
     configs = []
     for planner in ("RCRRT",) if quick else ("RCRRT", "RRTConnect"):
