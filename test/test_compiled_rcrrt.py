@@ -122,7 +122,7 @@ def test_a_goal_off_the_lattice_out_of_range_exhausts_the_lattice_reachable_from
     assert status == ob.PlannerStatus.INFEASIBLE and planner.exhausted
     assert planner.count == reachable_lattice_points(edges, gs.base[gs.indices], 0.45) > 1024  # arrays grew
     assert "no path exists at step 0.3 rad" in planner.failure_proof()
-    assert not planner.active[: planner.count].any()
+    assert not planner.active[: planner.count].any() and not planner.untried[: planner.count].any()
 
 
 def test_same_seed_same_path_other_seed_other_path(panda):

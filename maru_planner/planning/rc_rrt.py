@@ -311,9 +311,11 @@ class RCRRT(ob.Planner):
     def _keep_tree(self, tree) -> None:
         """The compiled search's tree as this planner's (graph_size, getPlannerData)."""
         kernel = _kernel()
+        self._reset_tree(self.dim)  # the Python loop's lattice dictionary and k-d tree stay empty
         self.count = int(tree.st[kernel.COUNT])
         self.X, self.parent, self.sigma = tree.X, tree.parent, tree.sigma
         self.expanded, self.active = tree.expanded, tree.active
+        self.untried = (~tree.expanded).sum(axis=1)
         self.goal_node = int(tree.st[kernel.GOAL_NODE])
         self.collisions = int(tree.st[kernel.COLLISIONS])
 
