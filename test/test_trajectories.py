@@ -256,6 +256,15 @@ def test_default_jerk_limits_reach_full_acceleration_in_the_ramp_time():
     assert np.allclose([limits.velocity[0], limits.acceleration[0], limits.jerk[0]], [0.5, 1.0, 4.0])
 
 
+def test_toppra_sections_after_the_first_do_not_search_the_import_path(monkeypatch):
+    """toppra asks which optional solvers are importable at each construction (timing caches the answer)."""
+    parameterize(ZIGZAG, "toppra")
+    searches = []
+    monkeypatch.setattr("importlib.util.find_spec", lambda *a, **k: searches.append(a))
+    trajectory, _ = parameterize(ZIGZAG, "toppra")
+    assert searches == [] and trajectory.duration > 0
+
+
 def test_deviation_from_path_is_the_distance_to_the_nearest_segment():
     path = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]])
     points = np.array([[0.5, 0.2], [1.3, 0.5], [2.0, 2.0], [1.0, 0.0]])

@@ -43,6 +43,7 @@ import ruckig
 import toppra.algorithm
 import toppra.constraint
 import toppra.interpolator
+import toppra.solverwrapper
 
 from maru_planner import errors
 from maru_planner.planning import postprocess
@@ -66,6 +67,10 @@ RUCKIG_DURATION = 100.0  # s: longer sections are computed sped up and played ba
 # Slowest scaling a request may ask for (10,000x the full-speed duration); far below it the time
 # parameterisations overflow (1e-300 gave NaN durations and internal errors).
 MIN_SCALING = 1e-4
+
+# toppra's ReachabilityAlgorithm asks which optional QP solvers are importable each time one is built: two
+# importlib find_spec walks of sys.path, ~0.13 ms of a section's ~1 ms. Within a process the answer cannot change.
+toppra.solverwrapper.available_solvers = functools.cache(toppra.solverwrapper.available_solvers)
 
 CurveFree = Callable[[np.ndarray, np.ndarray], bool]  # (states, chord deviation per joint) -> collision-free
 # (states, chord deviation per joint), or with a third element, bends (states - 1, joints): segment i is the parabola
