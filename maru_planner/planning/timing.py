@@ -316,25 +316,31 @@ def parabola_chords(start: np.ndarray, velocity: np.ndarray, acceleration: np.nd
     return points, np.abs(acceleration) * h * h / 8.0
 
 
-def blend_half_length(waypoints: np.ndarray, k: int, deviation: float, units: np.ndarray | None = None) -> float:
-    """Blend size ``l`` at interior waypoint k for a corner deviation ≤ ``deviation`` (0: stop there); ``units``:
-    the path's :func:`_units` if at hand."""
-    if deviation <= 0.0:
-        return 0.0
-    u_in, u_out = _units(waypoints[k - 1 : k + 2]) if units is None else units[k - 1 : k + 1]
-    if np.linalg.norm(u_in + u_out) < MIN_BLEND_SPEED:
-        return 0.0
-    turn = np.linalg.norm(u_out - u_in)
-    before, after = np.linalg.norm(waypoints[k] - waypoints[k - 1]), np.linalg.norm(waypoints[k + 1] - waypoints[k])
+def blend_half_lengths(waypoints: np.ndarray, deviation: np.ndarray, units: np.ndarray | None = None) -> np.ndarray:
+    """Blend size ``l`` at every waypoint for corner deviations ≤ ``deviation`` (one per waypoint; 0: stop there), 0
+    at the ends and at near reversals; ``units``: the path's :func:`_units` if at hand."""
+    half = np.zeros(len(waypoints))
+    if len(waypoints) < 3:
+        return half
+    units = _units(waypoints) if units is None else units
+    u_in, u_out = units[:-1], units[1:]
+    turn = np.linalg.norm(u_out - u_in, axis=1)
+    segment = np.linalg.norm(np.diff(waypoints, axis=0), axis=1)
     # A blend may take all of a first or last segment, half of a segment it shares with another blend.
-    room = min(before if k == 1 else 0.5 * before, after if k == len(waypoints) - 2 else 0.5 * after)
-    return float(min(4.0 * deviation / turn, room))
+    before, after = 0.5 * segment[:-1], 0.5 * segment[1:]
+    before[0], after[-1] = segment[0], segment[-1]
+    dev = np.asarray(deviation, dtype=float)[1:-1]
+    blended = (dev > 0.0) & (np.linalg.norm(u_in + u_out, axis=1) >= MIN_BLEND_SPEED)
+    with np.errstate(divide="ignore"):
+        half[1:-1] = np.where(blended, np.minimum(4.0 * dev / turn, np.minimum(before, after)), 0.0)
+    return half
 
 
-def corner_deviation(waypoints: np.ndarray, k: int, half_length: float) -> float:
-    """Distance of blend k's farthest point (its middle) from the corner it replaces."""
-    u_in, u_out = _units(waypoints[k - 1 : k + 2])
-    return 0.25 * half_length * float(np.linalg.norm(u_out - u_in))
+def blend_half_length(waypoints: np.ndarray, k: int, deviation: float) -> float:
+    """:func:`blend_half_lengths` at interior waypoint k alone."""
+    at_k = np.zeros(len(waypoints))
+    at_k[k] = deviation
+    return float(blend_half_lengths(waypoints, at_k)[k])
 
 
 def deviation_from_path(points: np.ndarray, path: np.ndarray) -> np.ndarray:
@@ -455,8 +461,7 @@ def _certified_half_lengths(
     pending = list(range(1, len(waypoints) - 1))
     units = _units(waypoints)
     for _ in range(BLEND_RETRIES + 1):  # all pending corners in one check: they share the certification's work
-        for k in pending:
-            half[k] = blend_half_length(waypoints, k, deviation[k], units)
+        half[pending] = blend_half_lengths(waypoints, deviation, units)[pending]
         pending = [k for k in pending if half[k] > 0.0]
         if not pending:
             break
@@ -484,10 +489,13 @@ def _corner_curve(waypoints: np.ndarray, units: np.ndarray, k: int, half_length:
 
 
 def _count_corners(waypoints: np.ndarray, half: np.ndarray, report: TimingReport) -> None:
-    interior = range(1, len(waypoints) - 1)
-    report.blends = sum(1 for k in interior if half[k] > 0)
+    """Blends, stops and the largest distance of a blend's middle from its corner (``l·|u_out − u_in| / 4``)."""
+    interior = half[1:-1]
+    report.blends = int(np.count_nonzero(interior > 0))
     report.stops = len(interior) - report.blends
-    report.max_deviation = max([corner_deviation(waypoints, k, half[k]) for k in interior if half[k] > 0] or [0.0])
+    if report.blends:
+        turn = np.linalg.norm(np.diff(_units(waypoints), axis=0), axis=1)
+        report.max_deviation = float(np.max(0.25 * interior * turn))
 
 
 def _sections(waypoints: np.ndarray, half: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -632,8 +640,7 @@ def _ruckig(waypoints, limits: Limits, check: _Check, max_deviation: float):
     deviation = np.full(len(waypoints), max_deviation)
     deviation[[0, -1]] = 0.0
     for attempt in range(BLEND_RETRIES + 2):
-        half = np.array([blend_half_length(waypoints, k, deviation[k]) if 0 < k < len(waypoints) - 1 else 0.0
-                         for k in range(len(waypoints))])  # fmt: skip
+        half = blend_half_lengths(waypoints, deviation)
         sections = [_ruckig_section(BlendedPath(w, h), limits) for w, h in _sections(waypoints, half)]
         failing = _failing_corners(sections, waypoints, half, max_deviation, check, limits, report)
         if not failing:
