@@ -170,3 +170,13 @@ def test_the_facade_plans_maru1_with_it_on_spheres_and_certifies_the_path(maru1)
                                         seed=1))  # fmt: skip
     assert result.status is PlanStatus.SUCCESS, result.message
     assert result.stats.certified and result.stats.collision_model == "spheres"
+
+
+def test_a_goal_it_cannot_reach_ends_at_the_termination_condition_with_the_tree_kept(panda):
+    """goal_range 0 and a goal off the lattice in the whole arm space: no proof and no path, only the timeout."""
+    gs = arm_space(panda)
+    goal = np.clip(gs.base[gs.indices] + 0.1, gs.lower, gs.upper)
+    planner, _, status, path = plan(panda, gs, goal, scene=wall_scene(), goal_range=0.0, seconds=0.3)
+    assert status == ob.PlannerStatus.TIMEOUT and path is None
+    assert not planner.exhausted and planner.failure_proof() is None
+    assert planner.count > 1 and planner.goal_node == -1
