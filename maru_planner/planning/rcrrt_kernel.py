@@ -44,7 +44,7 @@ _EMPTY = -1  # a free slot of the hash table
 
 
 class Tree:
-    """The kernel's node arrays (capacity rows) and lattice hash table, as :func:`new_tree` makes them."""
+    """The search's node arrays (``capacity`` rows), lattice hash table and state ``st``, the start in row 0."""
 
     def __init__(self, start: np.ndarray, capacity: int):
         dim = len(start)
@@ -54,7 +54,7 @@ class Tree:
         self.expanded = np.zeros((capacity, 2 * dim), dtype=np.bool_)
         self.sigma = np.zeros(capacity)
         self.active = np.zeros(capacity, dtype=np.bool_)
-        self.table = np.full(4 * capacity, _EMPTY, dtype=np.int64)
+        self.table = np.full(_table_size(capacity), _EMPTY, dtype=np.int64)
         self.st = np.zeros(len(STATE_FIELDS), dtype=np.int64)
         self.st[GOAL_NODE] = -1
         self.X[0] = start
@@ -73,8 +73,13 @@ class Tree:
             new = np.full((2 * cap,) + old.shape[1:], -1 if name == "parent" else 0, dtype=old.dtype)
             new[:cap] = old
             setattr(self, name, new)
-        self.table = np.full(8 * cap, _EMPTY, dtype=np.int64)
+        self.table = np.full(_table_size(2 * cap), _EMPTY, dtype=np.int64)
         rehash(self.coords, self.st[COUNT], self.st[GOAL_NODE], self.table)
+
+
+def _table_size(capacity: int) -> int:
+    """Hash table slots for ``capacity`` nodes: a power of two (the probe masks with it), at most a quarter full."""
+    return 1 << max(2, int(4 * capacity - 1).bit_length())
 
 
 def settings(goal_bias: float, step: float, goal_range: float) -> np.ndarray:
