@@ -10,6 +10,9 @@ import sys
 import textwrap
 
 import pytest
+import rclpy
+
+from maru_planner.ros import lifecycle
 
 # A ManagedNode that signals itself at a chosen moment, then records its cleanup on stdout.
 NODE = textwrap.dedent(
@@ -60,3 +63,18 @@ def test_a_signal_stops_the_node_quietly_and_releases_it(when, signal_name):
     # Ctrl-C raises inside configure, which then never finished: nothing was configured, nothing to release
     assert done.stdout.count("cleaned up") == (0 if (when, signal_name) == ("configure", "SIGINT") else 1), output
 
+
+
+def test_a_context_a_signal_shut_down_during_try_shutdown_counts_as_shut_down(monkeypatch):
+    """rclpy.try_shutdown checks the context, then shuts it down: a signal in between makes rcl raise. That context
+    is shut down, which is all the caller asked; an error on a context still up is not swallowed."""
+
+    def raced() -> None:
+        raise RuntimeError("failed to shutdown: rcl_shutdown already called on the given context")
+
+    monkeypatch.setattr(rclpy, "try_shutdown", raced)
+    monkeypatch.setattr(rclpy, "ok", lambda: False)
+    lifecycle._shut_down_context()
+    monkeypatch.setattr(rclpy, "ok", lambda: True)
+    with pytest.raises(RuntimeError, match="already called"):
+        lifecycle._shut_down_context()
