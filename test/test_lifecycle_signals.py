@@ -74,7 +74,7 @@ def test_a_context_a_signal_shut_down_during_try_shutdown_counts_as_shut_down(mo
 
     monkeypatch.setattr(rclpy, "try_shutdown", raced)
     monkeypatch.setattr(rclpy, "ok", lambda: False)
-    lifecycle._shut_down_context()
+    lifecycle.shut_down_context()
     monkeypatch.setattr(rclpy, "ok", lambda: True)
     with pytest.raises(RuntimeError, match="already called"):
-        lifecycle._shut_down_context()
+        lifecycle.shut_down_context()

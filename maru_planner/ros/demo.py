@@ -132,6 +132,7 @@ def main(argv=None) -> int:
     # lazy: rclpy and its client load only once configure_loopback_dds has set the DDS environment
     import rclpy
 
+    from maru_planner.ros.lifecycle import shut_down_context
     from maru_planner.ros.planning_client import PlanningClient
 
     problem = PROBLEMS["maru13"]
@@ -157,8 +158,7 @@ def main(argv=None) -> int:
     finally:
         if client is not None:
             client.close()
-        if rclpy.ok():
-            rclpy.shutdown()
+        shut_down_context()
         node.terminate()
         try:
             node.wait(timeout=10)

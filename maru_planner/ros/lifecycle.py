@@ -347,10 +347,10 @@ def run_node(
         node = make_node()
     except startup_errors as exc:
         print(f"{name}: cannot start: {one_line(exc)}", file=sys.stderr)
-        _shut_down_context()
+        shut_down_context()
         return 2
     except (KeyboardInterrupt, ExternalShutdownException, StartupInterrupted):  # stopped while starting
-        _shut_down_context()
+        shut_down_context()
         return 0
     node.get_logger().info(network)
     executor = (
@@ -368,11 +368,11 @@ def run_node(
         if farewell is not None:
             node.get_logger().info(farewell(node))
         node.destroy_node()
-        _shut_down_context()
+        shut_down_context()
     return 0
 
 
-def _shut_down_context() -> None:
+def shut_down_context() -> None:
     """``rclpy.try_shutdown()``, which races with rclpy's signal handler: a signal may shut the context down between
     its check and its own shutdown, which then raises rcl's "rcl_shutdown already called" (CI saw it once, SIGINT
     during configure). Shut down either way is what the caller wants."""
