@@ -38,8 +38,9 @@ def wall_scene() -> Scene:
     return Scene([Obstacle("wall", "box", size=[0.4, 0.05, 0.8], pose=[0.3, 0.3, 0.4])])
 
 
-def plan(robot, gs: GroupSpace, goal, seed: int = 3, scene: Scene | None = None, seconds: float = 20.0, **params):
-    checker = SphereCollisionChecker(robot, scene)
+def plan(robot, gs: GroupSpace, goal, seed: int = 3, scene: Scene | None = None, seconds: float = 20.0,
+         checker_options: dict | None = None, **params):  # fmt: skip
+    checker = SphereCollisionChecker(robot, scene, **(checker_options or {}))
     edges = EdgeChecker(gs, checker, RESOLUTION)
     ss = og.SimpleSetup(gs.space)
     planner = RCRRT(ss.getSpaceInformation(), edges)
@@ -81,6 +82,17 @@ def test_runs_compiled_on_a_numba_sphere_checker_and_finds_a_lattice_path_the_ch
     moves = np.abs(np.diff(np.round(steps), axis=0))
     assert np.all(moves.sum(axis=1) == 1)  # one input: one joint by one step
     assert np.abs(goal - path[-2]).max() <= rc_rrt.RCRRT_PARAMS["goal_range"].default + 1e-12
+    assert all(edges.edge_valid(a, b) for a, b in zip(path[:-1], path[1:], strict=True))
+
+
+@pytest.mark.parametrize("options", [{"grid_min_obstacles": 1}, {"confirm": False}], ids=["grid", "pure-spheres"])
+def test_through_the_grid_scan_and_on_the_pure_sphere_model_every_edge_is_one_the_checker_passes(panda, options):
+    """A large scene's grid broad phase (the checker's own scan per edge), and a checker that leaves no state to the
+    exact model (ambiguous ones collide)."""
+    gs = arm_space(panda)
+    planner, edges, status, path = plan(panda, gs, far_goal(gs), scene=wall_scene(), checker_options=options)
+    assert edges.checker.uses_grid == ("grid_min_obstacles" in options)
+    assert planner.compiled and status == ob.PlannerStatus.EXACT_SOLUTION and planner.collisions > 0
     assert all(edges.edge_valid(a, b) for a, b in zip(path[:-1], path[1:], strict=True))
 
 
