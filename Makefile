@@ -28,7 +28,7 @@ $(STAMP): requirements.txt $(PACKAGE_DIR)/setup.py $(PACKAGE_DIR)/package.xml
 # numba compiles the planning kernels at first use and caches them on disk: done here once per source change, so
 # no node start, request or test pays the ~1 min compile (maru_planner/planning/warm_up.py)
 $(KERNELS): $(STAMP) $(shell find maru_planner -name '*.py')
-	@echo "[setup] compiling the planning kernels (about a minute after an install or a source change)"
+	@echo "[setup] compiling the planning kernels (about two minutes after an install or a source change)"
 	@$(PY) -m maru_planner.planning.warm_up
 	@touch $@
 
