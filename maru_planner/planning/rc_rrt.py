@@ -306,7 +306,7 @@ class RCRRT(ob.Planner):
             return ob.PlannerStatus(ob.PlannerStatus.INFEASIBLE)
         if code != kernel.SOLVED:
             return ob.PlannerStatus(ob.PlannerStatus.TIMEOUT)
-        return self._finish_path(kernel.solution_path(tree.X, tree.parent, self.goal_node))
+        return self._finish_path()
 
     def _keep_tree(self, tree) -> None:
         """The compiled search's tree as this planner's (graph_size, getPlannerData)."""
@@ -358,17 +358,18 @@ class RCRRT(ob.Planner):
 
     def _finish(self, i: int, goal: np.ndarray):
         self.goal_node = self._add_node(goal, None, i)
+        return self._finish_path()
+
+    def _finish_path(self):
+        """The branch from the start to ``goal_node`` as the problem's solution (either loop's tree)."""
         chain = []
         j = self.goal_node
         while j >= 0:
             chain.append(j)
             j = self.parent[j]
-        return self._finish_path(self.X[chain[::-1]])
-
-    def _finish_path(self, waypoints: np.ndarray):
         path = og.PathGeometric(self._si)
-        for q in waypoints:
-            path.append(self._ompl_state(q))
+        for j in reversed(chain):
+            path.append(self._ompl_state(self.X[j]))
         self.getProblemDefinition().addSolutionPath(path, False, 0.0, self.getName())
         return ob.PlannerStatus(ob.PlannerStatus.EXACT_SOLUTION)
 

@@ -17,7 +17,7 @@ Resumable like :mod:`~maru_planner.planning.rrtc_kernel`: :func:`run` returns
 * :data:`NEED_EXACT` when the pending edge's only doubtful states are ambiguous on the spheres (the
   checker confirms them on the exact model): they are in ``amb_states[:edge_st[rrtc_kernel.N_AMB]]``, the caller
   passes the edge's verdict to the next call;
-* :data:`SOLVED` (the goal node is ``st[GOAL_NODE]``) or :data:`EXHAUSTED` (no node has an untried
+* :data:`SOLVED` (the goal node is ``st[GOAL_NODE]``, its branch the path) or :data:`EXHAUSTED` (no node has an untried
   input: no path at this resolution).
 
 Deterministic: samples and acceptance draws come from the splitmix64 generator ``rng`` the caller seeds.
@@ -330,18 +330,3 @@ def run(X, coords, parent, expanded, sigma, active, table, st, verdict, max_edge
                   step, goal_range) == SOLVED:  # fmt: skip
             return SOLVED
     return RUNNING
-
-
-@njit(cache=True)
-def solution_path(X, parent, goal_node):
-    """Waypoints start → goal of a SOLVED search."""
-    n, i = 0, goal_node
-    while i >= 0:
-        n += 1
-        i = parent[i]
-    out = np.empty((n, X.shape[1]))
-    i = goal_node
-    for k in range(n - 1, -1, -1):
-        out[k] = X[i]
-        i = parent[i]
-    return out
