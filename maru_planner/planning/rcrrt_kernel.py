@@ -13,7 +13,7 @@ integer coordinates (steps from the start along each axis), so no lattice size l
 Resumable like :mod:`~maru_planner.planning.rrtc_kernel`: :func:`run` returns
 
 * every ``max_edges`` edge checks (:data:`RUNNING`), for the caller's termination condition;
-* :data:`FULL` when the node arrays are full (:func:`grow`);
+* :data:`FULL` when the node arrays are full (:meth:`Tree.grow`);
 * :data:`NEED_EXACT` when the pending edge's only doubtful states are ambiguous on the spheres (the
   checker confirms them on the exact model): they are in ``amb_states[:edge_st[rrtc_kernel.N_AMB]]``, the caller
   passes the edge's verdict to the next call;
@@ -66,7 +66,8 @@ class Tree:
         return self.X, self.coords, self.parent, self.expanded, self.sigma, self.active, self.table
 
     def grow(self) -> None:
-        """Twice the capacity, contents kept (the hash table is rebuilt at its new size)."""
+        """Twice the capacity, contents kept (the hash table is rebuilt at its new size). Only a search still running
+        grows: there is no goal node yet, every node is a lattice point."""
         cap = len(self.X)
         for name in ("X", "coords", "parent", "expanded", "sigma", "active"):
             old = getattr(self, name)
@@ -74,7 +75,7 @@ class Tree:
             new[:cap] = old
             setattr(self, name, new)
         self.table = np.full(_table_size(2 * cap), _EMPTY, dtype=np.int64)
-        rehash(self.coords, self.st[COUNT], self.st[GOAL_NODE], self.table)
+        rehash(self.coords, self.st[COUNT], self.table)
 
 
 def _table_size(capacity: int) -> int:
@@ -128,11 +129,10 @@ def _insert(coords, table, i):
 
 
 @njit(cache=True)
-def rehash(coords, count, goal_node, table):
-    """Insert nodes ``0..count-1`` (not the goal node, off the lattice) into an empty ``table``."""
+def rehash(coords, count, table):
+    """Insert nodes ``0..count-1`` into an empty ``table``."""
     for i in range(count):
-        if i != goal_node:
-            _insert(coords, table, i)
+        _insert(coords, table, i)
 
 
 @njit(cache=True)
@@ -145,14 +145,14 @@ def _spend(expanded, active, i, u):
 
 
 @njit(cache=True)
-def _add_node(X, coords, parent, expanded, sigma, active, table, st, x, i_from, u, lower, upper, step):
+def _add_node(X, coords, parent, expanded, active, table, st, x, i_from, u, lower, upper, step):
     """Node for lattice point ``x``, reached from ``i_from`` by input ``u``; its inputs leaving the limits or
-    reaching a lattice point already in the tree are spent (and the neighbour's input back to it)."""
+    reaching a lattice point already in the tree are spent (and the neighbour's input back to it). Its σ is the
+    fresh row's 0."""
     i = st[COUNT]
     st[COUNT] = i + 1
     X[i] = x
     parent[i] = i_from
-    sigma[i] = 0.0
     dim = X.shape[1]
     if i_from >= 0:
         coords[i] = coords[i_from]
@@ -252,8 +252,7 @@ def _apply(X, coords, parent, expanded, sigma, active, table, st, x_new, valid, 
         st[COLLISIONS] += 1
         _raise_sigma(sigma, parent, i_from, expanded.shape[1])
         return RUNNING
-    new = _add_node(X, coords, parent, expanded, sigma, active, table, st, x_new, i_from, st[INPUT], lower, upper,
-                    step)  # fmt: skip
+    new = _add_node(X, coords, parent, expanded, active, table, st, x_new, i_from, st[INPUT], lower, upper, step)
     if _near_goal(X[new], goal, goal_range):
         st[PENDING], st[KIND], st[FROM] = PROPOSED, GOAL_EDGE, new
     return RUNNING
@@ -274,9 +273,8 @@ def _add_goal(X, parent, expanded, active, st, goal, i_from):
 @njit(cache=True)
 def start(X, coords, parent, expanded, sigma, active, table, st, goal, lower, upper, conf):
     """Put the start (``X[0]``) in the tree; its straight edge to the goal is the first to check when in range."""
-    x0 = X[0].copy()
-    _add_node(X, coords, parent, expanded, sigma, active, table, st, x0, -1, 0, lower, upper, conf[STEP])
-    if _near_goal(x0, goal, conf[GOAL_RANGE]):
+    _add_node(X, coords, parent, expanded, active, table, st, X[0], -1, 0, lower, upper, conf[STEP])
+    if _near_goal(X[0], goal, conf[GOAL_RANGE]):
         st[PENDING], st[KIND], st[FROM] = PROPOSED, GOAL_EDGE, 0
 
 
