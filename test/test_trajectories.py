@@ -98,7 +98,7 @@ def test_a_colliding_blend_is_shrunk_then_the_motion_stops_at_that_corner():
     turn = (ZIGZAG[3] - corner) / np.linalg.norm(ZIGZAG[3] - corner) - (corner - ZIGZAG[1]) / np.linalg.norm(
         corner - ZIGZAG[1]
     )
-    middle = corner + 0.25 * timing.blend_half_length(ZIGZAG, 2, 0.3) * turn
+    middle = corner + 0.25 * timing.blend_half_lengths(ZIGZAG, np.full(len(ZIGZAG), 0.3))[2] * turn
     box = BoxWorldChecker([(middle[:2] - 0.02, middle[:2] + 0.02)])
 
     def free(states, _deviation):
@@ -163,10 +163,11 @@ def test_a_bend_taking_check_gets_each_blend_as_exact_parabola_parts():
     parameterize(ZIGZAG, "toppra", curve_free=recorder, max_deviation=deviation)
     assert len(recorder.curves) == len(ZIGZAG) - 2  # every corner once: none failed
     tau = np.linspace(0.0, 1.0, 11)
+    half_lengths = timing.blend_half_lengths(ZIGZAG, np.full(len(ZIGZAG), deviation))
     for k, (ends, off_chord, bends) in enumerate(recorder.curves, start=1):
         parts = timing.BLEND_BEND_PARTS
         assert len(ends) == parts + 1 and len(bends) == parts and not off_chord.any()
-        half_length = timing.blend_half_length(ZIGZAG, k, deviation)
+        half_length = half_lengths[k]
         blend = timing.BlendedPath(ZIGZAG[k - 1 : k + 2], np.array([0.0, half_length, 0.0]))  # corner k alone
         s0, s1 = blend.starts[1], blend.starts[2]
         for j, (a, b, bend) in enumerate(zip(ends[:-1], ends[1:], bends, strict=True)):

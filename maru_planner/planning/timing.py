@@ -336,13 +336,6 @@ def blend_half_lengths(waypoints: np.ndarray, deviation: np.ndarray, units: np.n
     return half
 
 
-def blend_half_length(waypoints: np.ndarray, k: int, deviation: float) -> float:
-    """:func:`blend_half_lengths` at interior waypoint k alone."""
-    at_k = np.zeros(len(waypoints))
-    at_k[k] = deviation
-    return float(blend_half_lengths(waypoints, at_k)[k])
-
-
 def deviation_from_path(points: np.ndarray, path: np.ndarray) -> np.ndarray:
     """Euclidean distance of each of ``points`` from the polyline ``path`` (rad)."""
     points, path = np.atleast_2d(points), np.atleast_2d(path)
