@@ -120,9 +120,9 @@ def _shortcut_bent_path(planner: MotionPlanner, group: str, start: dict[str, flo
 def _planner_ids(planner: MotionPlanner) -> list[str]:
     """OMPL's RRT-Connect (the checker's kernels; other planners' own code is Python or OMPL's), and the compiled
     loops where they run (a sphere checker with numba): CompiledRRTConnect's and RCRRT's."""
-    if is_compiled_sphere_checker(planner.checker):
-        return ["RRTConnect", "CompiledRRTConnect", "RCRRT"]
-    return ["RRTConnect", "CompiledRRTConnect"] if is_sphere_checker(planner.checker) else ["RRTConnect"]
+    if not is_sphere_checker(planner.checker):
+        return ["RRTConnect"]
+    return ["RRTConnect", "CompiledRRTConnect"] + (["RCRRT"] if is_compiled_sphere_checker(planner.checker) else [])
 
 
 def _boxes(robot: RobotModel, count: int) -> Scene:
