@@ -16,6 +16,7 @@ Reported per problem and loop: success, median and p95 search time and whole-req
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
 from pathlib import Path
 from unittest import mock
@@ -50,7 +51,7 @@ def run_loop(robot: RobotModel, name: str, loop: str, batch: list[MotionRequest]
     config = PlannerConfig(collision_model="exact" if loop.endswith("exact checker") else "spheres")
     planner = MotionPlanner.from_scene(robot, Scene.from_yaml(PROBLEMS[name].scene_path), config)
     python_loop = mock.patch.object(RCRRT, "compiled", property(lambda _self: False))
-    with python_loop if loop != "compiled" else mock.MagicMock():
+    with python_loop if loop != "compiled" else contextlib.nullcontext():
         planner.plan(batch[0])  # warm: numba loads its cached code, the scene's tables are built
         rows = []
         for request in batch:
