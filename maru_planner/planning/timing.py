@@ -40,10 +40,10 @@ from typing import Any
 
 import numpy as np
 import ruckig
-import toppra.algorithm
+import toppra.constants
 import toppra.constraint
 import toppra.interpolator
-import toppra.solverwrapper
+from toppra.solverwrapper.cy_seidel_solverwrapper import seidelWrapper
 
 from maru_planner import errors
 from maru_planner.planning import postprocess
@@ -67,10 +67,6 @@ RUCKIG_DURATION = 100.0  # s: longer sections are computed sped up and played ba
 # Slowest scaling a request may ask for (10,000x the full-speed duration); far below it the time
 # parameterisations overflow (1e-300 gave NaN durations and internal errors).
 MIN_SCALING = 1e-4
-
-# toppra's ReachabilityAlgorithm asks which optional QP solvers are importable each time one is built: two
-# importlib find_spec walks of sys.path, ~0.13 ms of a section's ~1 ms. Within a process the answer cannot change.
-toppra.solverwrapper.available_solvers = functools.cache(toppra.solverwrapper.available_solvers)
 
 CurveFree = Callable[[np.ndarray, np.ndarray], bool]  # (states, chord deviation per joint) -> collision-free
 # (states, chord deviation per joint), or with a third element, bends (states - 1, joints): segment i is the parabola
@@ -570,12 +566,50 @@ def _toppra(waypoints, limits: Limits, check: _Check, max_deviation: float):
 def _toppra_section(path: BlendedPath, limits: Limits) -> _PathVelocity:
     grid, pieces = path.grid()
     constraints = _constraints(limits.velocity.tobytes(), limits.acceleration.tobytes())
-    instance = toppra.algorithm.TOPPRA(constraints, path, gridpoints=grid, solver_wrapper="seidel")
-    _sdd, sd, _v = instance.compute_parameterization(0.0, 0.0)
+    sd = _rest_to_rest_speeds(seidelWrapper(constraints, path, grid, solve_lp1d=True), len(grid) - 1)
     if sd is None:
-        raise _ParameterizationFailed(f"toppra: {instance.problem_data.return_code}")
-    profile = _PathVelocity(path, grid, pieces, np.maximum(np.asarray(sd, float), 0.0))
-    return _within_limits(profile, limits)
+        raise _ParameterizationFailed("toppra: the path is not controllable (numerical failure)")
+    return _within_limits(_PathVelocity(path, grid, pieces, sd), limits)
+
+
+_HIGHEST = np.array([1e-9, -1.0])  # toppra's stage objectives over (u, x): the largest x (a tie broken to small u),
+_LOWEST = -_HIGHEST  # the smallest x
+
+
+def _rest_to_rest_speeds(solver: Any, stages: int) -> np.ndarray | None:
+    """Path speeds ṡ at the grid points, from rest to rest: ``toppra.algorithm.TOPPRA(...).compute_parameterization
+    (0, 0)`` step for step on toppra's Seidel LP ``solver``; None where toppra fails. toppra's own driver allocates
+    arrays and asks the logger at every stage, which costs three times its LPs (~0.8 of a section's ~1.1 ms)."""
+    controllable = np.zeros((stages + 1, 2))  # [lowest, highest] controllable ṡ² per grid point; rest at the end
+    solver.setup_solver()
+    for i in range(stages - 1, -1, -1):
+        lowest, highest = controllable[i + 1]
+        high = solver.solve_stagewise_optim(i, None, _HIGHEST, math.nan, math.nan, lowest, highest)[1]
+        low = solver.solve_stagewise_optim(i, None, _LOWEST, math.nan, math.nan, lowest, highest)[1]
+        if math.isnan(high) or math.isnan(low):
+            return None
+        controllable[i] = (max(low, 0.0), high)
+    if not controllable[0, 0] <= toppra.constants.SMALL <= controllable[0, 1] + 2.0 * toppra.constants.SMALL:
+        return None  # rest is not controllable
+    deltas = solver.get_deltas()
+    objectives = np.column_stack([-2.0 * deltas, np.full(stages, -1.0)])  # the largest ṡ² at the next point
+    x = np.zeros(stages + 1)
+    i = tries = 0
+    while i < stages:
+        lowest, highest = controllable[i + 1]
+        u = solver.solve_stagewise_optim(i, None, objectives[i], x[i], x[i], lowest, highest)[0]
+        if math.isnan(u):  # slightly infeasible by rounding: toppra slows down a little and retries
+            if tries == toppra.constants.MAX_TRIES:
+                return None
+            x[i] = max(x[i] - toppra.constants.TINY, 0.999 * x[i])
+            tries += 1
+            continue
+        tries = 0
+        x_next = x[i] + 2.0 * deltas[i] * u
+        x[i + 1] = min(highest, max(lowest, max(x_next - toppra.constants.TINY, 0.9999 * x_next)))
+        i += 1
+    solver.close_solver()
+    return np.sqrt(np.maximum(x, 0.0))
 
 
 @functools.lru_cache(maxsize=16)
