@@ -275,6 +275,22 @@ def test_the_speeds_are_toppras_own(seed):
     assert np.allclose(ours, expected, rtol=1e-12, atol=1e-12)
 
 
+@pytest.mark.parametrize("deviation", [0.05, 0.3, 10.0])  # 10 rad: blends take whole segments, no straight left
+def test_the_blended_curve_is_continuous_and_its_grid_covers_every_piece(deviation):
+    path = timing.BlendedPath(ZIGZAG, timing.blend_half_lengths(ZIGZAG, np.full(len(ZIGZAG), deviation)))
+    assert np.array_equal(path.blend_of[path.blend_of >= 0], np.arange(1, len(ZIGZAG) - 1))  # each corner, in order
+    ends = path(path.starts[1:-1] - 1e-12)  # the end of each piece is where the next one starts, in value and slope
+    assert np.allclose(ends, path.p0[1:], atol=1e-9)
+    assert np.allclose(path(path.starts[1:-1] - 1e-12, 1), path.v0[1:], atol=1e-9)
+    assert np.allclose(path(path.starts[-1]), ZIGZAG[-1]) and np.allclose(path(0.0), ZIGZAG[0])
+    grid, pieces = path.grid()
+    assert np.all(np.diff(grid) > 0) and grid[0] == 0.0 and grid[-1] == path.starts[-1]
+    assert set(path.starts.tolist()) <= set(grid.tolist())  # every piece boundary is a grid point
+    per_piece = np.bincount(pieces, minlength=len(path.p0))
+    assert np.all(per_piece[path.blend_of >= 0] >= timing.BLEND_INTERVALS) and np.all(per_piece >= 1)
+    assert np.all((grid[:-1] >= path.starts[pieces]) & (grid[:-1] < path.starts[pieces + 1]))
+
+
 def test_deviation_from_path_is_the_distance_to_the_nearest_segment():
     path = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]])
     points = np.array([[0.5, 0.2], [1.3, 0.5], [2.0, 2.0], [1.0, 0.0]])

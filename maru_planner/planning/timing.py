@@ -219,30 +219,23 @@ class BlendedPath(toppra.interpolator.AbstractGeometricPath):
     """
 
     def __init__(self, waypoints: np.ndarray, half_lengths: np.ndarray):
-        starts, p0, v0, dd, blend_of = [], [], [], [], []
-        s = 0.0
         units = _units(waypoints)
-        for k in range(len(waypoints) - 1):
-            a = waypoints[k] + half_lengths[k] * units[k]
-            straight = np.linalg.norm(waypoints[k + 1] - waypoints[k]) - half_lengths[k] - half_lengths[k + 1]
-            if straight > 1e-12:
-                starts.append(s)
-                p0.append(a)
-                v0.append(units[k])
-                dd.append(np.zeros_like(a))
-                blend_of.append(-1)
-                s += straight
-            if k + 1 < len(waypoints) - 1:
-                l_blend = half_lengths[k + 1]
-                starts.append(s)
-                p0.append(waypoints[k + 1] - l_blend * units[k])
-                v0.append(units[k])
-                dd.append((units[k + 1] - units[k]) / (2.0 * l_blend))
-                blend_of.append(k + 1)
-                s += 2.0 * l_blend
-        self.starts = np.array(starts + [s])
-        self.p0, self.v0, self.dd = np.array(p0), np.array(v0), np.array(dd)
-        self.blend_of = np.array(blend_of)  # waypoint index of a blend piece, -1 for a line
+        inner = len(waypoints) - 2  # blends: one per interior waypoint; pieces in order line 0, blend 1, line 1, ...
+        straight = np.linalg.norm(np.diff(waypoints, axis=0), axis=1) - half_lengths[:-1] - half_lengths[1:]
+        blend = half_lengths[1:-1]
+        line_p0 = waypoints[:-1] + half_lengths[:-1, None] * units
+        blend_p0 = waypoints[1:-1] - blend[:, None] * units[:-1]
+        blend_dd = (units[1:] - units[:-1]) / (2.0 * blend[:, None])
+        order = np.empty(2 * inner + 1, dtype=int)  # position of each piece among [lines..., blends...]
+        order[0::2], order[1::2] = np.arange(inner + 1), inner + 1 + np.arange(inner)
+        keep = np.concatenate([straight > 1e-12, np.ones(inner, dtype=bool)])[order]
+        order = order[keep]
+        lengths = np.concatenate([straight, 2.0 * blend])[order]
+        self.starts = np.concatenate([[0.0], np.cumsum(lengths)])
+        self.p0 = np.concatenate([line_p0, blend_p0])[order]
+        self.v0 = np.concatenate([units, units[:-1]])[order]
+        self.dd = np.concatenate([np.zeros_like(units), blend_dd])[order]
+        self.blend_of = np.concatenate([np.full(inner + 1, -1), np.arange(1, inner + 1)])[order]  # -1: a line
         self.end = waypoints[-1]
 
     @property
@@ -276,14 +269,13 @@ class BlendedPath(toppra.interpolator.AbstractGeometricPath):
 
     def grid(self) -> tuple[np.ndarray, np.ndarray]:
         """toppra grid points (every piece boundary included) and the piece of each grid interval."""
-        length = self.starts[-1]
-        points, pieces = [], []
-        for k in range(len(self.p0)):
-            s0, s1 = self.starts[k], self.starts[k + 1]
-            n = max(BLEND_INTERVALS if self.blend_of[k] >= 0 else 1, math.ceil(GRID_INTERVALS * (s1 - s0) / length))
-            points.append(np.linspace(s0, s1, n + 1)[:-1])
-            pieces.append(np.full(n, k))
-        return np.append(np.concatenate(points), length), np.concatenate(pieces)
+        s0, lengths = self.starts[:-1], np.diff(self.starts)
+        least = np.where(self.blend_of >= 0, BLEND_INTERVALS, 1)
+        n = np.maximum(least, np.ceil(GRID_INTERVALS * lengths / self.starts[-1]).astype(int))
+        pieces = np.repeat(np.arange(len(n)), n)
+        step = np.arange(len(pieces)) - np.repeat(np.cumsum(n) - n, n)  # interval index within its piece
+        points = s0[pieces] + lengths[pieces] * (step / n[pieces])
+        return np.append(points, self.starts[-1]), pieces
 
 
 def _units(waypoints: np.ndarray) -> np.ndarray:
