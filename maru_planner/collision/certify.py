@@ -512,6 +512,7 @@ class PathCertifier:
         self._robot_pairs = self_collision_pairs(robot)
         self._geoms = self._robot_geometry(lambda g: geometries[g].geometry)
         self._hull_geoms = self._robot_geometry(lambda g: self._hulls.get(g, geometries[g].geometry))
+        self._query = (coal.DistanceRequest(), coal.DistanceResult())  # reused (cleared): making them costs like GJK
         self._pairs: _Pairs | None = None
         self._pairs_owner: list | None = None  # the reachable-obstacle list _pairs was built from
         self._near_tables: dict[bytes, _Pairs] = {}  # by the near obstacles' indices into _near_owner
@@ -755,8 +756,10 @@ class PathCertifier:
             return pin.computeDistance(model, data, int(pairs.self_pair[pair])).min_distance - DISTANCE_TOLERANCE
         g = int(pairs.first[pair])
         geometry, hull_geometry, placement = pairs.obstacles[pairs.second[pair]]
+        request, result = self._query
+        result.clear()
         distance = coal.distance(model.geometryObjects[g].geometry, data.oMg[g], hull_geometry if hull else geometry,
-                                 placement, coal.DistanceRequest(), coal.DistanceResult())  # fmt: skip
+                                 placement, request, result)  # fmt: skip
         return distance - DISTANCE_TOLERANCE
 
     def _robot_geometry(self, shape_of: Callable[[int], coal.CollisionGeometry]):
