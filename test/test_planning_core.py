@@ -114,7 +114,11 @@ def test_time_parameterisation_respects_scaled_limits():
 
 def test_smoothness_is_zero_for_a_straight_line_and_positive_for_a_corner():
     assert postprocess.smoothness(np.array([[0, 0], [1, 0], [2, 0]], float)) == 0.0
-    assert postprocess.smoothness(np.array([[0, 0], [1, 0], [1, 1]], float)) > 0.0
+    assert postprocess.smoothness(np.array([[0, 0], [1, 0], [1, 1]], float)) == pytest.approx(np.pi**2 / 4)  # (2·½π/2)²
+    # as OMPL's: triples with a repeated waypoint count nothing (here the corner at it), the 90° turn over segments
+    # of 1 and 2 after it counts (2·½π/3)²
+    square = np.array([[0, 0], [1, 0], [1, 0], [1, 1], [-1, 1]], float)
+    assert postprocess.smoothness(square) == pytest.approx(np.pi**2 / 9)
 
 
 # --- facade: every planner -------------------------------------------------------------------

@@ -30,19 +30,17 @@ def path_length(path: np.ndarray) -> float:
 
 def smoothness(path: np.ndarray) -> float:
     """OMPL's ``PathGeometric::smoothness``: Σ (2·turn angle / (a + b))² over waypoint triples (0 = straight)."""
-    total = 0.0
-    for i in range(2, len(path)):
-        a = float(np.linalg.norm(path[i - 1] - path[i - 2]))
-        b = float(np.linalg.norm(path[i] - path[i - 1]))
-        if a < 1e-12 or b < 1e-12:
-            continue
-        c = float(np.linalg.norm(path[i] - path[i - 2]))
-        cos_value = (a * a + b * b - c * c) / (2.0 * a * b)
-        if -1.0 < cos_value < 1.0:
-            angle = math.pi - math.acos(cos_value)
-            k = 2.0 * angle / (a + b)
-            total += k * k
-    return float(total)
+    path = np.asarray(path, dtype=float)
+    if len(path) < 3:
+        return 0.0
+    a = np.linalg.norm(path[1:-1] - path[:-2], axis=1)
+    b = np.linalg.norm(path[2:] - path[1:-1], axis=1)
+    c = np.linalg.norm(path[2:] - path[:-2], axis=1)
+    turns = (a >= 1e-12) & (b >= 1e-12)  # a repeated waypoint has no turn
+    cos_value = (a * a + b * b - c * c) / np.where(turns, 2.0 * a * b, 1.0)
+    turns &= (cos_value > -1.0) & (cos_value < 1.0)
+    k = 2.0 * (math.pi - np.arccos(cos_value[turns])) / (a + b)[turns]
+    return float(np.sum(k * k))
 
 
 def drop_collinear(path: np.ndarray, tol: float = 1e-9) -> np.ndarray:
