@@ -86,10 +86,6 @@ def toppras_driver(constraints: list, path: timing.BlendedPath, grid: np.ndarray
     return instance.compute_parameterization(0.0, 0.0)[1]
 
 
-def ours(constraints: list, path: timing.BlendedPath, grid: np.ndarray) -> np.ndarray | None:
-    return timing._rest_to_rest_speeds(timing.seidelWrapper(constraints, path, grid, solve_lp1d=True), len(grid) - 1)
-
-
 def measure(item: dict, repeats: int) -> dict:
     """Both drivers on every section of one path: best-of-``repeats`` seconds summed over sections, grid points,
     and the largest speed difference relative to the profile's peak."""
@@ -102,7 +98,7 @@ def measure(item: dict, repeats: int) -> dict:
         best = dict.fromkeys(DRIVERS, np.inf)
         speeds = {}
         for _ in range(repeats):
-            for name, driver in zip(DRIVERS, (toppras_driver, ours), strict=True):
+            for name, driver in zip(DRIVERS, (toppras_driver, timing._rest_to_rest_speeds), strict=True):
                 t0 = time.perf_counter()
                 speeds[name] = driver(constraints, path, grid)
                 best[name] = min(best[name], time.perf_counter() - t0)

@@ -270,7 +270,7 @@ def test_the_speeds_are_toppras_own(seed):
     constraints = timing._constraints(limits.velocity.tobytes(), limits.acceleration.tobytes())
     _sdd, expected, _v = toppra.algorithm.TOPPRA(constraints, path, gridpoints=grid,
                                                  solver_wrapper="seidel").compute_parameterization(0.0, 0.0)
-    ours = timing._rest_to_rest_speeds(timing.seidelWrapper(constraints, path, grid, solve_lp1d=True), len(grid) - 1)
+    ours = timing._rest_to_rest_speeds(constraints, path, grid)
     assert expected is not None and ours is not None
     assert np.max(expected) > 0.1
     assert np.allclose(ours, expected, rtol=1e-12, atol=1e-12)

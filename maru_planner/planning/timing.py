@@ -558,7 +558,7 @@ def _toppra(waypoints, limits: Limits, check: _Check, max_deviation: float):
 def _toppra_section(path: BlendedPath, limits: Limits) -> _PathVelocity:
     grid, pieces = path.grid()
     constraints = _constraints(limits.velocity.tobytes(), limits.acceleration.tobytes())
-    sd = _rest_to_rest_speeds(seidelWrapper(constraints, path, grid, solve_lp1d=True), len(grid) - 1)
+    sd = _rest_to_rest_speeds(constraints, path, grid)
     if sd is None:
         raise _ParameterizationFailed("toppra: the path is not controllable (numerical failure)")
     return _within_limits(_PathVelocity(path, grid, pieces, sd), limits)
@@ -567,14 +567,16 @@ def _toppra_section(path: BlendedPath, limits: Limits) -> _PathVelocity:
 _HIGHEST = np.array([1e-9, -1.0])  # toppra's stage objective over (u, x): the largest x, a tie broken to small u
 
 
-def _rest_to_rest_speeds(solver: Any, stages: int) -> np.ndarray | None:
-    """Path speeds ṡ at the grid points, from rest to rest: ``toppra.algorithm.TOPPRA(...).compute_parameterization
-    (0, 0)`` step for step on toppra's Seidel LP ``solver``; None where toppra fails. toppra's own driver allocates
-    arrays and asks the logger at every stage, which costs three times its LPs (~0.8 of a section's ~1.1 ms).
+def _rest_to_rest_speeds(constraints: list, path: BlendedPath, grid: np.ndarray) -> np.ndarray | None:
+    """Path speeds ṡ at the ``grid`` points from rest to rest: the profile of ``toppra.algorithm.TOPPRA(constraints,
+    path, gridpoints=grid).compute_parameterization(0, 0)``, from the same Seidel LPs; None where toppra fails.
+    toppra's own driver allocates arrays and asks the logger at every stage, which costs three times its LPs.
 
     The lowest controllable ṡ² is 0 at every grid point (rest is reachable from rest: x = u = 0 meets every
     constraint), so only the highest is computed; toppra's LP for the lowest returns 0 up to rounding (< 1e-15).
     """
+    solver = seidelWrapper(constraints, path, grid, solve_lp1d=True)
+    stages = len(grid) - 1
     highest = np.zeros(stages + 1)  # the highest controllable ṡ² per grid point; rest at the end
     solver.setup_solver()
     for i in range(stages - 1, -1, -1):
@@ -584,7 +586,7 @@ def _rest_to_rest_speeds(solver: Any, stages: int) -> np.ndarray | None:
         highest[i] = max(high, 0.0)
     deltas = solver.get_deltas()
     objectives = np.column_stack([-2.0 * deltas, np.full(stages, -1.0)])  # the largest ṡ² at the next point
-    x = np.zeros(stages + 1)
+    x = np.zeros(stages + 1)  # ṡ², never negative: every step below keeps it >= 0
     i = tries = 0
     while i < stages:
         u = solver.solve_stagewise_optim(i, None, objectives[i], x[i], x[i], 0.0, highest[i + 1])[0]
@@ -599,7 +601,7 @@ def _rest_to_rest_speeds(solver: Any, stages: int) -> np.ndarray | None:
         x[i + 1] = min(highest[i + 1], max(0.0, x_next - toppra.constants.TINY, 0.9999 * x_next))
         i += 1
     solver.close_solver()
-    return np.sqrt(np.maximum(x, 0.0))
+    return np.sqrt(x)
 
 
 @functools.lru_cache(maxsize=16)
