@@ -261,10 +261,10 @@ def proves_too_little(slack, needed):
 def _assess_rows_nb(configs, config_of, seg, pair, half, run_arrays, pair_arrays, robot_arrays, cover_arrays,
                     primitives, use_cover, margin, bound, rate, need, refine):  # fmt: skip
     """Per row, at the middle of its piece (one call per round of :meth:`PathCertifier._check_rows`): its pair's
-    margin on its segment, the distance bound (bounding volumes, then the sphere cover where they fall short), the
-    rate (configuration-free, tightened at the middle where the bound falls short of it), ``need`` = margin + half *
-    rate, and whether coal is to refine the bound (module doc: where it may prove the row, and wherever the bounds
-    leave no slack; on a covered pair only then)."""
+    margin on its segment, the rate (configuration-free, tightened at the middle where the bounding volumes fall
+    short of it), ``need`` = margin + half * rate, the distance bound (bounding volumes, then the sphere cover where
+    they fall short of ``need``), and whether coal is to refine the bound (module doc: where it may prove the row,
+    and wherever the bounds leave no slack; on a covered pair only then)."""
     pair_margin, rate_free, motion, downstream = run_arrays
     first, second, obstacle, other, covered, moves_first, moves_other, gap, box_center, box_rot, box_half = pair_arrays
     parent, kind, axis, prot, ppos, idx_q, g_joint, g_local, g_radius, q_joint, levers, prismatic = robot_arrays
@@ -275,28 +275,17 @@ def _assess_rows_nb(configs, config_of, seg, pair, half, run_arrays, pair_arrays
     volume = np.empty(n_rows)
     _volume_bounds_nb(centers, config_of, pair, first, second, obstacle, box_center, box_rot, box_half, g_radius,
                       volume)  # fmt: skip
-    enough = np.empty(n_rows)  # a bound this large proves the whole piece even with the configuration-free rate
-    n_cover = 0
-    cover_rows = np.empty(n_rows, dtype=np.int64)
     for r in range(n_rows):
         s, p = seg[r], pair[r]
         margin[r] = pair_margin[s, p]
         bound[r] = volume[r]
         rate[r] = rate_free[s, p]
-        enough[r] = margin[r] + half[r] * rate[r]
-        if use_cover and covered[p] and bound[r] < enough[r]:
-            cover_rows[n_cover] = r
-            n_cover += 1
-    if n_cover:
-        rows = cover_rows[:n_cover]
-        rows = rows[np.argsort(config_of[rows])]
-        cover_bounds_nb(rots, poss, rows, config_of, first[pair], second[pair], obstacle[pair], enough, *cover_arrays,
-                        *primitives, bound)  # fmt: skip
+        need[r] = margin[r] + half[r] * rate[r]
     to_axis = np.empty((n_configs, n_geoms, nq))
     has_axis = np.zeros((n_configs, n_geoms), dtype=np.bool_)
     for r in range(n_rows):
         s, p, c = seg[r], pair[r], config_of[r]
-        if bound[r] < enough[r]:  # tighten the levers with the configuration at the middle
+        if bound[r] < need[r]:  # tighten the levers with the configuration at the middle
             g, o, total = first[p], other[p], 0.0
             for b in (g, o):
                 if not has_axis[c, b]:
@@ -313,6 +302,20 @@ def _assess_rows_nb(configs, config_of, seg, pair, half, run_arrays, pair_arrays
                 total += lever * motion[s, j]
             rate[r] = total
         need[r] = margin[r] + half[r] * rate[r]
+    # the cover after the levers: it stops at the (lower) need they leave, and only where the volumes fall short of it
+    n_cover = 0
+    cover_rows = np.empty(n_rows, dtype=np.int64)
+    for r in range(n_rows):
+        if use_cover and covered[pair[r]] and bound[r] < need[r]:
+            cover_rows[n_cover] = r
+            n_cover += 1
+    if n_cover:
+        rows = cover_rows[:n_cover]
+        rows = rows[np.argsort(config_of[rows])]
+        cover_bounds_nb(rots, poss, rows, config_of, first[pair], second[pair], obstacle[pair], need, *cover_arrays,
+                        *primitives, bound)  # fmt: skip
+    for r in range(n_rows):
+        p = pair[r]
         no_slack = bound[r] <= margin[r]
         thin = proves_too_little(bound[r] - margin[r], half[r] * rate[r])
         refine[r] = bound[r] < need[r] and (volume[r] + gap[p] >= need[r] or no_slack) and (
