@@ -488,6 +488,61 @@ def test_corner_blends_leave_out_only_the_ends_a_blend_replaces(arm):
     assert not cert.valid and cert.first_failing_segment == 1 and len(cert.segment_clearance) == 1
 
 
+
+def test_a_segment_two_blends_take_whole_is_left_to_them(arm):
+    """Blends meeting at a segment's middle leave nothing of it to prove: a ball on that middle does not fail it,
+    and the point is not measured again (fewer configurations); the segments' own rests still are."""
+    path = np.array([[-0.3, 0.0], [0.0, 0.4], [0.3, 0.0], [0.9, 0.0]])
+    middle = 0.5 * (path[1] + path[2])
+    ball = Obstacle("ball", "sphere", radius=0.005, pose=list(_tip(middle)))
+    certifier = PathCertifier(arm, Scene([ball]), safety_margin=0.005)
+    half = 0.5 * np.linalg.norm(path[2] - path[1])
+    short = certifier.certify_path(path, corner_blends=np.array([0.0, 0.9 * half, 0.9 * half, 0.0]))
+    assert not short.valid and short.first_failing_segment == 1  # a rest of the middle segment is left: it fails
+    whole = certifier.certify_path(path, corner_blends=np.array([0.0, half, half, 0.0]))
+    assert whole.valid and whole.segment_clearance[1] == np.inf, whole
+    assert np.isfinite(whole.segment_clearance[0]) and np.isfinite(whole.segment_clearance[2])
+
+
+def test_prove_curves_reports_each_certified_curve_s_clearance(arm):
+    """A curve proven clear gets the smallest distance measured on it (at least the margin; here every pair is
+    proven at once from the segment's middle, so at most the exact distance there); one that is not gets NaN, and
+    certify_curves agrees on which is which."""
+    ball = Obstacle("ball", "sphere", radius=0.005, pose=list(_tip(np.array([0.0, 0.4]))))
+    certifier = PathCertifier(arm, Scene([ball]), safety_margin=0.005)
+    clear = (np.array([[0.6, 0.0], [0.9, 0.2]]), np.zeros(2))
+    hitting = (np.array([[-0.3, 0.0], [0.0, 0.4], [0.3, 0.0]]), np.zeros(2))
+    certified, clearance = certifier.prove_curves([clear, hitting])
+    assert certified.tolist() == [True, False] == certifier.certify_curves([clear, hitting])
+    assert 0.005 <= clearance[0] <= certifier.clearance(clear[0].mean(axis=0)) and np.isnan(clearance[1])
+
+
+def test_a_plan_s_min_clearance_includes_its_blends(arm, monkeypatch):
+    """stats.min_clearance is the least distance measured on the certified path and on the blends its trajectory
+    rounds corners with (these replace the path's corners: the robot moves there)."""
+    measured = []
+    real_curves, real_path = PathCertifier.prove_curves, PathCertifier.certify_path
+
+    def curves(self, *args, **kwargs):
+        certified, clearance = real_curves(self, *args, **kwargs)
+        measured.extend(clearance[certified])
+        return certified, clearance
+
+    def path(self, *args, **kwargs):
+        cert = real_path(self, *args, **kwargs)
+        measured.append(cert.min_clearance)
+        return cert
+
+    monkeypatch.setattr(PathCertifier, "prove_curves", curves)
+    monkeypatch.setattr(PathCertifier, "certify_path", path)
+    planner = MotionPlanner.from_scene(arm, Scene([plate_at(0.0)]), PlannerConfig(safety_margin=0.005))
+    result = planner.plan(MotionRequest("all", start={"j1": -0.6, "j2": 0.0}, goal_joints={"j1": 0.6, "j2": 0.0},
+                                        planner_id="RRTConnect", time_budget=10.0, seed=3))  # fmt: skip
+    assert result.success and result.stats.certified, result.message
+    assert np.count_nonzero(result.corner_blends) and measured
+    assert result.stats.min_clearance == min(measured) >= 0.005
+
+
 def test_without_corners_clips_each_end_to_its_segment():
     path = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 0.5], [3.0, 0.5]])
     ends = _without_corners(path, np.array([0.0, 0.3, 2.0, 0.0]))

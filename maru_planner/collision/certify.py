@@ -58,6 +58,7 @@ from maru_planner.scene import Obstacle, Scene
 
 DEFAULT_SAFETY_MARGIN = 0.01  # m (PlannerConfig.safety_margin's default too)
 UNBOUNDED = 1e6  # m: an obstacle bounding box this large is treated as infinite
+SHARED_END = 1e-12  # rad: a segment's rest between its blends this short is their shared end (certify_path)
 MIN_INTERVAL = 1e-9  # rad: a piece of segment this short that is still unproven fails as "unproven"
 # An unproven end is split into up to this many dyadic pieces at once, each no longer than twice the radius its
 # piece's middle proved (bisecting one level per round took ~10 rounds a path, each a batch's fixed cost)
@@ -554,7 +555,8 @@ class PathCertifier:
         ``margin`` overrides ``safety_margin``. ``deviation`` (nq,): per joint, how far the real motion may
         leave the straight segments (a sampled curve: :func:`chord_deviation`); each pair's margin grows
         by the motion that deviation can cause. ``corner_blends`` (n,): per waypoint, how far along each of its
-        segments (rad) a curve proven elsewhere replaces the path (a trajectory's blend): those ends are left out.
+        segments (rad) a curve proven elsewhere replaces the path (a trajectory's blend): those ends (a segment
+        two blends take whole: all of it) are left out.
         ``deadline`` (``time.monotonic()``): a certification still running then fails with reason "timeout".
         """
         t0 = time.monotonic()
@@ -567,6 +569,10 @@ class PathCertifier:
             points, stride = _without_corners(path, np.asarray(corner_blends, dtype=float)), 2
             curve = np.zeros(2 * n_segments - 1, int)
             curve[1::2] = -1  # between two trimmed segments: a blend, not this certification's
+            # A segment its blends take whole leaves a point where they meet, proven with them (the rounding gap
+            # moves no body by 1e-11 m, far within the DISTANCE_TOLERANCE every bound gives away)
+            taken = np.linalg.norm(points[1::2] - points[0::2], axis=1) <= SHARED_END
+            curve[0::2][taken] = -1
         cert, run = self._certify(points, np.tile(deviation, (len(curve), 1)), curve, margin, deadline)
         kept = run.clearance[::stride]  # per segment of ``path``
         failed = n_segments
@@ -581,7 +587,13 @@ class PathCertifier:
 
     def certify_curves(self, curves: list[tuple], deadline: float | None = None, *, margin: float | None = None
                        ) -> list[bool]:  # fmt: skip
-        """Whether each curve is certified, all in one pass (their pairs share the work).
+        """Whether each curve is certified, all in one pass (their pairs share the work): :meth:`prove_curves`."""
+        return self.prove_curves(curves, deadline, margin=margin)[0].tolist()
+
+    def prove_curves(self, curves: list[tuple], deadline: float | None = None, *, margin: float | None = None
+                     ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+        """Per curve, whether it is certified and the smallest distance measured on it (NaN where it is not), all
+        in one pass (their pairs share the work).
 
         ``curves``: (configurations (n, nq), deviation (nq,)) as :meth:`certify_path` takes them, or
         (configurations, deviation, bend (n - 1, nq)) whose segment i is the parabola
@@ -605,11 +617,16 @@ class PathCertifier:
             bends.append(np.reshape(bend[0], (-1, nq)) if bend else np.zeros((len(configs) - 1, nq)))
             curve += [c] * (len(configs) - 1)
         if not points:
-            return []
+            return np.zeros(0, dtype=bool), np.zeros(0)
         path = np.concatenate(points)
-        _, run = self._certify(path, np.array(deviation).reshape(-1, nq), np.array(curve, dtype=int), margin, deadline,
+        curve_of = np.array(curve, dtype=int)
+        _, run = self._certify(path, np.array(deviation).reshape(-1, nq), curve_of, margin, deadline,
                                np.concatenate(bends))  # fmt: skip
-        return (~run.failed_curves(len(curves))).tolist()
+        certified = ~run.failed_curves(len(curves))
+        clearance = np.full(len(curves), math.inf)
+        proven = curve_of >= 0
+        np.minimum.at(clearance, curve_of[proven], run.clearance[proven])
+        return certified, np.where(certified, clearance, math.nan)
 
     def _certify(
         self, path: np.ndarray, deviation: np.ndarray, curve: np.ndarray, margin: float, deadline: float | None,

@@ -273,7 +273,8 @@ class MotionPlanner:
         self._monitor.check()  # a repair search ended by a cancel looks like a failed repair
         certificate = repaired.certificate
         stats.certified, stats.repairs = repaired.path is not None, repaired.repairs
-        stats.certify_time, stats.min_clearance = certificate.seconds, certificate.min_clearance
+        stats.certify_time = certificate.seconds
+        stats.min_clearance = min(stats.min_clearance, certificate.min_clearance)  # and the blends' (_set_path)
         if is_sphere_checker(self.checker):
             _record_verification(result, certificate, repaired.repairs)
         if repaired.path is None:
@@ -335,6 +336,7 @@ class MotionPlanner:
         t_par = time.monotonic()
         result.trajectory, report = self._time_parameterize(req, path, start_full, indices, stats, deadline)
         result.corner_blends = report.corner_blends if self.certifier is not None else None
+        stats.min_clearance = min(stats.min_clearance, report.min_clearance)  # the blends' (the path's: _certify_path)
         stats.parameterize_time += time.monotonic() - t_par
         result.path = path
         stats.waypoints = len(path)

@@ -113,6 +113,7 @@ class CertifiedCurve:
     indices: Sequence[int]
     deadline: float | None
     margin: float
+    clearance: list[float] = field(default_factory=list, compare=False)  # m: least distance on each curve proven
     takes_bends = True  # the certifier proves parabolic segments as they are
 
     def __call__(self, states: np.ndarray, chord_deviation: np.ndarray) -> bool:
@@ -129,7 +130,9 @@ class CertifiedCurve:
                 full_bend[:, self.indices] = bend[0]
                 curve.append(full_bend)
             full.append(tuple(curve))
-        return self.certifier.certify_curves(full, self.deadline, margin=self.margin)
+        certified, clearance = self.certifier.prove_curves(full, self.deadline, margin=self.margin)
+        self.clearance.extend(clearance[certified].tolist())
+        return certified.tolist()
 
 
 def certified_curve(certifier: Any, base: np.ndarray, indices, deadline: float | None, margin: float) -> CurveFree:
@@ -156,6 +159,14 @@ class WatchedCurve:
     def many(self, curves: Sequence[Curve]) -> list[bool]:
         self.before()
         return curves_free(self.curve_free, curves)
+
+
+def certified_clearance(curve_free: CurveFree) -> float:
+    """The smallest distance (m) measured on the curves ``curve_free`` (a :class:`CertifiedCurve`, maybe watched)
+    certified; inf if none, or if it is no certifier."""
+    while isinstance(curve_free, WatchedCurve):
+        curve_free = curve_free.curve_free
+    return min(getattr(curve_free, "clearance", None) or [math.inf])
 
 
 def takes_bends(curve_free: CurveFree) -> bool:
@@ -208,6 +219,7 @@ class TimingReport:
     # per waypoint of the path given: the half-length (rad) of the certified parabolic blend the curve rounds it with
     # (toppra; 0: the curve passes it or stops there). None: the curve was not made of certified blends (ruckig's).
     corner_blends: np.ndarray | None = None
+    min_clearance: float = math.inf  # m: smallest distance measured on the curves certified (inf: none)
 
 
 # --- geometry: the blended curve ---------------------------------------------------------------
@@ -378,6 +390,7 @@ def parameterize(
         return _trapezoid(waypoints, joint_names, limits, dt, max_points), report
     if report.corner_blends is not None:
         report.corner_blends = _at_rows(np.asarray(path, float), waypoints, report.corner_blends)
+    report.min_clearance = certified_clearance(curve_free)
     return _sample(sections, joint_names, waypoints[-1], dt, max_points, sample_deadline), report
 
 

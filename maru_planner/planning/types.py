@@ -167,7 +167,7 @@ class PlanStats:
     # rounds with certified blends (MotionResult.corner_blends; docs/certification.md)
     certified: bool = False
     certify_time: float = 0.0  # s spent certifying (all attempts)
-    min_clearance: float = math.inf  # m: smallest distance measured while certifying the path (as ``certified``)
+    min_clearance: float = math.inf  # m: smallest distance measured while certifying the path and its blends
     repairs: int = 0  # segments that failed certification and were re-planned locally
 
     def to_dict(self) -> dict:
