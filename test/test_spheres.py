@@ -7,7 +7,7 @@ import pinocchio as pin
 import pytest
 
 from maru_planner.collision import CollisionChecker
-from maru_planner.collision.batch_fk import KinematicTree, batch_joint_poses, joint_poses_nb
+from maru_planner.collision.batch_fk import KinematicTree, batch_joint_poses, frame_placements_nb, joint_poses_nb
 from maru_planner.collision.sphere_model import SphereFitOptions, subdivide, surface_of
 from maru_planner.collision.spheres import SphereCollisionChecker, densify, verify_path
 from maru_planner.scene import Obstacle, Scene
@@ -55,6 +55,28 @@ def test_batch_fk_matches_pinocchio(robot_name, request):
             np.testing.assert_allclose(r1[j], data.oMi[j].rotation, atol=1e-12)
             np.testing.assert_allclose(p1[j], data.oMi[j].translation, atol=1e-12)
 
+
+
+@pytest.mark.parametrize("robot_name", ["panda", "maru1"])
+def test_frame_placements_match_pinocchios_geometry_placements(robot_name, request):
+    """The placements the sphere checker hands coal for its exact checks are Pinocchio's own."""
+    robot = request.getfixturevalue(robot_name)
+    tree = KinematicTree.from_pinocchio(robot.model)
+    geoms = robot.collision_model.geometryObjects
+    joint = np.array([obj.parentJoint for obj in geoms], dtype=np.int64)
+    local_rot = np.array([obj.placement.rotation for obj in geoms])
+    local_pos = np.array([obj.placement.translation for obj in geoms])
+    rot, pos = np.empty((tree.njoints, 3, 3)), np.empty((tree.njoints, 3))
+    out_rot, out_pos = np.empty((len(geoms), 3, 3)), np.empty((len(geoms), 3))
+    data, gdata = robot.model.createData(), pin.GeometryData(robot.collision_model)
+    for q in random_configs(robot, 10, 1):
+        joint_poses_nb(q, tree.parent, tree.kind, tree.axis, tree.placement_rot, tree.placement_pos, tree.idx_q, rot,
+                       pos)  # fmt: skip
+        frame_placements_nb(rot, pos, joint, local_rot, local_pos, out_rot, out_pos)
+        pin.updateGeometryPlacements(robot.model, data, robot.collision_model, gdata, q)
+        for g in range(len(geoms)):
+            np.testing.assert_allclose(out_rot[g], gdata.oMg[g].rotation, atol=1e-12)
+            np.testing.assert_allclose(out_pos[g], gdata.oMg[g].translation, atol=1e-12)
 
 def test_unsupported_joint_is_named():
     model = pin.Model()

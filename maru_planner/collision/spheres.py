@@ -27,7 +27,13 @@ import coal
 import numpy as np
 
 from maru_planner.collision import sphere_kernels as _kernels
-from maru_planner.collision.batch_fk import KinematicTree, batch_joint_poses, joint_poses_nb, sphere_centers_nb
+from maru_planner.collision.batch_fk import (
+    KinematicTree,
+    batch_joint_poses,
+    frame_placements_nb,
+    joint_poses_nb,
+    sphere_centers_nb,
+)
 from maru_planner.collision.broadphase import robot_reach
 from maru_planner.collision.checker import hull_or_self, robot_hull, self_collision_pairs
 from maru_planner.collision.sphere_model import SphereFitOptions, SphereModel, load_or_fit
@@ -170,10 +176,18 @@ class SphereCollisionChecker:
         self._packed_robot = _kernels.pack_robot(*self._robot_args, *clusters) if self.use_numba else None
         self._robot_geoms = list(robot.collision_model.geometryObjects)
         self._exact_shapes = [obj.geometry for obj in self._robot_geoms]  # the exact checker's own shapes
+        # each geometry's joint and placement in it, and its world placement at the last _exact_hit's state
+        self._geom_frames = (np.array([obj.parentJoint for obj in self._robot_geoms], dtype=np.int64),
+                             np.array([obj.placement.rotation for obj in self._robot_geoms]).reshape(-1, 3, 3),
+                             np.array([obj.placement.translation for obj in self._robot_geoms]).reshape(-1, 3))
+        n_geoms = len(self._robot_geoms)
+        self._geom_rot, self._geom_pos = np.empty((n_geoms, 3, 3)), np.empty((n_geoms, 3))
         self._rot = np.empty((self.tree.njoints, 3, 3))
         self._pos = np.empty((self.tree.njoints, 3))
         self._sphere_pairs = self._expand_pairs()
         self.set_scene(scene)
+        if self.use_numba:  # compile (or load) the placement kernel now, not in a request's first exact check
+            self._place_geometries(np.asarray(robot.neutral(), dtype=float))
 
     # ------------------------------------------------------------ protocol --
     def set_scene(self, scene) -> None:
@@ -331,12 +345,12 @@ class SphereCollisionChecker:
             self._result = coal.CollisionResult()  # reused, cleared before each query (making one costs ~1 µs)
             self._obstacle_shapes = [_with_hull(ob.geometry(), _coal_tf(ob.pose[:3, :3], ob.pose[:3, 3]))
                                      for ob in self.primitives.obstacles]  # fmt: skip
-        rot, pos = self._joint_poses(q)
+        self._place_geometries(q)
         placed: dict[int, tuple] = {}
         for kind, a, b in pairs:
             self.exact_pair_checks += 1
-            shape_a, hull_a, tf_a = self._link_shape(a, rot, pos, placed)
-            shape_b, hull_b, tf_b = self._obstacle_shapes[b] if kind == 0 else self._link_shape(b, rot, pos, placed)
+            shape_a, hull_a, tf_a = self._link_shape(a, placed)
+            shape_b, hull_b, tf_b = self._obstacle_shapes[b] if kind == 0 else self._link_shape(b, placed)
             hulls = hull_a is not shape_a or hull_b is not shape_b
             self._result.clear()
             if hulls and not coal.collide(hull_a, tf_a, hull_b, tf_b, self._request, self._result):
@@ -346,15 +360,21 @@ class SphereCollisionChecker:
                 return True
         return False
 
-    def _link_shape(self, g: int, rot: np.ndarray, pos: np.ndarray, placed: dict[int, tuple]) -> tuple:
-        """(shape, its convex hull or itself, coal placement) of robot geometry ``g`` at the joint poses."""
+    def _place_geometries(self, q: np.ndarray) -> None:
+        """Every robot geometry's world placement at ``q`` (``_geom_rot``, ``_geom_pos``), in one numba call."""
+        rot, pos = self._joint_poses(q)
+        joint, local_rot, local_pos = self._geom_frames
+        if self.use_numba:
+            frame_placements_nb(rot, pos, joint, local_rot, local_pos, self._geom_rot, self._geom_pos)
+        else:
+            self._geom_rot[:] = rot[joint] @ local_rot
+            self._geom_pos[:] = np.einsum("gab,gb->ga", rot[joint], local_pos) + pos[joint]
+
+    def _link_shape(self, g: int, placed: dict[int, tuple]) -> tuple:
+        """(shape, its convex hull or itself, coal placement) of robot geometry ``g`` at the last placements."""
         if g not in placed:
-            obj = self._robot_geoms[g]
-            j = obj.parentJoint
-            r = rot[j] @ obj.placement.rotation
-            p = rot[j] @ obj.placement.translation + pos[j]
             shape = self._exact_shapes[g]
-            placed[g] = (shape, robot_hull(shape), _coal_tf(r, p))
+            placed[g] = (shape, robot_hull(shape), coal.Transform3s(self._geom_rot[g], self._geom_pos[g]))
         return placed[g]
 
     def _expand_pairs(self) -> np.ndarray:
