@@ -169,21 +169,20 @@ def _sphere_centers_py(rot, pos, sphere_joint, sphere_local, out):
             )
 
 
-def _frame_placements_py(rot, pos, frame_joint, local_rot, local_pos, out_rot, out_pos):
+joint_poses_nb = njit(cache=True, fastmath=False)(_joint_poses_py)
+sphere_centers_nb = njit(cache=True)(_sphere_centers_py)
+
+
+@njit(cache=True)
+def frame_placements_nb(rot, pos, frame_joint, local_rot, local_pos, out_rot, out_pos):
     """World placements of frames fixed in joint frames: R[joint] @ local_rot and R[joint] @ local_pos + p[joint]."""
+    sphere_centers_nb(rot, pos, frame_joint, local_pos, out_pos)
     for f in range(frame_joint.shape[0]):
         j = frame_joint[f]
         for a in range(3):
             for b in range(3):
                 out_rot[f, a, b] = (rot[j, a, 0] * local_rot[f, 0, b] + rot[j, a, 1] * local_rot[f, 1, b]
                                     + rot[j, a, 2] * local_rot[f, 2, b])  # fmt: skip
-            out_pos[f, a] = (pos[j, a] + rot[j, a, 0] * local_pos[f, 0] + rot[j, a, 1] * local_pos[f, 1]
-                             + rot[j, a, 2] * local_pos[f, 2])  # fmt: skip
-
-
-joint_poses_nb = njit(cache=True, fastmath=False)(_joint_poses_py)
-sphere_centers_nb = njit(cache=True)(_sphere_centers_py)
-frame_placements_nb = njit(cache=True)(_frame_placements_py)
 
 
 @njit(cache=True, inline="always")

@@ -152,6 +152,10 @@ class WatchedCurve:
     def takes_bends(self) -> bool:
         return takes_bends(self.curve_free)
 
+    @property
+    def clearance(self) -> list[float]:
+        return getattr(self.curve_free, "clearance", [])
+
     def __call__(self, states: np.ndarray, chord_deviation: np.ndarray) -> bool:
         self.before()
         return self.curve_free(states, chord_deviation)
@@ -164,8 +168,6 @@ class WatchedCurve:
 def certified_clearance(curve_free: CurveFree) -> float:
     """The smallest distance (m) measured on the curves ``curve_free`` (a :class:`CertifiedCurve`, maybe watched)
     certified; inf if none, or if it is no certifier."""
-    while isinstance(curve_free, WatchedCurve):
-        curve_free = curve_free.curve_free
     return min(getattr(curve_free, "clearance", None) or [math.inf])
 
 
