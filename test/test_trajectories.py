@@ -7,6 +7,7 @@ import time
 import numpy as np
 import pytest
 import toppra.algorithm
+import toppra.constraint
 from planning_toys import BoxWorldChecker, ToyRobot, maze_checker
 
 from maru_planner import errors
@@ -257,23 +258,31 @@ def test_default_jerk_limits_reach_full_acceleration_in_the_ramp_time():
     assert np.allclose([limits.velocity[0], limits.acceleration[0], limits.jerk[0]], [0.5, 1.0, 4.0])
 
 
-@pytest.mark.parametrize("seed", range(20))
+@pytest.mark.parametrize("seed", range(40))
 def test_the_speeds_are_toppras_own(seed):
-    """``_rest_to_rest_speeds`` is ``TOPPRA.compute_parameterization(0, 0)`` without its driver's overhead: its LPs
-    for the highest speeds, so the same profile, on blended random paths of 2 to 13 joints."""
+    """``_rest_to_rest_speeds`` (toppra's stage programs in closed form) gives ``TOPPRA.compute_parameterization(0,
+    0)``'s profile on blended random paths of 2 to 13 joints, some with a joint that never moves, under binding
+    velocity limits (toppra rounds their bound on ṡ to single precision: ~1e-7 of the peak) or none."""
     rng = np.random.default_rng(seed)
     dof = int(rng.integers(2, 14))
     waypoints = np.cumsum(rng.uniform(-1.0, 1.0, (int(rng.integers(3, 9)), dof)) * rng.uniform(0.05, 2.0), axis=0)
-    path = timing.BlendedPath(waypoints, timing.blend_half_lengths(waypoints, np.full(len(waypoints), 0.2)))
+    if seed % 3 == 0:
+        waypoints[:, 0] = 0.25
+    half = timing.blend_half_lengths(waypoints, np.full(len(waypoints), 0.2))
+    section = max(timing._sections(waypoints, half), key=lambda s: len(s[0]))  # cut at reversals, as parameterize
+    path = timing.BlendedPath(*section)
     grid, _ = path.grid()
-    limits = timing.Limits.scaled(rng.uniform(0.5, 3.0, dof), rng.uniform(1.0, 10.0, dof))
-    constraints = timing._constraints(limits.velocity.tobytes(), limits.acceleration.tobytes())
+    binding = seed % 2 == 0
+    velocity = rng.uniform(0.5, 3.0, dof) if binding else np.full(dof, 1e3)
+    limits = timing.Limits.scaled(velocity, rng.uniform(1.0, 10.0, dof))
+    constraints = [toppra.constraint.JointVelocityConstraint(limits.velocity),
+                   toppra.constraint.JointAccelerationConstraint(limits.acceleration)]  # fmt: skip
     _sdd, expected, _v = toppra.algorithm.TOPPRA(constraints, path, gridpoints=grid,
                                                  solver_wrapper="seidel").compute_parameterization(0.0, 0.0)
-    ours = timing._rest_to_rest_speeds(constraints, path, grid)
+    ours = timing._rest_to_rest_speeds(path, grid, limits)
     assert expected is not None and ours is not None
     assert np.max(expected) > 0.1
-    assert np.allclose(ours, expected, rtol=1e-12, atol=1e-12)
+    assert np.max(np.abs(ours - expected)) <= (2e-6 if binding else 1e-9) * np.max(expected)
 
 
 @pytest.mark.parametrize("deviation", [0.05, 0.3, 10.0])  # 10 rad: blends take whole segments, no straight left

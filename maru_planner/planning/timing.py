@@ -31,7 +31,6 @@ Every trajectory is sampled with at most ``max_points`` points: the sample perio
 
 from __future__ import annotations
 
-import functools
 import math
 import time
 from collections.abc import Callable, Sequence
@@ -41,9 +40,7 @@ from typing import Any
 import numpy as np
 import ruckig
 import toppra.constants
-import toppra.constraint
 import toppra.interpolator
-from toppra.solverwrapper.cy_seidel_solverwrapper import seidelWrapper
 
 from maru_planner import errors
 from maru_planner.planning import postprocess
@@ -572,61 +569,24 @@ def _toppra(waypoints, limits: Limits, check: _Check, max_deviation: float):
 
 def _toppra_section(path: BlendedPath, limits: Limits) -> _PathVelocity:
     grid, pieces = path.grid()
-    constraints = _constraints(limits.velocity.tobytes(), limits.acceleration.tobytes())
-    sd = _rest_to_rest_speeds(constraints, path, grid)
+    sd = _rest_to_rest_speeds(path, grid, limits)
     if sd is None:
         raise _ParameterizationFailed("toppra: the path is not controllable (numerical failure)")
     return _within_limits(_PathVelocity(path, grid, pieces, sd), limits)
 
 
-_HIGHEST = np.array([1e-9, -1.0])  # toppra's stage objective over (u, x): the largest x, a tie broken to small u
-
-
-def _rest_to_rest_speeds(constraints: list, path: BlendedPath, grid: np.ndarray) -> np.ndarray | None:
-    """Path speeds ṡ at the ``grid`` points from rest to rest: the profile of ``toppra.algorithm.TOPPRA(constraints,
-    path, gridpoints=grid).compute_parameterization(0, 0)``, from the same Seidel LPs; None where toppra fails.
-    toppra's own driver allocates arrays and asks the logger at every stage, which costs three times its LPs.
-
-    The lowest controllable ṡ² is 0 at every grid point (rest is reachable from rest: x = u = 0 meets every
-    constraint), so only the highest is computed; toppra's LP for the lowest returns 0 up to rounding (< 1e-15).
+def _rest_to_rest_speeds(path: BlendedPath, grid: np.ndarray, limits: Limits) -> np.ndarray | None:
+    """Path speeds ṡ at the ``grid`` points from rest to rest under the joint velocity and acceleration ``limits``:
+    the profile of ``toppra.algorithm.TOPPRA([JointVelocityConstraint, JointAccelerationConstraint], path,
+    gridpoints=grid).compute_parameterization(0, 0)``, its stage programs solved in closed form in one numba call
+    (:mod:`~maru_planner.planning.topp_kernel`; toppra's Seidel solver took ~2 µs a program from Python, ~0.25 ms a
+    path); None where toppra fails.
     """
-    solver = seidelWrapper(constraints, path, grid, solve_lp1d=True)
-    stages = len(grid) - 1
-    highest = np.zeros(stages + 1)  # the highest controllable ṡ² per grid point; rest at the end
-    solver.setup_solver()
-    for i in range(stages - 1, -1, -1):
-        high = solver.solve_stagewise_optim(i, None, _HIGHEST, math.nan, math.nan, 0.0, highest[i + 1])[1]
-        if math.isnan(high):  # toppra's numerical failure
-            return None
-        highest[i] = max(high, 0.0)
-    deltas = solver.get_deltas()
-    objectives = np.column_stack([-2.0 * deltas, np.full(stages, -1.0)])  # the largest ṡ² at the next point
-    x = np.zeros(stages + 1)  # ṡ², never negative: every step below keeps it >= 0
-    i = tries = 0
-    while i < stages:
-        u = solver.solve_stagewise_optim(i, None, objectives[i], x[i], x[i], 0.0, highest[i + 1])[0]
-        if math.isnan(u):  # slightly infeasible by rounding: toppra slows down a little and retries
-            if tries == toppra.constants.MAX_TRIES:
-                return None
-            x[i] = max(x[i] - toppra.constants.TINY, 0.999 * x[i])
-            tries += 1
-            continue
-        tries = 0
-        x_next = x[i] + 2.0 * deltas[i] * u
-        x[i + 1] = min(highest[i + 1], max(0.0, x_next - toppra.constants.TINY, 0.9999 * x_next))
-        i += 1
-    solver.close_solver()
-    return np.sqrt(x)
+    from maru_planner.planning import topp_kernel  # lazy: numba, loaded by warm_up before any request
 
-
-@functools.lru_cache(maxsize=16)
-def _constraints(velocity: bytes, acceleration: bytes) -> list:
-    """toppra's joint velocity and acceleration constraints, cached: building them formats the limits
-    into a description string, which costs more than the parameterisation itself."""
-    return [
-        toppra.constraint.JointVelocityConstraint(np.frombuffer(velocity)),
-        toppra.constraint.JointAccelerationConstraint(np.frombuffer(acceleration)),
-    ]
+    x = topp_kernel.rest_to_rest_nb(path(grid, 1), path(grid, 2), np.diff(grid), limits.velocity, limits.acceleration,
+                                    toppra.constants.TINY, toppra.constants.MAX_TRIES)  # fmt: skip
+    return np.sqrt(x) if len(x) else None
 
 
 def _within_limits(profile: _PathVelocity, limits: Limits) -> _PathVelocity:

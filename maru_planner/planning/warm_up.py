@@ -26,6 +26,7 @@ import numpy as np
 
 from maru_planner import errors
 from maru_planner.collision.broadphase import robot_reach
+from maru_planner.planning import timing
 from maru_planner.planning.checkers import is_compiled_sphere_checker, is_sphere_checker
 from maru_planner.planning.config import COLLISION_MODELS, PlannerConfig
 from maru_planner.planning.motion_planner import MotionPlanner
@@ -96,16 +97,14 @@ def _plan_short_motions(robot: RobotModel, config: PlannerConfig) -> tuple[tuple
                                     seed=SEED)  # fmt: skip
             plans.append((planner_id, scene_name, planner.plan(request).status.value))
         _shortcut_bent_path(planner, group, start, goal)
+    _time_bent_path(planner, group, start, goal)
     return tuple(plans)
 
 
-def _shortcut_bent_path(planner: MotionPlanner, group: str, start: dict[str, float], goal: dict[str, float]) -> None:
-    """On a compiled sphere checker, the compiled shortcut of start → a point off the line → goal: the warm-up plans'
-    straight motions leave nothing to shortcut."""
-    if not is_compiled_sphere_checker(planner.checker):
-        return
-    from maru_planner.planning.compiled_shortcut import shortcut  # lazy: numba, loaded with the sphere checker
-
+def _bent_path(planner: MotionPlanner, group: str, start: dict[str, float], goal: dict[str, float]
+               ) -> tuple[GroupSpace, np.ndarray]:  # fmt: skip
+    """``group``'s space and the path start → a point off the line → goal (the warm-up plans' motions are straight,
+    which leaves the shortcut nothing to do and toppra nothing to solve)."""
     robot = planner.robot
     indices = sorted(robot.group_joint_indices(group))
     names = [robot.joint_names[i] for i in indices]
@@ -113,8 +112,26 @@ def _shortcut_bent_path(planner: MotionPlanner, group: str, start: dict[str, flo
     base = np.array([start[name] for name in robot.joint_names])
     a, b = base[indices], np.array([goal[name] for name in names])
     path = np.array([a, np.clip(0.5 * (a + b) + 0.5 * EDGE_STEP, lower, upper), b])
-    edges = EdgeChecker(GroupSpace(names, indices, lower, upper, base), planner.checker, planner.config.resolution)
-    shortcut(path, edges, SEED, time.monotonic() + BUDGET, 1)
+    return GroupSpace(names, indices, lower, upper, base), path
+
+
+def _shortcut_bent_path(planner: MotionPlanner, group: str, start: dict[str, float], goal: dict[str, float]) -> None:
+    """On a compiled sphere checker, the compiled shortcut of :func:`_bent_path`."""
+    if not is_compiled_sphere_checker(planner.checker):
+        return
+    from maru_planner.planning.compiled_shortcut import shortcut  # lazy: numba, loaded with the sphere checker
+
+    space, path = _bent_path(planner, group, start, goal)
+    shortcut(path, EdgeChecker(space, planner.checker, planner.config.resolution), SEED, time.monotonic() + BUDGET, 1)
+
+
+def _time_bent_path(planner: MotionPlanner, group: str, start: dict[str, float], goal: dict[str, float]) -> None:
+    """toppra along :func:`_bent_path` (its numba kernel), its corner taken as free: only the kernel is warmed."""
+    space, path = _bent_path(planner, group, start, goal)
+    robot = planner.robot
+    limits = timing.Limits.scaled(robot.velocity_limits[space.indices], robot.acceleration_limits[space.indices])
+    timing.parameterize(path, space.joint_names, limits, "toppra", curve_free=lambda states, deviation: True,
+                        max_deviation=planner.config.blend_deviation)  # fmt: skip
 
 
 def _planner_ids(planner: MotionPlanner) -> list[str]:
