@@ -285,6 +285,29 @@ def test_the_speeds_are_toppras_own(seed):
     assert np.max(np.abs(ours - expected)) <= (2e-6 if binding else 1e-9) * np.max(expected)
 
 
+def test_a_profiles_states_follow_its_path_and_speeds():
+    """At the times the profile reaches its grid points, the sampled state is the path's point there, its velocity
+    the path's slope times ṡ; between them the acceleration is the path's curvature times ṡ² plus slope times s̈."""
+    path = timing.BlendedPath(ZIGZAG, timing.blend_half_lengths(ZIGZAG, np.full(len(ZIGZAG), 0.3)))
+    limits = timing.Limits.scaled(np.full(3, 1.5), np.full(3, 4.0))
+    profile = timing._toppra_section(path, limits)
+    q, qd, _qdd = profile.state(profile.times[:-1])
+    assert np.allclose(q, path(profile.grid[:-1]), atol=1e-9)
+    assert np.allclose(qd, path(profile.grid[:-1], 1) * profile.sd[:-1, None], atol=1e-9)
+    sdd = (profile.sd[1:] ** 2 - profile.sd[:-1] ** 2) / (2.0 * np.diff(profile.grid))
+    middle = 0.5 * (profile.times[:-1] + profile.times[1:])
+    tau = middle - profile.times[:-1]
+    s = profile.grid[:-1] + profile.sd[:-1] * tau + 0.5 * sdd * tau**2
+    speed = profile.sd[:-1] + sdd * tau
+    expected = path.at(s, profile.pieces, 2) * speed[:, None] ** 2 + path.at(s, profile.pieces, 1) * sdd[:, None]
+    assert np.allclose(profile.state(middle)[2], expected, atol=1e-9)
+    velocity_ratio, acceleration_ratio = profile.peak_ratios(limits)
+    dense = profile.state(np.linspace(0.0, profile.duration, 5001))
+    assert np.max(np.abs(dense[1]) / limits.velocity) <= velocity_ratio + 1e-9
+    assert np.max(np.abs(dense[2]) / limits.acceleration) <= acceleration_ratio + 1e-9
+    assert velocity_ratio <= 1.0 + 1e-9 and acceleration_ratio <= 1.0 + 1e-9
+
+
 @pytest.mark.parametrize("deviation", [0.05, 0.3, 10.0])  # 10 rad: blends take whole segments, no straight left
 def test_the_blended_curve_is_continuous_and_its_grid_covers_every_piece(deviation):
     path = timing.BlendedPath(ZIGZAG, timing.blend_half_lengths(ZIGZAG, np.full(len(ZIGZAG), deviation)))

@@ -513,10 +513,6 @@ class _PathVelocity:
     sd: np.ndarray
 
     @property
-    def sdd(self) -> np.ndarray:
-        return (self.sd[1:] ** 2 - self.sd[:-1] ** 2) / (2.0 * np.diff(self.grid))
-
-    @property
     def times(self) -> np.ndarray:
         return np.concatenate([[0.0], np.cumsum(2.0 * np.diff(self.grid) / (self.sd[1:] + self.sd[:-1]))])
 
@@ -526,38 +522,16 @@ class _PathVelocity:
 
     def state(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Joint positions, velocities and accelerations at times ``t``."""
-        times, sdd = self.times, self.sdd
-        k = np.clip(np.searchsorted(times, t, side="right") - 1, 0, len(sdd) - 1)
-        tau = t - times[k]
-        s = np.clip(self.grid[k] + self.sd[k] * tau + 0.5 * sdd[k] * tau**2, self.grid[k], self.grid[k + 1])
-        sd = np.maximum(self.sd[k] + sdd[k] * tau, 0.0)
-        piece = self.pieces[k]
-        d1 = self.path.at(s, piece, 1)
-        acc = self.path.at(s, piece, 2) * (sd**2)[:, None] + d1 * sdd[k][:, None]
-        return self.path.at(s, piece, 0), d1 * sd[:, None], acc
+        path = self.path
+        return _topp_kernel().profile_states_nb(np.asarray(t, dtype=float), self.times, self.grid, self.sd,
+                                                self.pieces, path.starts, path.p0, path.v0, path.dd)  # fmt: skip
 
     def peak_ratios(self, limits: Limits) -> tuple[float, float]:
-        """Exact maxima over the whole profile of |joint velocity| / limit and |joint acceleration| / limit.
-
-        On a grid interval ``p'(s) = b + c·σ`` and ``ṡ² = x + 2·u·σ`` (σ = s − s_k), so the joint
-        acceleration ``c·ṡ² + p'·u`` is linear in σ (extremes at the ends) and the squared velocity
-        ``(b + c·σ)²·(x + 2·u·σ)`` is a cubic whose one interior extremum is at
-        ``σ* = −(c·x + u·b) / (3·u·c)``.
-        """
-        delta, u = np.diff(self.grid), self.sdd[:, None]
-        x0, x1 = (self.sd[:-1] ** 2)[:, None], (self.sd[1:] ** 2)[:, None]
-        b = self.path.at(self.grid[:-1], self.pieces, 1)
-        c = self.path.dd[self.pieces]
-        b1 = b + c * delta[:, None]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            star = -(c * x0 + u * b) / (3.0 * u * c)
-        star = np.where(np.isfinite(star), np.clip(star, 0.0, delta[:, None]), 0.0)
-        velocity2 = np.maximum.reduce([b * b * x0, b1 * b1 * x1, (b + c * star) ** 2 * (x0 + 2.0 * u * star)])
-        acceleration = np.maximum(np.abs(c * x0 + b * u), np.abs(c * x1 + b1 * u))
-        return (
-            math.sqrt(float(np.max(velocity2 / limits.velocity**2))),
-            float(np.max(acceleration / limits.acceleration)),
-        )
+        """Exact maxima over the whole profile of |joint velocity| / limit and |joint acceleration| / limit
+        (:func:`~maru_planner.planning.topp_kernel.peak_ratios_nb`)."""
+        path = self.path
+        return _topp_kernel().peak_ratios_nb(self.grid, self.sd, self.pieces, path.starts, path.v0, path.dd,
+                                             limits.velocity, limits.acceleration)  # fmt: skip
 
 
 def _toppra(waypoints, limits: Limits, check: _Check, max_deviation: float):
@@ -582,11 +556,17 @@ def _rest_to_rest_speeds(path: BlendedPath, grid: np.ndarray, limits: Limits) ->
     (:mod:`~maru_planner.planning.topp_kernel`; toppra's Seidel solver took ~2 µs a program from Python, ~0.25 ms a
     path); None where toppra fails.
     """
-    from maru_planner.planning import topp_kernel  # lazy: numba, loaded by warm_up before any request
-
-    x = topp_kernel.rest_to_rest_nb(path(grid, 1), path(grid, 2), np.diff(grid), limits.velocity, limits.acceleration,
-                                    toppra.constants.TINY, toppra.constants.MAX_TRIES)  # fmt: skip
+    x = _topp_kernel().rest_to_rest_nb(path(grid, 1), path(grid, 2), np.diff(grid), limits.velocity,
+                                       limits.acceleration, toppra.constants.TINY, toppra.constants.MAX_TRIES)
     return np.sqrt(x) if len(x) else None
+
+
+def _topp_kernel():
+    """The toppra profile's kernels (:mod:`~maru_planner.planning.topp_kernel`), imported on first use."""
+    # lazy: numba, loaded by warm_up before any request (planners on toy checkers that never blend skip it)
+    from maru_planner.planning import topp_kernel
+
+    return topp_kernel
 
 
 def _within_limits(profile: _PathVelocity, limits: Limits) -> _PathVelocity:

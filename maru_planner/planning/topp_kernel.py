@@ -149,3 +149,51 @@ def rest_to_rest_nb(ps, pss, deltas, velocity, acceleration, step_down, max_trie
         x[i + 1] = min(highest[i + 1], max(0.0, x_next - step_down, 0.9999 * x_next))
         i += 1
     return x
+
+
+@njit(cache=True)
+def profile_states_nb(t, times, grid, sd, pieces, starts, p0, v0, dd):
+    """Joint positions, velocities and accelerations (len(t), dof) at times ``t`` of a path-velocity profile: ṡ
+    ``sd`` at the ``grid`` points (reached at ``times``), constant s̈ between them, on the pieces ``p0 + v0·σ +
+    ½·dd·σ²`` (σ from the piece's start in ``starts``) that ``pieces`` gives per grid interval."""
+    n, dof, last = t.shape[0], p0.shape[1], sd.shape[0] - 2
+    q, qd, qdd = np.empty((n, dof)), np.empty((n, dof)), np.empty((n, dof))
+    for r in range(n):
+        k = min(max(np.searchsorted(times, t[r], side="right") - 1, 0), last)
+        sdd = (sd[k + 1] ** 2 - sd[k] ** 2) / (2.0 * (grid[k + 1] - grid[k]))
+        tau = t[r] - times[k]
+        s = min(max(grid[k] + sd[k] * tau + 0.5 * sdd * tau**2, grid[k]), grid[k + 1])
+        speed = max(sd[k] + sdd * tau, 0.0)
+        p = pieces[k]
+        sigma = s - starts[p]
+        for j in range(dof):
+            slope = v0[p, j] + dd[p, j] * sigma
+            q[r, j] = p0[p, j] + v0[p, j] * sigma + 0.5 * dd[p, j] * sigma**2
+            qd[r, j] = slope * speed
+            qdd[r, j] = dd[p, j] * speed**2 + slope * sdd
+    return q, qd, qdd
+
+
+@njit(cache=True)
+def peak_ratios_nb(grid, sd, pieces, starts, v0, dd, velocity, acceleration):
+    """Exact maxima over a profile (as :func:`profile_states_nb` takes it) of |joint velocity| / limit and |joint
+    acceleration| / limit: on a grid interval ``p'(s) = b + c·σ`` and ``ṡ² = x + 2·u·σ``, so the acceleration
+    ``c·ṡ² + p'·u`` is linear in σ (extremes at the ends) and the squared velocity ``(b + c·σ)²·(x + 2·u·σ)`` a cubic
+    whose one interior extremum is at ``σ* = −(c·x + u·b) / (3·u·c)``."""
+    velocity2, peak_acceleration = 0.0, 0.0
+    for k in range(sd.shape[0] - 1):
+        delta = grid[k + 1] - grid[k]
+        x0, x1 = sd[k] ** 2, sd[k + 1] ** 2
+        u = (x1 - x0) / (2.0 * delta)
+        p = pieces[k]
+        for j in range(v0.shape[1]):
+            c = dd[p, j]
+            b = v0[p, j] + c * (grid[k] - starts[p])
+            b1 = b + c * delta
+            denominator = 3.0 * u * c
+            star = -(c * x0 + u * b) / denominator if denominator != 0.0 else 0.0
+            star = min(max(star, 0.0), delta) if math.isfinite(star) else 0.0
+            top = max(b * b * x0, b1 * b1 * x1, (b + c * star) ** 2 * (x0 + 2.0 * u * star))
+            velocity2 = max(velocity2, top / velocity[j] ** 2)
+            peak_acceleration = max(peak_acceleration, max(abs(c * x0 + b * u), abs(c * x1 + b1 * u)) / acceleration[j])
+    return math.sqrt(velocity2), peak_acceleration
