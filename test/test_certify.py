@@ -632,7 +632,13 @@ def test_a_hull_bound_proving_too_little_of_its_piece_is_measured_on_the_mesh(mo
     for hull_value, measured_on_mesh in ((0.0105, True), (0.0125, False), (0.009, True)):
         hull["value"], bound = hull_value, np.array([0.0])
         cert = Certificate(valid=True, margin=0.01)
-        exact = certifier._refine(robot.neutral()[None], pairs, np.zeros(1, dtype=int), np.array([row_pair]),
-                                  np.ones(1, dtype=bool), margin, bound, need, cert)  # fmt: skip
+        rows, one = np.array([row_pair]), np.ones(1, dtype=bool)
+        exact = certifier._refine(robot.neutral()[None], pairs, np.zeros(1, dtype=int), rows, one, ~one, margin,
+                                  bound, need, cert)  # fmt: skip
         assert exact[0] == measured_on_mesh, hull_value
         assert bound[0] == (mesh if measured_on_mesh else hull_value)
+    # a row whose hull the row kernel bounded already goes to the mesh at once
+    hull["value"], bound = 1.0, np.array([0.0105])
+    exact = certifier._refine(robot.neutral()[None], pairs, np.zeros(1, dtype=int), np.array([row_pair]),
+                              np.ones(1, dtype=bool), np.ones(1, dtype=bool), margin, bound, need, cert)  # fmt: skip
+    assert exact[0] and bound[0] == mesh

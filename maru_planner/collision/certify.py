@@ -53,6 +53,7 @@ from maru_planner.collision.sphere_cover import (
 )
 from maru_planner.collision.sphere_model import SphereModel
 from maru_planner.collision.spheres import ScenePrimitives
+from maru_planner.collision.support_bounds import hull_primitive_bound
 from maru_planner.robot.model import RobotModel
 from maru_planner.scene import Obstacle, Scene
 
@@ -260,12 +261,14 @@ def proves_too_little(slack, needed):
 
 @njit(cache=True)
 def _assess_rows_nb(configs, config_of, seg, pair, half, run_arrays, pair_arrays, robot_arrays, cover_arrays,
-                    primitives, use_cover, margin, bound, rate, need, refine):  # fmt: skip
+                    hull_arrays, primitives, use_cover, margin, bound, rate, need, refine, hulled):  # fmt: skip
     """Per row, at the middle of its piece (one call per round of :meth:`PathCertifier._check_rows`): its pair's
     margin on its segment, the rate (configuration-free, tightened at the middle where the bounding volumes fall
     short of it), ``need`` = margin + half * rate, the distance bound (bounding volumes, then the sphere cover where
     they fall short of ``need``), and whether coal is to refine the bound (module doc: where it may prove the row,
-    and wherever the bounds leave no slack; on a covered pair only then)."""
+    and wherever the bounds leave no slack; on a covered pair only then). A covered row of a robot mesh against an
+    obstacle that coal would refine first gets its hull's separating-axis bound (``support_bounds``; ``hulled``):
+    coal then only measures the mesh itself, where that bound leaves it unproven."""
     pair_margin, rate_free, motion, downstream = run_arrays
     first, second, obstacle, other, covered, moves_first, moves_other, gap, box_center, box_rot, box_half = pair_arrays
     parent, kind, axis, prot, ppos, idx_q, g_joint, g_local, g_radius, q_joint, levers, prismatic = robot_arrays
@@ -321,6 +324,22 @@ def _assess_rows_nb(configs, config_of, seg, pair, half, run_arrays, pair_arrays
         thin = proves_too_little(bound[r] - margin[r], half[r] * rate[r])
         refine[r] = bound[r] < need[r] and (volume[r] + gap[p] >= need[r] or no_slack) and (
             no_slack or thin or not covered[p])
+    # where coal would measure a robot mesh's hull against an obstacle: its separating-axis bound here instead
+    hull_start, hull_verts = hull_arrays
+    primitive, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r = primitives
+    for r in range(n_rows):
+        p = pair[r]
+        g = first[p]
+        hulled[r] = refine[r] and use_cover and covered[p] and obstacle[p] and hull_start[g + 1] > hull_start[g]
+        if not hulled[r]:
+            continue
+        c, j = config_of[r], g_joint[g]
+        lower = hull_primitive_bound(rots[c, j], poss[c, j], hull_verts, hull_start[g], hull_start[g + 1],
+                                     primitive[second[p]], box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h,
+                                     cyl_r, need[r] + DISTANCE_TOLERANCE, centers[c, g])  # fmt: skip
+        bound[r] = max(bound[r], lower - DISTANCE_TOLERANCE)
+        no_slack = bound[r] <= margin[r]
+        refine[r] = bound[r] < need[r] and (no_slack or proves_too_little(bound[r] - margin[r], half[r] * rate[r]))
 
 
 FAILURE_REASONS = ("collision", "margin", "unproven", "timeout")  # Certificate.reason by the round kernels' codes
@@ -530,6 +549,7 @@ class PathCertifier:
         self._robot_arrays = (*self._tree, self._joint, self._local, self._radius, self._q_joint, self._levers,
                               self._prismatic)  # fmt: skip
         self._cover_arrays = self._cover.arrays if self._cover is not None else NO_COVER
+        self._hull_arrays = _hull_vertices(geometries, self._hulls)
         # Compile (or load from numba's cache) the kernels now: inside the first request it took ~1.5 s of its budget.
         self._centers(np.asarray(robot.neutral(), dtype=float)[None])
         self._warm_row_kernel()
@@ -694,15 +714,15 @@ class PathCertifier:
         cert.checks += len(configs)
         n_rows = len(seg)
         margin, bound, rate, need = (np.empty(n_rows) for _ in range(4))
-        refine = np.empty(n_rows, dtype=bool)
+        refine, hulled = np.empty(n_rows, dtype=bool), np.empty(n_rows, dtype=bool)
         _assess_rows_nb(configs, config_of, seg, pair, half, run.arrays, run.pairs.arrays, self._robot_arrays,
-                        self._cover_arrays, run.pairs.primitives, self._cover is not None, margin, bound, rate, need,
-                        refine)  # fmt: skip
-        exact = self._refine(configs, run.pairs, config_of, pair, refine, margin, bound, need, cert)
+                        self._cover_arrays, self._hull_arrays, run.pairs.primitives, self._cover is not None, margin,
+                        bound, rate, need, refine, hulled)  # fmt: skip
+        exact = self._refine(configs, run.pairs, config_of, pair, refine, hulled, margin, bound, need, cert)
         run.seg, run.pair, run.a, run.b = _finish_round_nb(
-            configs, config_of, seg, pair, run.a, run.b, half, margin, bound, rate, need, refine, exact, run.span,
-            time.monotonic() > run.deadline, MIN_INTERVAL, MAX_SPLIT, run.alive, run.curve, run.clearance, run.failure,
-            run.witness_config,
+            configs, config_of, seg, pair, run.a, run.b, half, margin, bound, rate, need, refine | hulled, exact,
+            run.span, time.monotonic() > run.deadline, MIN_INTERVAL, MAX_SPLIT, run.alive, run.curve, run.clearance,
+            run.failure, run.witness_config,
         )  # fmt: skip
 
     def _centers(self, configs: np.ndarray) -> np.ndarray:
@@ -720,8 +740,8 @@ class PathCertifier:
         pair_arrays = (none, none, no, none, no, np.zeros((0, nq), dtype=bool), np.zeros((0, nq), dtype=bool),
                        np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros((0, 3)))  # fmt: skip
         _assess_rows_nb(np.zeros((1, nq)), none, none, none, np.zeros(0), run_arrays, pair_arrays, self._robot_arrays,
-                        self._cover_arrays, _kernel_primitives([]), self._cover is not None, np.zeros(0),
-                        np.zeros(0), np.zeros(0), np.zeros(0), no)  # fmt: skip
+                        self._cover_arrays, self._hull_arrays, _kernel_primitives([]), self._cover is not None,
+                        np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0), no, no)  # fmt: skip
         _volume_bounds_nb(np.zeros((1, n_geoms, 3)), none, none, *pair_arrays[:3], *pair_arrays[8:], self._radius,
                           np.zeros(0))  # fmt: skip  # clearance() calls it from Python
         proves_too_little(0.0, 0.0)  # so does _refine
@@ -738,13 +758,13 @@ class PathCertifier:
                           pairs.box_rot, pairs.box_half, self._radius, bound)  # fmt: skip
         return bound
 
-    def _refine(self, configs, pairs: _Pairs, config_of, pair, refine, margin, bound, need, cert: Certificate
+    def _refine(self, configs, pairs: _Pairs, config_of, pair, refine, hulled, margin, bound, need, cert: Certificate
                 ) -> np.ndarray:  # fmt: skip
         """Replace ``bound`` on the ``refine`` rows by a coal distance; returns where it is the exact one.
 
         A pair with a mesh is first measured on the convex hulls (a lower bound, ~100x cheaper than the
-        mesh); the mesh itself where the hull distance is within the margin (exact geometry decides) or
-        :func:`proves_too_little` of the piece.
+        mesh) unless the row kernel bounded its hull already (``hulled``); the mesh itself where the hull distance is
+        within the margin (exact geometry decides) or :func:`proves_too_little` of the piece.
         """
         exact = np.zeros(len(pair), dtype=bool)
         rows = np.flatnonzero(refine)
@@ -757,7 +777,7 @@ class PathCertifier:
                 current, placed = config_of[row], set[int]()
                 pin.forwardKinematics(self._model, self._data, configs[current])
             p = int(pair[row])
-            if pairs.has_hull[p]:
+            if pairs.has_hull[p] and not hulled[row]:
                 cert.hull_queries += 1
                 bound[row] = max(bound[row], self._distance(pairs, p, True, placed))
                 slack = bound[row] - margin[row]
@@ -911,6 +931,18 @@ class PathCertifier:
             covered=covered,
             primitives=_kernel_primitives(obstacles if self._cover is not None else []),
         )
+
+
+def _hull_vertices(geometries, hulls: dict[int, coal.ConvexBase]) -> tuple[np.ndarray, np.ndarray]:
+    """(start (geometries + 1,), vertices (n, 3)): the vertices of each robot geometry's convex hull (none for a
+    geometry without one) in its parent joint's frame, for :func:`~maru_planner.collision.support_bounds
+    .hull_primitive_bound`."""
+    parts = [np.zeros((0, 3))] * len(geometries)
+    for g, hull in hulls.items():
+        placement = geometries[g].placement
+        parts[g] = np.asarray(hull.points(), dtype=float) @ placement.rotation.T + placement.translation
+    start = np.cumsum([0] + [len(part) for part in parts]).astype(np.int64)
+    return start, np.ascontiguousarray(np.concatenate(parts).reshape(-1, 3))
 
 
 def _kernel_primitives(obstacles: list[Obstacle]) -> tuple:
