@@ -318,17 +318,15 @@ def _assess_rows_nb(configs, config_of, seg, pair, half, run_arrays, pair_arrays
         rows = rows[np.argsort(config_of[rows])]
         cover_bounds_nb(rots, poss, rows, config_of, first[pair], second[pair], obstacle[pair], need, *cover_arrays,
                         *primitives, bound)  # fmt: skip
+    # where coal would measure a robot mesh's hull against an obstacle: its separating-axis bound here instead
+    hull_start, hull_verts = hull_arrays
+    primitive, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r = primitives
     for r in range(n_rows):
         p = pair[r]
         no_slack = bound[r] <= margin[r]
         thin = proves_too_little(bound[r] - margin[r], half[r] * rate[r])
         refine[r] = bound[r] < need[r] and (volume[r] + gap[p] >= need[r] or no_slack) and (
             no_slack or thin or not covered[p])
-    # where coal would measure a robot mesh's hull against an obstacle: its separating-axis bound here instead
-    hull_start, hull_verts = hull_arrays
-    primitive, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r = primitives
-    for r in range(n_rows):
-        p = pair[r]
         g = first[p]
         hulled[r] = refine[r] and use_cover and covered[p] and obstacle[p] and hull_start[g + 1] > hull_start[g]
         if not hulled[r]:
