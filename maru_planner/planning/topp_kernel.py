@@ -37,6 +37,16 @@ def _row(alpha, beta, gamma, i, k, delta, next_high):
     return 2.0 * delta, 1.0, next_high
 
 
+@njit(cache=True, inline="always")
+def _bounded(lo, hi, coef, rhs, tiny):
+    """``[lo, hi]`` cut by ``coef * v <= rhs`` (``coef`` within ``tiny`` of 0: ``0 <= rhs``, else empty)."""
+    if coef > tiny:
+        return lo, min(hi, rhs / coef)
+    if coef < -tiny:
+        return max(lo, rhs / coef), hi
+    return (lo, hi) if rhs >= -tiny else (math.inf, hi)
+
+
 @njit(cache=True)
 def highest_x(alpha, beta, gamma, i, x_low, x_high, delta, next_high, tiny):
     """The largest ``x`` of stage ``i`` for which some ``u`` meets every row (NaN: none); ``x`` in
@@ -48,25 +58,12 @@ def highest_x(alpha, beta, gamma, i, x_low, x_high, delta, next_high, tiny):
         if ak > tiny:
             continue
         if ak >= -tiny:  # no u in it: b x <= c
-            coef, rhs = bk, ck
-            if coef > tiny:
-                hi = min(hi, rhs / coef)
-            elif coef < -tiny:
-                lo = max(lo, rhs / coef)
-            elif rhs < -tiny:
-                return math.nan
+            lo, hi = _bounded(lo, hi, bk, ck, tiny)
             continue
         for m in range(rows):  # ak < 0: u >= (ck - bk x) / ak; pair it with each upper bound u <= (cm - bm x) / am
             am, bm, cm = _row(alpha, beta, gamma, i, m, delta, next_high)
-            if am <= tiny:
-                continue
-            coef, rhs = am * bk - ak * bm, am * ck - ak * cm
-            if coef > tiny:
-                hi = min(hi, rhs / coef)
-            elif coef < -tiny:
-                lo = max(lo, rhs / coef)
-            elif rhs < -tiny:
-                return math.nan
+            if am > tiny:
+                lo, hi = _bounded(lo, hi, am * bk - ak * bm, am * ck - ak * cm, tiny)
     return hi if lo <= hi else math.nan
 
 
@@ -76,13 +73,7 @@ def largest_u(alpha, beta, gamma, i, x, delta, next_high, tiny):
     lo, hi = -math.inf, math.inf
     for k in range(alpha.shape[1] + 2):
         a, b, c = _row(alpha, beta, gamma, i, k, delta, next_high)
-        rest = c - b * x
-        if a > tiny:
-            hi = min(hi, rest / a)
-        elif a < -tiny:
-            lo = max(lo, rest / a)
-        elif rest < -tiny:
-            return math.nan
+        lo, hi = _bounded(lo, hi, a, c - b * x, tiny)
     return hi if lo <= hi else math.nan
 
 
