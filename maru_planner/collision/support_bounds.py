@@ -110,8 +110,8 @@ def _closest_on_simplex(simplex, count, point, keep, idx, g, rhs, mu):
     the last point (GJK's newest support point), written to ``point``, and in ``keep`` which points it needs; brute
     force over those faces' affine projections (a face whose projection has a negative weight is not the answer).
     Returns the number kept (4: the origin is inside). ``idx``, ``g``, ``rhs``, ``mu``: work arrays."""
-    best, best_mask = math.inf, 1 << (count - 1)
     newest = 1 << (count - 1)
+    best, best_mask = math.inf, newest
     for mask in range(newest, 1 << count):  # GJK: the nearest face holds the newest support point
         m = 0
         for i in range(count):
@@ -201,7 +201,7 @@ def hull_primitive_bound(rot, pos, verts, start, end, k, box_c, box_r, box_h, sp
     once the bound reaches ``enough``. GJK starts from ``near`` (a point of the hull's body, e.g. its bounding
     sphere's centre) against the primitive's point nearest it: a first direction close to the answer."""
     simplex = np.empty((4, 3))
-    a, b, v, w = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
+    a, b, v = np.empty(3), np.empty(3), np.empty(3)
     keep, idx = np.empty(4, dtype=np.int64), np.empty(4, dtype=np.int64)
     g, rhs, mu = np.empty((3, 3)), np.empty(3), np.empty(3)
     _primitive_closest(k, near[0], near[1], near[2], box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, b)
@@ -220,10 +220,8 @@ def hull_primitive_bound(rot, pos, verts, start, end, k, box_c, box_r, box_h, sp
         bound = max(bound, low_b - high_a)
         if bound >= enough or norm - bound <= GJK_TOLERANCE + GJK_RELATIVE_TOLERANCE * norm:
             return bound
-        for i in range(3):
-            w[i] = a[i] - b[i]
-        for i in range(3):
-            simplex[count, i] = w[i]
+        for i in range(3):  # the support point of A - B joins the simplex
+            simplex[count, i] = a[i] - b[i]
         count += 1
         kept = _closest_on_simplex(simplex, count, v, keep, idx, g, rhs, mu)
         for j in range(kept):

@@ -38,42 +38,42 @@ def _row(alpha, beta, gamma, i, k, delta, next_high):
 
 
 @njit(cache=True, inline="always")
-def _bounded(lo, hi, coef, rhs, tiny):
-    """``[lo, hi]`` cut by ``coef * v <= rhs`` (``coef`` within ``tiny`` of 0: ``0 <= rhs``, else empty)."""
-    if coef > tiny:
+def _bounded(lo, hi, coef, rhs):
+    """``[lo, hi]`` cut by ``coef * v <= rhs`` (``coef`` within :data:`TINY` of 0: ``0 <= rhs``, else empty)."""
+    if coef > TINY:
         return lo, min(hi, rhs / coef)
-    if coef < -tiny:
+    if coef < -TINY:
         return max(lo, rhs / coef), hi
-    return (lo, hi) if rhs >= -tiny else (math.inf, hi)
+    return (lo, hi) if rhs >= -TINY else (math.inf, hi)
 
 
 @njit(cache=True)
-def highest_x(alpha, beta, gamma, i, x_low, x_high, delta, next_high, tiny):
+def highest_x(alpha, beta, gamma, i, x_high, delta, next_high):
     """The largest ``x`` of stage ``i`` for which some ``u`` meets every row (NaN: none); ``x`` in
-    ``[x_low, x_high]``. A row whose ``|alpha|`` is at most ``tiny`` bounds ``x`` alone."""
-    lo, hi = x_low, x_high
+    ``[0, x_high]``. A row whose ``|alpha|`` is at most :data:`TINY` bounds ``x`` alone."""
+    lo, hi = 0.0, x_high
     rows = alpha.shape[1] + 2
     for k in range(rows):
         ak, bk, ck = _row(alpha, beta, gamma, i, k, delta, next_high)
-        if ak > tiny:
+        if ak > TINY:
             continue
-        if ak >= -tiny:  # no u in it: b x <= c
-            lo, hi = _bounded(lo, hi, bk, ck, tiny)
+        if ak >= -TINY:  # no u in it: b x <= c
+            lo, hi = _bounded(lo, hi, bk, ck)
             continue
         for m in range(rows):  # ak < 0: u >= (ck - bk x) / ak; pair it with each upper bound u <= (cm - bm x) / am
             am, bm, cm = _row(alpha, beta, gamma, i, m, delta, next_high)
-            if am > tiny:
-                lo, hi = _bounded(lo, hi, am * bk - ak * bm, am * ck - ak * cm, tiny)
+            if am > TINY:
+                lo, hi = _bounded(lo, hi, am * bk - ak * bm, am * ck - ak * cm)
     return hi if lo <= hi else math.nan
 
 
 @njit(cache=True)
-def largest_u(alpha, beta, gamma, i, x, delta, next_high, tiny):
+def largest_u(alpha, beta, gamma, i, x, delta, next_high):
     """The largest ``u`` of stage ``i`` at squared speed ``x`` that meets every row (NaN: none)."""
     lo, hi = -math.inf, math.inf
     for k in range(alpha.shape[1] + 2):
         a, b, c = _row(alpha, beta, gamma, i, k, delta, next_high)
-        lo, hi = _bounded(lo, hi, a, c - b * x, tiny)
+        lo, hi = _bounded(lo, hi, a, c - b * x)
     return hi if lo <= hi else math.nan
 
 
@@ -121,14 +121,14 @@ def rest_to_rest_nb(ps, pss, deltas, velocity, acceleration, step_down, max_trie
     stages = deltas.shape[0]
     highest = np.zeros(stages + 1)
     for i in range(stages - 1, -1, -1):
-        high = highest_x(alpha, beta, gamma, i, 0.0, x_high[i], deltas[i], highest[i + 1], TINY)
+        high = highest_x(alpha, beta, gamma, i, x_high[i], deltas[i], highest[i + 1])
         if math.isnan(high):
             return np.empty(0)
         highest[i] = max(high, 0.0)
     x = np.zeros(stages + 1)
     i = tries = 0
     while i < stages:
-        u = largest_u(alpha, beta, gamma, i, x[i], deltas[i], highest[i + 1], TINY)
+        u = largest_u(alpha, beta, gamma, i, x[i], deltas[i], highest[i + 1])
         if math.isnan(u):
             if tries == max_tries:
                 return np.empty(0)
