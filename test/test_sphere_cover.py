@@ -151,7 +151,7 @@ def test_cover_bounds_are_the_balls_least_distance_below_enough_and_at_least_eno
     s_joint, s_center, s_radius, c_start, _, _, _, g_clusters = cover.arrays
     obstacles = [Obstacle("box", "box", size=(0.3, 0.2, 0.4), pose=[0.45, 0.1, 0.4]),
                  Obstacle("ball", "sphere", radius=0.08, pose=[0.3, -0.3, 0.6])]  # fmt: skip
-    primitives = _kernel_primitives(obstacles)
+    primitives, _ = _kernel_primitives(obstacles)
     rng = np.random.default_rng(3)
     configs = rng.uniform(robot.lower_limits, robot.upper_limits, (40, robot.nq))
     rots, poss = batch_joint_poses(KinematicTree.from_pinocchio(robot.model), configs)

@@ -53,7 +53,17 @@ from maru_planner.collision.sphere_cover import (
 )
 from maru_planner.collision.sphere_model import SphereModel
 from maru_planner.collision.spheres import ScenePrimitives
-from maru_planner.collision.support_bounds import hull_primitive_bound
+from maru_planner.collision.support_bounds import (
+    BOX,
+    CYLINDER,
+    HULL,
+    NO_SHAPE,
+    SPHERE,
+    convex_bound,
+    load_primitive,
+    new_records,
+    place_shape,
+)
 from maru_planner.robot.model import RobotModel
 from maru_planner.scene import Obstacle, Scene
 
@@ -64,6 +74,9 @@ MIN_INTERVAL = 1e-9  # rad: a piece of segment this short that is still unproven
 # An unproven end is split into up to this many dyadic pieces at once, each no longer than twice the radius its
 # piece's middle proved (bisecting one level per round took ~10 rounds a path, each a batch's fixed cost)
 MAX_SPLIT = 8
+# what the row kernel's GJK bound (support_bounds) is for a pair: none (coal measures it), a lower bound (a robot
+# hull: coal's mesh is finer), the distance itself (primitives on both sides, exactly the pair's shapes)
+MEASURE_NONE, MEASURE_BOUND, MEASURE_EXACT = 0, 1, 2
 COVER_SLACK_SPLIT = 2 * MAX_SPLIT  # see proves_too_little
 NEAR_PATH_MIN_OBSTACLES = 64  # reachable obstacles from which a certification only builds pairs for those near its path
 NEAR_TABLES = 4  # pair tables of near obstacles kept (blends and repairs certify around the same path)
@@ -197,13 +210,14 @@ class _Pairs:
     box_rot: np.ndarray  # (K, 3, 3)
     box_half: np.ndarray  # (K, 3)
     covered: np.ndarray  # (P,) bool: a sphere-cover bound applies (mesh geometries, bounded obstacle primitives)
+    measure: np.ndarray  # (P,) MEASURE_*: what the row kernel's GJK bound (support_bounds) is for the pair
     primitives: tuple  # the obstacles' sphere-kernel primitives (boxes, spheres, cylinders) and each one's index
 
     @property
     def arrays(self) -> tuple:
         """The per-pair arrays :func:`_assess_rows_nb` takes, in its order."""
-        return (self.first, self.second, self.obstacle, self.other, self.covered, self.moves_first, self.moves_other,
-                self.gap, self.box_center, self.box_rot, self.box_half)  # fmt: skip
+        return (self.first, self.second, self.obstacle, self.other, self.covered, self.measure, self.moves_first,
+                self.moves_other, self.gap, self.box_center, self.box_rot, self.box_half)  # fmt: skip
 
 
 @njit(cache=True)
@@ -261,16 +275,18 @@ def proves_too_little(slack, needed):
 
 @njit(cache=True)
 def _assess_rows_nb(configs, config_of, seg, pair, half, run_arrays, pair_arrays, robot_arrays, cover_arrays,
-                    hull_arrays, primitives, use_cover, margin, bound, rate, need, refine, hulled):  # fmt: skip
+                    shape_arrays, primitives, use_cover, margin, bound, rate, need, refine, measured):  # fmt: skip
     """Per row, at the middle of its piece (one call per round of :meth:`PathCertifier._check_rows`): its pair's
     margin on its segment, the rate (configuration-free, tightened at the middle where the bounding volumes fall
     short of it), ``need`` = margin + half * rate, the distance bound (bounding volumes, then the sphere cover where
     they fall short of ``need``), and whether coal is to refine the bound (module doc: where it may prove the row,
-    and wherever the bounds leave no slack; on a covered pair only then). A covered row of a robot mesh against an
-    obstacle that coal would refine first gets its hull's separating-axis bound (``support_bounds``; ``hulled``):
-    coal then only measures the mesh itself, where that bound leaves it unproven."""
+    and wherever the bounds leave no slack; on a covered pair only then). A row coal would refine whose pair's shapes
+    the kernel holds (``measure``) gets GJK's separating-axis bound first (``support_bounds``; ``measured``): coal
+    then only measures a mesh where its hull's bound leaves the row unproven, and an exact pair where the distance
+    leaves no slack (coal's verdict fails the path)."""
     pair_margin, rate_free, motion, downstream = run_arrays
-    first, second, obstacle, other, covered, moves_first, moves_other, gap, box_center, box_rot, box_half = pair_arrays
+    first, second, obstacle, other, covered, measure, moves_first, moves_other, gap, box_center, box_rot, box_half = (
+        pair_arrays)
     parent, kind, axis, prot, ppos, idx_q, g_joint, g_local, g_radius, q_joint, levers, prismatic = robot_arrays
     n_rows, n_geoms, nq, n_configs = seg.shape[0], g_joint.shape[0], q_joint.shape[0], configs.shape[0]
     rots, poss = np.empty((n_configs, parent.shape[0], 3, 3)), np.empty((n_configs, parent.shape[0], 3))
@@ -318,26 +334,34 @@ def _assess_rows_nb(configs, config_of, seg, pair, half, run_arrays, pair_arrays
         rows = rows[np.argsort(config_of[rows])]
         cover_bounds_nb(rots, poss, rows, config_of, first[pair], second[pair], obstacle[pair], need, *cover_arrays,
                         *primitives, bound)  # fmt: skip
-    # where coal would measure a robot mesh's hull against an obstacle: its separating-axis bound here instead
-    hull_start, hull_verts = hull_arrays
+    # where coal would measure the pair: GJK's bound on the shapes the kernel holds instead
+    g_kind, g_rot, g_pos, g_size, g_verts, verts = shape_arrays
     primitive, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r = primitives
+    kinds, cs, rs, ss, vr = new_records()
     for r in range(n_rows):
         p = pair[r]
         no_slack = bound[r] <= margin[r]
         thin = proves_too_little(bound[r] - margin[r], half[r] * rate[r])
         refine[r] = bound[r] < need[r] and (volume[r] + gap[p] >= need[r] or no_slack) and (
             no_slack or thin or not covered[p])
-        g = first[p]
-        hulled[r] = refine[r] and use_cover and covered[p] and obstacle[p] and hull_start[g + 1] > hull_start[g]
-        if not hulled[r]:
+        measured[r] = refine[r] and measure[p] != MEASURE_NONE
+        if not measured[r]:
             continue
-        c, j = config_of[r], g_joint[g]
-        lower = hull_primitive_bound(rots[c, j], poss[c, j], hull_verts, hull_start[g], hull_start[g + 1],
-                                     primitive[second[p]], box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h,
-                                     cyl_r, need[r] + DISTANCE_TOLERANCE, centers[c, g])  # fmt: skip
+        c, g = config_of[r], first[p]
+        place_shape(g, rots[c, g_joint[g]], poss[c, g_joint[g]], g_kind, g_rot, g_pos, g_size, g_verts, 0, kinds, cs,
+                    rs, ss, vr)  # fmt: skip
+        if obstacle[p]:
+            load_primitive(primitive[second[p]], box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, 1,
+                           kinds, cs, rs, ss)  # fmt: skip
+        else:
+            o = second[p]
+            place_shape(o, rots[c, g_joint[o]], poss[c, g_joint[o]], g_kind, g_rot, g_pos, g_size, g_verts, 1, kinds,
+                        cs, rs, ss, vr)  # fmt: skip
+        lower = convex_bound(kinds, cs, rs, ss, vr, verts, need[r] + DISTANCE_TOLERANCE, centers[c, g])
         bound[r] = max(bound[r], lower - DISTANCE_TOLERANCE)
         no_slack = bound[r] <= margin[r]
-        refine[r] = bound[r] < need[r] and (no_slack or proves_too_little(bound[r] - margin[r], half[r] * rate[r]))
+        finer = measure[p] == MEASURE_BOUND and proves_too_little(bound[r] - margin[r], half[r] * rate[r])
+        refine[r] = bound[r] < need[r] and (no_slack or finer)
 
 
 FAILURE_REASONS = ("collision", "margin", "unproven", "timeout")  # Certificate.reason by the round kernels' codes
@@ -547,7 +571,7 @@ class PathCertifier:
         self._robot_arrays = (*self._tree, self._joint, self._local, self._radius, self._q_joint, self._levers,
                               self._prismatic)  # fmt: skip
         self._cover_arrays = self._cover.arrays if self._cover is not None else NO_COVER
-        self._hull_arrays = _hull_vertices(geometries, self._hulls)
+        self._shape_arrays = _robot_shapes(geometries, self._hulls)
         # Compile (or load from numba's cache) the kernels now: inside the first request it took ~1.5 s of its budget.
         self._centers(np.asarray(robot.neutral(), dtype=float)[None])
         self._warm_row_kernel()
@@ -712,13 +736,13 @@ class PathCertifier:
         cert.checks += len(configs)
         n_rows = len(seg)
         margin, bound, rate, need = (np.empty(n_rows) for _ in range(4))
-        refine, hulled = np.empty(n_rows, dtype=bool), np.empty(n_rows, dtype=bool)
+        refine, measured = np.empty(n_rows, dtype=bool), np.empty(n_rows, dtype=bool)
         _assess_rows_nb(configs, config_of, seg, pair, half, run.arrays, run.pairs.arrays, self._robot_arrays,
-                        self._cover_arrays, self._hull_arrays, run.pairs.primitives, self._cover is not None, margin,
-                        bound, rate, need, refine, hulled)  # fmt: skip
-        exact = self._refine(configs, run.pairs, config_of, pair, refine, hulled, margin, bound, need, cert)
+                        self._cover_arrays, self._shape_arrays, run.pairs.primitives, self._cover is not None, margin,
+                        bound, rate, need, refine, measured)  # fmt: skip
+        exact = self._refine(configs, run.pairs, config_of, pair, refine, measured, margin, bound, need, cert)
         run.seg, run.pair, run.a, run.b = _finish_round_nb(
-            configs, config_of, seg, pair, run.a, run.b, half, margin, bound, rate, need, refine | hulled, exact,
+            configs, config_of, seg, pair, run.a, run.b, half, margin, bound, rate, need, refine | measured, exact,
             run.span, time.monotonic() > run.deadline, MIN_INTERVAL, MAX_SPLIT, run.alive, run.curve, run.clearance,
             run.failure, run.witness_config,
         )  # fmt: skip
@@ -735,12 +759,12 @@ class PathCertifier:
         """Compile (or load) the row kernels for this robot's array types, on no rows (not in a request's budget)."""
         nq, n_geoms, none, no = self._model.nq, self._n_robot, np.zeros(0, dtype=np.int64), np.zeros(0, dtype=bool)
         run_arrays = (np.zeros((0, 0)), np.zeros((0, 0)), np.zeros((0, nq)), np.zeros((0, n_geoms, nq)))
-        pair_arrays = (none, none, no, none, no, np.zeros((0, nq), dtype=bool), np.zeros((0, nq), dtype=bool),
+        pair_arrays = (none, none, no, none, no, none, np.zeros((0, nq), dtype=bool), np.zeros((0, nq), dtype=bool),
                        np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros((0, 3)))  # fmt: skip
         _assess_rows_nb(np.zeros((1, nq)), none, none, none, np.zeros(0), run_arrays, pair_arrays, self._robot_arrays,
-                        self._cover_arrays, self._hull_arrays, _kernel_primitives([]), self._cover is not None,
+                        self._cover_arrays, self._shape_arrays, _kernel_primitives([])[0], self._cover is not None,
                         np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0), no, no)  # fmt: skip
-        _volume_bounds_nb(np.zeros((1, n_geoms, 3)), none, none, *pair_arrays[:3], *pair_arrays[8:], self._radius,
+        _volume_bounds_nb(np.zeros((1, n_geoms, 3)), none, none, *pair_arrays[:3], *pair_arrays[9:], self._radius,
                           np.zeros(0))  # fmt: skip  # clearance() calls it from Python
         proves_too_little(0.0, 0.0)  # so does _refine
         path, rows = np.zeros((2, nq)), np.zeros(0)
@@ -756,13 +780,13 @@ class PathCertifier:
                           pairs.box_rot, pairs.box_half, self._radius, bound)  # fmt: skip
         return bound
 
-    def _refine(self, configs, pairs: _Pairs, config_of, pair, refine, hulled, margin, bound, need, cert: Certificate
-                ) -> np.ndarray:  # fmt: skip
+    def _refine(self, configs, pairs: _Pairs, config_of, pair, refine, measured, margin, bound, need,
+                cert: Certificate) -> np.ndarray:  # fmt: skip
         """Replace ``bound`` on the ``refine`` rows by a coal distance; returns where it is the exact one.
 
         A pair with a mesh is first measured on the convex hulls (a lower bound, ~100x cheaper than the
-        mesh) unless the row kernel bounded its hull already (``hulled``); the mesh itself where the hull distance is
-        within the margin (exact geometry decides) or :func:`proves_too_little` of the piece.
+        mesh) unless the row kernel bounded its hulls already (``measured``); the mesh itself where the hull distance
+        is within the margin (exact geometry decides) or :func:`proves_too_little` of the piece.
         """
         exact = np.zeros(len(pair), dtype=bool)
         rows = np.flatnonzero(refine)
@@ -775,7 +799,7 @@ class PathCertifier:
                 current, placed = config_of[row], set[int]()
                 pin.forwardKinematics(self._model, self._data, configs[current])
             p = int(pair[row])
-            if pairs.has_hull[p] and not hulled[row]:
+            if pairs.has_hull[p] and not measured[row]:
                 cert.hull_queries += 1
                 bound[row] = max(bound[row], self._distance(pairs, p, True, placed))
                 slack = bound[row] - margin[row]
@@ -906,11 +930,15 @@ class PathCertifier:
         robot_mesh = np.array([isinstance(obj.geometry, coal.BVHModelBase)
                                for obj in self.robot.collision_model.geometryObjects])  # fmt: skip
         obstacle_mesh = np.array([geometry is not hull for geometry, hull, _ in shapes], dtype=bool)
+        bounded = np.isfinite(box_half).all(axis=1)
         covered = np.zeros(len(first), dtype=bool)
         if self._cover is not None:
-            bounded = np.isfinite(box_half).all(axis=1)
             covered[:n_env] = self._cover.covered[first[:n_env]] & bounded[second[:n_env]]
             covered[n_env:] = self._cover.covered[first[n_env:]] & self._cover.covered[second[n_env:]]
+        primitives, exact_primitive = _kernel_primitives(obstacles)
+        kind = self._shape_arrays[0]
+        held = np.concatenate([bounded[second[:n_env]], kind[second[n_env:]] != NO_SHAPE]) & (kind[first] != NO_SHAPE)
+        exact = np.concatenate([exact_primitive[second[:n_env]], kind[second[n_env:]] != HULL]) & (kind[first] != HULL)
         return _Pairs(
             obstacles=shapes,
             self_pair=np.concatenate([np.full(n_env, -1), np.arange(len(self_ends))]).astype(int),
@@ -927,28 +955,42 @@ class PathCertifier:
             box_rot=np.array([r for _, r, _, _ in boxes], dtype=float).reshape(-1, 3, 3),
             box_half=box_half,
             covered=covered,
-            primitives=_kernel_primitives(obstacles if self._cover is not None else []),
+            measure=np.where(held, np.where(exact, MEASURE_EXACT, MEASURE_BOUND), MEASURE_NONE).astype(np.int64),
+            primitives=primitives,
         )
 
 
-def _hull_vertices(geometries, hulls: dict[int, coal.ConvexBase]) -> tuple[np.ndarray, np.ndarray]:
-    """(start (geometries + 1,), vertices (n, 3)): the vertices of each robot geometry's convex hull (none for a
-    geometry without one) in its parent joint's frame, for :func:`~maru_planner.collision.support_bounds
-    .hull_primitive_bound`."""
-    parts = [np.zeros((0, 3))] * len(geometries)
-    for g, hull in hulls.items():
-        placement = geometries[g].placement
-        parts[g] = np.asarray(hull.points(), dtype=float) @ placement.rotation.T + placement.translation
+def _robot_shapes(geometries, hulls: dict[int, coal.ConvexBase]) -> tuple:
+    """The robot's shape records for :func:`~maru_planner.collision.support_bounds.place_shape`: per geometry its
+    kind (a box, sphere or cylinder as itself, a mesh as its convex hull ``hulls[g]``, else ``NO_SHAPE``), placement
+    in its joint's frame, size, and vertex range into the hull vertices (in their geometry's frame); then those."""
+    n = len(geometries)
+    kind, size = np.full(n, NO_SHAPE, dtype=np.int64), np.zeros((n, 3))
+    parts = [np.zeros((0, 3))] * n
+    for g, obj in enumerate(geometries):
+        shape = obj.geometry
+        if g in hulls:
+            kind[g], parts[g] = HULL, np.asarray(hulls[g].points(), dtype=float)
+        elif isinstance(shape, coal.Box):
+            kind[g], size[g] = BOX, shape.halfSide
+        elif isinstance(shape, coal.Sphere):
+            kind[g], size[g, 0] = SPHERE, shape.radius
+        elif isinstance(shape, coal.Cylinder):
+            kind[g], size[g, 0], size[g, 2] = CYLINDER, shape.radius, shape.halfLength
+    rot = np.array([obj.placement.rotation for obj in geometries], dtype=float).reshape(n, 3, 3)
+    pos = np.array([obj.placement.translation for obj in geometries], dtype=float).reshape(n, 3)
     start = np.cumsum([0] + [len(part) for part in parts]).astype(np.int64)
-    return start, np.ascontiguousarray(np.concatenate(parts).reshape(-1, 3))
+    return kind, rot, pos, size, start, np.ascontiguousarray(np.concatenate(parts).reshape(-1, 3))
 
 
-def _kernel_primitives(obstacles: list[Obstacle]) -> tuple:
+def _kernel_primitives(obstacles: list[Obstacle]) -> tuple[tuple, np.ndarray]:
     """The obstacles' sphere-kernel primitives (each contains its obstacle): the index of each obstacle's
-    primitive, then the arrays :func:`~maru_planner.collision.sphere_kernels.obstacle_distance` takes."""
+    primitive, then the arrays :func:`~maru_planner.collision.sphere_kernels.obstacle_distance` takes; and per
+    obstacle whether its primitive is the obstacle itself."""
     primitives = ScenePrimitives.from_obstacles(obstacles)
-    position = {id(ob): k for k, ob in enumerate(primitives.obstacles)}
-    return np.array([position[id(ob)] for ob in obstacles], dtype=np.int64), *primitives.as_tuple()[:-1]
+    position = np.array([{id(ob): k for k, ob in enumerate(primitives.obstacles)}[id(ob)] for ob in obstacles],
+                        dtype=np.int64)  # fmt: skip
+    return (position, *primitives.as_tuple()[:-1]), primitives.exact[position]
 
 
 def _box_distances(centers: np.ndarray, box_center: np.ndarray, box_rot: np.ndarray, box_half: np.ndarray

@@ -1,4 +1,4 @@
-"""Separating-axis lower bounds of a robot hull's distance to an obstacle primitive, the axis found by GJK.
+"""Separating-axis lower bounds of the distance between two convex shapes, the axis found by GJK.
 
 For convex sets ``A`` and ``B`` and any unit direction ``m``, every ``a`` in ``A`` and ``b`` in ``B`` have
 ``|a - b| >= m·(a - b)``, so ``dist(A, B) >= min over A of m·a - max over B of m·b``: a lower bound from the two
@@ -6,10 +6,13 @@ support functions alone, whichever ``m`` is taken. The bound is tight for the di
 which GJK (Gilbert–Johnson–Keerthi) finds on the Minkowski difference ``A - B`` in a few iterations; GJK's own
 arithmetic only chooses ``m``, so the bound stays sound where it converges poorly (it is then just lower).
 
-``A`` is a robot geometry's convex hull (its vertices: the support function is exact over the hull, which contains
-the mesh); ``B`` an obstacle's sphere-kernel primitive (box, sphere or cylinder; it contains the obstacle, so the
-bound holds for the obstacle too). Certification (``certify.py``) takes this bound where the sphere cover leaves a
-row without slack, before asking coal for the hull distance (~1 µs here against ~5 µs through Python).
+A shape is a *record* in slot 0 (``A``) or 1 (``B``) of four small arrays: its kind (:data:`BOX`, :data:`SPHERE`,
+:data:`CYLINDER`: the sphere kernels' primitives, or :data:`HULL`: the vertices ``verts[start:end]``, whose support
+function is exact over the hull, which contains the mesh), its centre, its rotation (world from shape; a cylinder's
+axis is its third column, a hull's vertices are in this frame) and its size (a box's half extents; a sphere's radius
+first; a cylinder's radius first and half length last). Certification (``certify.py``) takes this bound where the
+sphere cover leaves a row without slack, before asking coal (~1 µs here against ~5-10 µs through Python): a robot
+hull against an obstacle's primitive, and primitives against primitives, where the bound is the distance itself.
 """
 
 from __future__ import annotations
@@ -22,86 +25,123 @@ from numba import njit
 GJK_ITERATIONS = 12  # GJK steps at most (a polytope against a primitive converges in ~3-6)
 GJK_TOLERANCE = 1e-6  # m: stop once the bound is this close to the distance of GJK's current point, plus:
 GJK_RELATIVE_TOLERANCE = 1e-3  # of that distance (curved primitives converge slowly; a row needs no finer bound)
+NO_SHAPE, BOX, SPHERE, CYLINDER, HULL = -1, 0, 1, 2, 3  # record kinds (the first three: the kernels' order)
+
+
+@njit(cache=True)
+def new_records():
+    """Two empty shape records (kinds, centres, rotations, sizes, vertex ranges), for :func:`convex_bound`."""
+    return (np.full(2, NO_SHAPE, dtype=np.int64), np.zeros((2, 3)), np.zeros((2, 3, 3)), np.zeros((2, 3)),
+            np.zeros((2, 2), dtype=np.int64))  # fmt: skip
 
 
 @njit(cache=True, inline="always")
-def _hull_support(rot, pos, verts, start, end, dx, dy, dz, out):
-    """The hull vertex (world) farthest along (dx, dy, dz), written to ``out``; its projection returned.
-    ``verts`` are in the frame placed by ``rot``/``pos``: the direction is turned into it once."""
-    lx = rot[0, 0] * dx + rot[1, 0] * dy + rot[2, 0] * dz
-    ly = rot[0, 1] * dx + rot[1, 1] * dy + rot[2, 1] * dz
-    lz = rot[0, 2] * dx + rot[1, 2] * dy + rot[2, 2] * dz
-    best, arg = -math.inf, start
-    for v in range(start, end):
-        value = verts[v, 0] * lx + verts[v, 1] * ly + verts[v, 2] * lz
-        if value > best:
-            best, arg = value, v
-    for i in range(3):
-        out[i] = rot[i, 0] * verts[arg, 0] + rot[i, 1] * verts[arg, 1] + rot[i, 2] * verts[arg, 2] + pos[i]
-    return best + pos[0] * dx + pos[1] * dy + pos[2] * dz
-
-
-@njit(cache=True, inline="always")
-def _primitive_low(k, dx, dy, dz, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, out):
-    """The point of primitive ``k`` (kernel order: boxes, spheres, cylinders) least along (dx, dy, dz), a unit
-    direction, written to ``out``; its projection returned."""
+def load_primitive(k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, slot, kinds, cs, rs, ss):
+    """Primitive ``k`` of the kernels' arrays (boxes, spheres, cylinders) into record ``slot``."""
     nb, ns = box_c.shape[0], sph_c.shape[0]
     if k < nb:
+        kinds[slot] = BOX
         for i in range(3):
-            out[i] = box_c[k, i]
-        for a in range(3):
-            along = box_r[k, 0, a] * dx + box_r[k, 1, a] * dy + box_r[k, 2, a] * dz
-            sign = -1.0 if along > 0.0 else 1.0
-            for i in range(3):
-                out[i] += sign * box_h[k, a] * box_r[k, i, a]
+            cs[slot, i], ss[slot, i] = box_c[k, i], box_h[k, i]
+            for j in range(3):
+                rs[slot, i, j] = box_r[k, i, j]
     elif k - nb < ns:
         k -= nb
-        out[0], out[1], out[2] = sph_c[k, 0] - sph_r[k] * dx, sph_c[k, 1] - sph_r[k] * dy, sph_c[k, 2] - sph_r[k] * dz
+        kinds[slot] = SPHERE
+        for i in range(3):
+            cs[slot, i] = sph_c[k, i]
+        ss[slot, 0] = sph_r[k]
     else:
         k -= nb + ns
-        ax, ay, az = cyl_a[k, 0], cyl_a[k, 1], cyl_a[k, 2]
+        kinds[slot] = CYLINDER
+        for i in range(3):
+            cs[slot, i], rs[slot, i, 2] = cyl_c[k, i], cyl_a[k, i]
+        ss[slot, 0], ss[slot, 2] = cyl_r[k], cyl_h[k]
+
+
+@njit(cache=True, inline="always")
+def place_shape(g, rot, pos, g_kind, g_rot, g_pos, g_size, g_verts, slot, kinds, cs, rs, ss, vr):
+    """Robot shape ``g`` (kind, placement in its joint's frame, size, vertex range) into record ``slot``, its joint
+    at ``rot``/``pos``."""
+    kinds[slot] = g_kind[g]
+    for i in range(3):
+        cs[slot, i] = pos[i] + rot[i, 0] * g_pos[g, 0] + rot[i, 1] * g_pos[g, 1] + rot[i, 2] * g_pos[g, 2]
+        ss[slot, i] = g_size[g, i]
+        for j in range(3):
+            rs[slot, i, j] = rot[i, 0] * g_rot[g, 0, j] + rot[i, 1] * g_rot[g, 1, j] + rot[i, 2] * g_rot[g, 2, j]
+    vr[slot, 0], vr[slot, 1] = g_verts[g], g_verts[g + 1]
+
+
+@njit(cache=True, inline="always")
+def _support(slot, kinds, cs, rs, ss, vr, verts, dx, dy, dz, out):
+    """The point of record ``slot`` farthest along the unit direction (dx, dy, dz), written to ``out``; its
+    projection returned."""
+    kind = kinds[slot]
+    if kind == SPHERE:
+        r = ss[slot, 0]
+        out[0], out[1], out[2] = cs[slot, 0] + r * dx, cs[slot, 1] + r * dy, cs[slot, 2] + r * dz
+    elif kind == BOX:
+        for i in range(3):
+            out[i] = cs[slot, i]
+        for a in range(3):
+            along = rs[slot, 0, a] * dx + rs[slot, 1, a] * dy + rs[slot, 2, a] * dz
+            sign = 1.0 if along > 0.0 else -1.0
+            for i in range(3):
+                out[i] += sign * ss[slot, a] * rs[slot, i, a]
+    elif kind == CYLINDER:
+        ax, ay, az = rs[slot, 0, 2], rs[slot, 1, 2], rs[slot, 2, 2]
         along = ax * dx + ay * dy + az * dz
-        sign = -1.0 if along > 0.0 else 1.0
+        sign = 1.0 if along > 0.0 else -1.0
         rx, ry, rz = dx - along * ax, dy - along * ay, dz - along * az
         radial = math.sqrt(rx * rx + ry * ry + rz * rz)
-        scale = cyl_r[k] / radial if radial > 1e-12 else 0.0
-        out[0] = cyl_c[k, 0] + sign * cyl_h[k] * ax - scale * rx
-        out[1] = cyl_c[k, 1] + sign * cyl_h[k] * ay - scale * ry
-        out[2] = cyl_c[k, 2] + sign * cyl_h[k] * az - scale * rz
+        scale = ss[slot, 0] / radial if radial > 1e-12 else 0.0
+        h = ss[slot, 2]
+        out[0] = cs[slot, 0] + sign * h * ax + scale * rx
+        out[1] = cs[slot, 1] + sign * h * ay + scale * ry
+        out[2] = cs[slot, 2] + sign * h * az + scale * rz
+    else:  # HULL: the direction turned into the vertices' frame once
+        lx = rs[slot, 0, 0] * dx + rs[slot, 1, 0] * dy + rs[slot, 2, 0] * dz
+        ly = rs[slot, 0, 1] * dx + rs[slot, 1, 1] * dy + rs[slot, 2, 1] * dz
+        lz = rs[slot, 0, 2] * dx + rs[slot, 1, 2] * dy + rs[slot, 2, 2] * dz
+        best, arg = -math.inf, vr[slot, 0]
+        for v in range(vr[slot, 0], vr[slot, 1]):
+            value = verts[v, 0] * lx + verts[v, 1] * ly + verts[v, 2] * lz
+            if value > best:
+                best, arg = value, v
+        for i in range(3):
+            out[i] = (rs[slot, i, 0] * verts[arg, 0] + rs[slot, i, 1] * verts[arg, 1] + rs[slot, i, 2] * verts[arg, 2]
+                      + cs[slot, i])  # fmt: skip
     return out[0] * dx + out[1] * dy + out[2] * dz
 
 
 @njit(cache=True, inline="always")
-def _primitive_closest(k, px, py, pz, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, out):
-    """The point of primitive ``k`` nearest (px, py, pz) (the point itself where it is inside), into ``out``."""
-    nb, ns = box_c.shape[0], sph_c.shape[0]
-    if k < nb:
-        dx, dy, dz = px - box_c[k, 0], py - box_c[k, 1], pz - box_c[k, 2]
-        for i in range(3):
-            out[i] = box_c[k, i]
+def _closest(slot, kinds, cs, rs, ss, px, py, pz, out):
+    """The point of record ``slot`` nearest (px, py, pz) (the point itself where it is inside), into ``out``; a hull's
+    frame origin stands for it (GJK only starts from it)."""
+    kind = kinds[slot]
+    dx, dy, dz = px - cs[slot, 0], py - cs[slot, 1], pz - cs[slot, 2]
+    for i in range(3):
+        out[i] = cs[slot, i]
+    if kind == BOX:
         for a in range(3):
-            local = box_r[k, 0, a] * dx + box_r[k, 1, a] * dy + box_r[k, 2, a] * dz
-            local = min(max(local, -box_h[k, a]), box_h[k, a])
+            local = rs[slot, 0, a] * dx + rs[slot, 1, a] * dy + rs[slot, 2, a] * dz
+            local = min(max(local, -ss[slot, a]), ss[slot, a])
             for i in range(3):
-                out[i] += local * box_r[k, i, a]
-    elif k - nb < ns:
-        k -= nb
-        dx, dy, dz = px - sph_c[k, 0], py - sph_c[k, 1], pz - sph_c[k, 2]
+                out[i] += local * rs[slot, i, a]
+    elif kind == SPHERE:
         norm = math.sqrt(dx * dx + dy * dy + dz * dz)
-        scale = min(1.0, sph_r[k] / norm) if norm > 0.0 else 0.0
-        out[0], out[1], out[2] = sph_c[k, 0] + scale * dx, sph_c[k, 1] + scale * dy, sph_c[k, 2] + scale * dz
-    else:
-        k -= nb + ns
-        dx, dy, dz = px - cyl_c[k, 0], py - cyl_c[k, 1], pz - cyl_c[k, 2]
-        ax, ay, az = cyl_a[k, 0], cyl_a[k, 1], cyl_a[k, 2]
+        scale = min(1.0, ss[slot, 0] / norm) if norm > 0.0 else 0.0
+        out[0], out[1], out[2] = out[0] + scale * dx, out[1] + scale * dy, out[2] + scale * dz
+    elif kind == CYLINDER:
+        ax, ay, az = rs[slot, 0, 2], rs[slot, 1, 2], rs[slot, 2, 2]
         along = dx * ax + dy * ay + dz * az
         rx, ry, rz = dx - along * ax, dy - along * ay, dz - along * az
         radial = math.sqrt(rx * rx + ry * ry + rz * rz)
-        scale = min(1.0, cyl_r[k] / radial) if radial > 0.0 else 0.0
-        along = min(max(along, -cyl_h[k]), cyl_h[k])
-        out[0] = cyl_c[k, 0] + along * ax + scale * rx
-        out[1] = cyl_c[k, 1] + along * ay + scale * ry
-        out[2] = cyl_c[k, 2] + along * az + scale * rz
+        scale = min(1.0, ss[slot, 0] / radial) if radial > 0.0 else 0.0
+        along = min(max(along, -ss[slot, 2]), ss[slot, 2])
+        out[0] += along * ax + scale * rx
+        out[1] += along * ay + scale * ry
+        out[2] += along * az + scale * rz
 
 
 @njit(cache=True)
@@ -194,17 +234,16 @@ def _det3(a, b, c, d, e, f, g, h, i):
 
 
 @njit(cache=True)
-def hull_primitive_bound(rot, pos, verts, start, end, k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h,
-                         cyl_r, enough, near):  # fmt: skip
-    """A lower bound of the distance between the hull ``verts[start:end]`` (placed by ``rot``/``pos``) and primitive
-    ``k`` (module doc): the best separating-axis bound along GJK's directions; <= 0 where they may touch. Stops early
-    once the bound reaches ``enough``. GJK starts from ``near`` (a point of the hull's body, e.g. its bounding
-    sphere's centre) against the primitive's point nearest it: a first direction close to the answer."""
+def convex_bound(kinds, cs, rs, ss, vr, verts, enough, near):
+    """A lower bound of the distance between records 0 (``A``) and 1 (``B``) (module doc): the best separating-axis
+    bound along GJK's directions; <= 0 where they may touch. Stops early once the bound reaches ``enough``. GJK starts
+    from ``near`` (a point of ``A``'s body, e.g. its bounding sphere's centre) against ``B``'s point nearest it: a
+    first direction close to the answer."""
     simplex = np.empty((4, 3))
     a, b, v = np.empty(3), np.empty(3), np.empty(3)
     keep, idx = np.empty(4, dtype=np.int64), np.empty(4, dtype=np.int64)
     g, rhs, mu = np.empty((3, 3)), np.empty(3), np.empty(3)
-    _primitive_closest(k, near[0], near[1], near[2], box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, b)
+    _closest(1, kinds, cs, rs, ss, near[0], near[1], near[2], b)
     for i in range(3):
         v[i] = near[i] - b[i]
     count, bound = 0, -math.inf
@@ -213,9 +252,9 @@ def hull_primitive_bound(rot, pos, verts, start, end, k, box_c, box_r, box_h, sp
         if norm < 1e-12:
             return min(bound, 0.0) if bound > -math.inf else 0.0
         dx, dy, dz = -v[0] / norm, -v[1] / norm, -v[2] / norm  # from A - B's point towards the origin
-        # support of A - B along -v: A's farthest along -v minus B's least along -v
-        high_a = _hull_support(rot, pos, verts, start, end, dx, dy, dz, a)
-        low_b = _primitive_low(k, dx, dy, dz, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, b)
+        # support of A - B along -v: A's farthest along -v minus B's least along -v (its farthest along v)
+        high_a = _support(0, kinds, cs, rs, ss, vr, verts, dx, dy, dz, a)
+        low_b = -_support(1, kinds, cs, rs, ss, vr, verts, -dx, -dy, -dz, b)
         # unit m = v / |v|: dist >= min_A m·a - max_B m·b = -(high_a - low_b)
         bound = max(bound, low_b - high_a)
         if bound >= enough or norm - bound <= GJK_TOLERANCE + GJK_RELATIVE_TOLERANCE * norm:
