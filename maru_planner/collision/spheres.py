@@ -343,14 +343,13 @@ class SphereCollisionChecker:
             self._request.security_margin = self.padding
             self._request.enable_contact = False
             self._result = coal.CollisionResult()  # reused, cleared before each query (making one costs ~1 µs)
-            self._obstacle_shapes = [_with_hull(ob.geometry(), _coal_tf(ob.pose[:3, :3], ob.pose[:3, 3]))
-                                     for ob in self.primitives.obstacles]  # fmt: skip
+            self._obstacle_shapes: dict[int, tuple] = {}  # by kernel index, made on first use (most never are)
         self._place_geometries(q)
         placed: dict[int, tuple] = {}
         for kind, a, b in pairs:
             self.exact_pair_checks += 1
             shape_a, hull_a, tf_a = self._link_shape(a, placed)
-            shape_b, hull_b, tf_b = self._obstacle_shapes[b] if kind == 0 else self._link_shape(b, placed)
+            shape_b, hull_b, tf_b = self._obstacle_shape(b) if kind == 0 else self._link_shape(b, placed)
             hulls = hull_a is not shape_a or hull_b is not shape_b
             self._result.clear()
             if hulls and not coal.collide(hull_a, tf_a, hull_b, tf_b, self._request, self._result):
@@ -369,6 +368,14 @@ class SphereCollisionChecker:
         else:
             self._geom_rot[:] = rot[joint] @ local_rot
             self._geom_pos[:] = np.einsum("gab,gb->ga", rot[joint], local_pos) + pos[joint]
+
+    def _obstacle_shape(self, k: int) -> tuple:
+        """(shape, its convex hull or itself, coal placement) of obstacle ``k`` (kernel order), made once per scene."""
+        shape = self._obstacle_shapes.get(k)
+        if shape is None:
+            ob = self.primitives.obstacles[k]
+            shape = self._obstacle_shapes[k] = _with_hull(ob.geometry(), _coal_tf(ob.pose[:3, :3], ob.pose[:3, 3]))
+        return shape
 
     def _link_shape(self, g: int, placed: dict[int, tuple]) -> tuple:
         """(shape, its convex hull or itself, coal placement) of robot geometry ``g`` at the last placements."""
