@@ -95,6 +95,22 @@ def test_shortcut_stays_collision_free_and_shortens():
     assert np.allclose(short[0], zigzag[0]) and np.allclose(short[-1], zigzag[-1])
 
 
+def test_drop_collinear_keeps_the_corners_and_the_ends_only():
+    """Waypoints on the line between their neighbours go (also several in a row: the test is against the last
+    waypoint kept, not the dropped one); corners and both ends stay."""
+    corner = np.array([[0, 0], [1, 0], [1.5, 0], [2, 0], [2, 1], [2, 1.5], [2, 3]], float)
+    assert postprocess.drop_collinear(corner).tolist() == [[0, 0], [2, 0], [2, 3]]
+    back = np.array([[0, 0], [2, 0], [1, 0]], float)  # turning back on the line is a corner
+    assert postprocess.drop_collinear(back).tolist() == back.tolist()
+    rng = np.random.default_rng(0)
+    for _ in range(200):  # a random polyline with points inserted on its segments: the polyline comes back
+        path = rng.normal(size=(int(rng.integers(2, 8)), 5))
+        dense = [path[0]]
+        for a, b in zip(path[:-1], path[1:], strict=True):
+            dense += [a + t * (b - a) for t in np.sort(rng.choice([0.25, 0.5, 0.9], size=2, replace=False))] + [b]
+        assert np.allclose(postprocess.drop_collinear(np.array(dense)), path)
+
+
 def test_time_parameterisation_respects_scaled_limits():
     path = np.array([[0.0, 0.0], [1.0, 0.2], [1.0, 1.2], [1.01, 1.2]])
     vmax, amax = np.array([1.0, 0.5]), np.array([2.0, 1.0])

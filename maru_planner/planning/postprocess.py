@@ -47,14 +47,20 @@ def drop_collinear(path: np.ndarray, tol: float = 1e-9) -> np.ndarray:
     """Remove interior waypoints lying on the straight line between their neighbours (no checks needed)."""
     if len(path) < 3:
         return path
+    step = np.diff(path, axis=0)
+    norms = np.linalg.norm(step, axis=1).tolist()
+    turns = np.einsum("ij,ij->i", step[:-1], step[1:]).tolist()  # step i-1 · step i, for the usual case below
     keep = [0]
     for i in range(1, len(path) - 1):
-        a = path[i] - path[keep[-1]]
-        b = path[i + 1] - path[i]
-        na, nb = float(np.linalg.norm(a)), float(np.linalg.norm(b))
+        if keep[-1] == i - 1:  # the usual case: the previous waypoint stays, the vectors are the steps
+            na, dot = norms[i - 1], turns[i - 1]
+        else:
+            a = path[i] - path[keep[-1]]
+            na, dot = float(np.linalg.norm(a)), float(a @ step[i])
+        nb = norms[i]
         if na < tol:
             continue
-        if nb > tol and abs(float(a @ b) - na * nb) <= tol * max(1.0, na * nb):
+        if nb > tol and abs(dot - na * nb) <= tol * max(1.0, na * nb):
             continue
         keep.append(i)
     keep.append(len(path) - 1)
