@@ -15,7 +15,6 @@ from maru_planner.collision.certify import (
     MIN_ANCHOR_CLEARANCE,
     Certificate,
     PathCertifier,
-    _robot_shapes,
     _without_corners,
     certify_and_repair,
     chord_deviation,
@@ -23,7 +22,7 @@ from maru_planner.collision.certify import (
 )
 from maru_planner.collision.checker import convex_hull
 from maru_planner.collision.spheres import densify, verify_path
-from maru_planner.collision.support_bounds import NO_SHAPE
+from maru_planner.collision.support_bounds import NO_SHAPE, robot_shape_records
 from maru_planner.moveit_scene import mbm_panda
 from maru_planner.paths import config_path
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig, PlanStatus
@@ -437,7 +436,7 @@ def test_a_large_scene_certifies_like_its_full_pair_table(monkeypatch):
 
 def _no_shapes(geometries, hulls) -> tuple:
     """certify's robot shape records with no shape held: the row kernel measures nothing by GJK."""
-    kind, *rest = _robot_shapes(geometries, hulls)
+    kind, *rest = robot_shape_records(geometries, hulls)
     return (np.full_like(kind, NO_SHAPE), *rest)
 
 
@@ -451,7 +450,7 @@ def test_the_kernels_gjk_certifies_like_coal_with_fewer_coal_queries(world, monk
     spheres = load_or_fit_of(robot)
     kernel = PathCertifier(robot, checker, safety_margin=0.005, spheres=spheres)
     with monkeypatch.context() as patch:
-        patch.setattr(certify, "_robot_shapes", _no_shapes)
+        patch.setattr(certify, "robot_shape_records", _no_shapes)
         coal_only = PathCertifier(robot, checker, safety_margin=0.005, spheres=spheres)
     rng = np.random.default_rng(17)
     outcomes, queries = {True: 0, False: 0}, {"coal": 0, "kernel": 0}
@@ -475,7 +474,7 @@ def test_the_sphere_cover_certifies_like_the_bounding_spheres_with_fewer_coal_qu
     from maru_planner.collision import certify
 
     robot, checker = world()
-    monkeypatch.setattr(certify, "_robot_shapes", _no_shapes)  # coal measures what the bounds leave (not GJK)
+    monkeypatch.setattr(certify, "robot_shape_records", _no_shapes)  # coal measures what the bounds leave (not GJK)
     with monkeypatch.context() as patch:
         patch.setattr(certify.SphereCover, "of", lambda *_: None)
         plain = PathCertifier(robot, checker, safety_margin=0.005)

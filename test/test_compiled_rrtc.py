@@ -120,7 +120,7 @@ def test_classify_answers_each_state_like_the_sphere_checker(robot_name, request
     AMBIGUOUS as COLLIDING when the first touch decides, and the numpy path's answers on the pure sphere model."""
     robot = request.getfixturevalue(robot_name)
     checker = SphereCollisionChecker(robot, panda_clutter(9), confirm=False)
-    ri, rf, sf, grid_i, grid_f, amb, mark = checker.kernel_inputs()
+    ri, rf, sf, grid_i, grid_f, amb, mark, _shapes = checker.kernel_inputs()
     assert not checker.uses_grid  # classify is the grid-less path
     robot_arrays, scene_arrays = unpack_robot(ri, rf), unpack_scene(sf)
     work = kernel.work_arrays(robot_arrays, scene_arrays)
@@ -134,6 +134,37 @@ def test_classify_answers_each_state_like_the_sphere_checker(robot_name, request
     numpy_path = SphereCollisionChecker(robot, panda_clutter(9), confirm=False, use_numba=False)  # slow: fewer states
     assert numpy_path.are_valid(states[:150]).tolist() == [e == kernel.VALID for e in expected[:150]]
     assert set(expected) == {kernel.VALID, kernel.COLLIDING, kernel.AMBIGUOUS}
+
+
+@pytest.mark.parametrize(("robot_name", "grid"), [("maru1", False), ("maru1", True), ("panda", False)])
+def test_near_contacts_on_primitives_are_cleared_in_the_kernel_only_where_coal_clears_them(robot_name, grid, request):
+    """On states the spheres leave in doubt, GJK on the robot's boxes, spheres and cylinders (whole scan, or the
+    scan's listed pairs with the grid) clears only states the exact model calls valid: most of them on Maru-1 (all
+    primitives), fewer on the Panda (its fingers are boxes; its meshes are left to coal)."""
+    robot = request.getfixturevalue(robot_name)
+    checker = SphereCollisionChecker(robot, panda_clutter(9), grid_min_obstacles=1 if grid else 10**9)
+    assert checker.uses_grid == grid
+    ri, rf, sf, grid_i, grid_f, amb, mark, shapes = checker.kernel_inputs()
+    robot_arrays, scene_arrays = unpack_robot(ri, rf), unpack_scene(sf)
+    work = kernel.work_arrays(robot_arrays, scene_arrays)
+    rng = np.random.default_rng(4)
+    in_doubt = valid = cleared = 0
+    for _ in range(6000):
+        q = robot.random_configuration(rng)
+        _row, status, n_pairs = scan_nb(q[None], 0, ri, rf, sf, grid_i, grid_f, amb, mark, True)
+        if status != kernel.AMBIGUOUS:
+            continue
+        listed = kernel.pairs_clear_on_shapes(q, amb[:n_pairs].copy(), robot_arrays, scene_arrays, work, shapes)
+        clear = listed if grid else kernel.clear_on_shapes(q, robot_arrays, scene_arrays, work, shapes)
+        assert clear == listed
+        exact_valid = checker.first_invalid(q[None]) < 0
+        assert exact_valid or not clear
+        in_doubt, valid, cleared = in_doubt + 1, valid + exact_valid, cleared + clear
+    assert in_doubt > 50 and valid > 20, (in_doubt, valid)
+    if robot_name == "maru1":
+        assert cleared >= 0.8 * valid, (valid, cleared)
+    else:
+        assert cleared < 0.8 * valid, (valid, cleared)
 
 
 def test_edge_states_are_checked_in_bisection_order():

@@ -95,7 +95,7 @@ def test_a_hull_around_the_obstacle_is_not_apart(panda_hulls):
     assert _bound(verts, np.eye(3), np.zeros(3), Obstacle("o", "sphere", pose=pose, radius=0.001)) <= 0.0
 
 
-ROBOT_SHAPES = {  # coal shape and its record (kind, size) as certify's _robot_shapes makes them
+ROBOT_SHAPES = {  # coal shape and its record (kind, size) as robot_shape_records makes them
     "box": lambda rng: (lambda half: (coal.Box(*(2 * half)), BOX, half))(rng.uniform(0.01, 0.2, 3)),
     "sphere": lambda rng: (lambda r: (coal.Sphere(r), SPHERE, np.array([r, 0.0, 0.0])))(rng.uniform(0.01, 0.2)),
     "cylinder": lambda rng: (lambda r, h: (coal.Cylinder(r, 2 * h), CYLINDER, np.array([r, 0.0, h])))(

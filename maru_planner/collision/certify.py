@@ -54,15 +54,13 @@ from maru_planner.collision.sphere_cover import (
 from maru_planner.collision.sphere_model import SphereModel
 from maru_planner.collision.spheres import ScenePrimitives
 from maru_planner.collision.support_bounds import (
-    BOX,
-    CYLINDER,
     HULL,
     NO_SHAPE,
-    SPHERE,
     convex_bound,
     load_primitive,
     new_records,
     place_shape,
+    robot_shape_records,
 )
 from maru_planner.robot.model import RobotModel
 from maru_planner.scene import Obstacle, Scene
@@ -571,7 +569,7 @@ class PathCertifier:
         self._robot_arrays = (*self._tree, self._joint, self._local, self._radius, self._q_joint, self._levers,
                               self._prismatic)  # fmt: skip
         self._cover_arrays = self._cover.arrays if self._cover is not None else NO_COVER
-        self._shape_arrays = _robot_shapes(geometries, self._hulls)
+        self._shape_arrays = robot_shape_records(geometries, self._hulls)
         # Compile (or load from numba's cache) the kernels now: inside the first request it took ~1.5 s of its budget.
         self._centers(np.asarray(robot.neutral(), dtype=float)[None])
         self._warm_row_kernel()
@@ -958,29 +956,6 @@ class PathCertifier:
             measure=np.where(held, np.where(exact, MEASURE_EXACT, MEASURE_BOUND), MEASURE_NONE).astype(np.int64),
             primitives=primitives,
         )
-
-
-def _robot_shapes(geometries, hulls: dict[int, coal.ConvexBase]) -> tuple:
-    """The robot's shape records for :func:`~maru_planner.collision.support_bounds.place_shape`: per geometry its
-    kind (a box, sphere or cylinder as itself, a mesh as its convex hull ``hulls[g]``, else ``NO_SHAPE``), placement
-    in its joint's frame, size, and vertex range into the hull vertices (in their geometry's frame); then those."""
-    n = len(geometries)
-    kind, size = np.full(n, NO_SHAPE, dtype=np.int64), np.zeros((n, 3))
-    parts = [np.zeros((0, 3))] * n
-    for g, obj in enumerate(geometries):
-        shape = obj.geometry
-        if g in hulls:
-            kind[g], parts[g] = HULL, np.asarray(hulls[g].points(), dtype=float)
-        elif isinstance(shape, coal.Box):
-            kind[g], size[g] = BOX, shape.halfSide
-        elif isinstance(shape, coal.Sphere):
-            kind[g], size[g, 0] = SPHERE, shape.radius
-        elif isinstance(shape, coal.Cylinder):
-            kind[g], size[g, 0], size[g, 2] = CYLINDER, shape.radius, shape.halfLength
-    rot = np.array([obj.placement.rotation for obj in geometries], dtype=float).reshape(n, 3, 3)
-    pos = np.array([obj.placement.translation for obj in geometries], dtype=float).reshape(n, 3)
-    start = np.cumsum([0] + [len(part) for part in parts]).astype(np.int64)
-    return kind, rot, pos, size, start, np.ascontiguousarray(np.concatenate(parts).reshape(-1, 3))
 
 
 def _kernel_primitives(obstacles: list[Obstacle]) -> tuple[tuple, np.ndarray]:

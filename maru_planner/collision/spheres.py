@@ -37,6 +37,7 @@ from maru_planner.collision.batch_fk import (
 from maru_planner.collision.broadphase import robot_reach
 from maru_planner.collision.checker import hull_or_self, robot_hull, self_collision_pairs
 from maru_planner.collision.sphere_model import SphereFitOptions, SphereModel, load_or_fit
+from maru_planner.collision.support_bounds import robot_shape_records
 from maru_planner.scene import BuildClock, Obstacle, Scene
 from maru_planner.shapes import KERNEL_KINDS, KernelPrimitive
 
@@ -185,6 +186,9 @@ class SphereCollisionChecker:
         self._rot = np.empty((self.tree.njoints, 3, 3))
         self._pos = np.empty((self.tree.njoints, 3))
         self._sphere_pairs = self._expand_pairs()
+        # the robot's boxes, spheres and cylinders, on which the search kernels settle near contacts by GJK; not its
+        # meshes' hulls: on MotionBenchMaker's Panda they cleared 15 % of the states coal is asked about, and cost more
+        self._shapes = robot_shape_records(self._robot_geoms, {})
         self.set_scene(scene)
         if self.use_numba:  # compile (or load) the placement kernel now, not in a request's first exact check
             self._place_geometries(np.asarray(robot.neutral(), dtype=float))
@@ -209,12 +213,14 @@ class SphereCollisionChecker:
         """Whether the kernels look obstacles up in a grid (large scenes) rather than test them all."""
         return bool(self._grid[0][0] > 0)
 
-    def kernel_inputs(self) -> tuple[np.ndarray, ...]:
+    def kernel_inputs(self) -> tuple:
         """The current scene's arrays for compiled callers, in ``scan_nb``'s order after ``Q, start``: packed
-        robot (ints, floats), packed scene, grid (ints, floats) and the work arrays ``amb``, ``mark`` (numba only)."""
+        robot (ints, floats), packed scene, grid (ints, floats) and the work arrays ``amb``, ``mark`` (numba only);
+        then the records of the robot's primitive shapes (``support_bounds.robot_shape_records``), on which the
+        search kernels settle near contacts before asking coal."""
         self._sync()
         ri, rf, scene = self._packed()
-        return ri, rf, scene, *self._grid, self._amb, self._mark
+        return ri, rf, scene, *self._grid, self._amb, self._mark, self._shapes
 
     def _packed(self) -> tuple[Any, Any, Any]:
         """The numba kernels' packed robot (ints, floats) and packed scene."""

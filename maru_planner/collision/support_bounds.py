@@ -18,7 +18,9 @@ hull against an obstacle's primitive, and primitives against primitives, where t
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
+import coal
 import numpy as np
 from numba import njit
 
@@ -26,6 +28,30 @@ GJK_ITERATIONS = 12  # GJK steps at most (a polytope against a primitive converg
 GJK_TOLERANCE = 1e-6  # m: stop once the bound is this close to the distance of GJK's current point, plus:
 GJK_RELATIVE_TOLERANCE = 1e-3  # of that distance (curved primitives converge slowly; a row needs no finer bound)
 NO_SHAPE, BOX, SPHERE, CYLINDER, HULL = -1, 0, 1, 2, 3  # record kinds (the first three: the kernels' order)
+
+
+def robot_shape_records(geometries: Sequence, hulls: dict[int, coal.ConvexBase]) -> tuple:
+    """A robot's shape records for :func:`place_shape` (``geometries``: its Pinocchio geometry objects): per
+    geometry its kind (a box, sphere or cylinder as itself, a mesh as its convex hull ``hulls[g]``, else
+    ``NO_SHAPE``), placement in its joint's frame, size, and vertex range into the hull vertices (in their
+    geometry's frame); then those vertices."""
+    n = len(geometries)
+    kind, size = np.full(n, NO_SHAPE, dtype=np.int64), np.zeros((n, 3))
+    parts = [np.zeros((0, 3))] * n
+    for g, obj in enumerate(geometries):
+        shape = obj.geometry
+        if g in hulls:
+            kind[g], parts[g] = HULL, np.asarray(hulls[g].points(), dtype=float)
+        elif isinstance(shape, coal.Box):
+            kind[g], size[g] = BOX, shape.halfSide
+        elif isinstance(shape, coal.Sphere):
+            kind[g], size[g, 0] = SPHERE, shape.radius
+        elif isinstance(shape, coal.Cylinder):
+            kind[g], size[g, 0], size[g, 2] = CYLINDER, shape.radius, shape.halfLength
+    rot = np.array([obj.placement.rotation for obj in geometries], dtype=float).reshape(n, 3, 3)
+    pos = np.array([obj.placement.translation for obj in geometries], dtype=float).reshape(n, 3)
+    start = np.cumsum([0] + [len(part) for part in parts]).astype(np.int64)
+    return kind, rot, pos, size, start, np.ascontiguousarray(np.concatenate(parts).reshape(-1, 3))
 
 
 @njit(cache=True)

@@ -77,7 +77,7 @@ def shortcut(path: np.ndarray, edges: EdgeChecker, seed: int, deadline: float, m
 
 @njit(cache=True)
 def run(path, live, verdict, max_edges, max_tries, sc, failed, edge_st, amb_states, rng, resolution, base, indices, ri,
-        rf, sf, grid_i, grid_f, amb, mark, confirm):  # fmt: skip
+        rf, sf, grid_i, grid_f, amb, mark, shapes, confirm):  # fmt: skip
     """Try at most ``max_edges`` shortcuts of ``path[live[:sc[LIVE]]]``; DONE, RUNNING or NEED_EXACT (module doc).
 
     ``failed[a, b]``: the edge from waypoint a to waypoint b (indices into ``path``) is known not to be free; a pair
@@ -111,8 +111,8 @@ def run(path, live, verdict, max_edges, max_tries, sc, failed, edge_st, amb_stat
             first, last = 0, m - 1
         sc[FIRST], sc[LAST] = first, last
         status = kernel.edge_status(path[live[first]], path[live[last]], resolution, base, indices, robot, scene,
-                                    work, order, queue, q, ri, rf, sf, grid_i, grid_f, amb, mark, confirm, amb_states,
-                                    edge_st, roots, np.inf)  # fmt: skip
+                                    work, order, queue, q, ri, rf, sf, grid_i, grid_f, amb, mark, shapes, confirm,
+                                    amb_states, edge_st, roots, np.inf)  # fmt: skip
         if status == kernel.AMBIGUOUS:
             sc[PENDING] = 1
             return NEED_EXACT

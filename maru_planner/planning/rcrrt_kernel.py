@@ -280,11 +280,11 @@ def start(X, coords, parent, expanded, sigma, active, table, st, goal, lower, up
 
 @njit(cache=True)
 def run(X, coords, parent, expanded, sigma, active, table, st, verdict, max_edges, edge_st, goal, x_new, amb_states,
-        conf, lower, upper, rng, candidates, resolution, base, indices, ri, rf, sf, grid_i, grid_f, amb, mark,
+        conf, lower, upper, rng, candidates, resolution, base, indices, ri, rf, sf, grid_i, grid_f, amb, mark, shapes,
         confirm):  # fmt: skip
     """Advance the search by at most ``max_edges`` edge checks (module doc). ``verdict``: the exact answer for the
     pending edge after a NEED_EXACT return. ``edge_st``: where the edge checks count their checks and ambiguous
-    states (:attr:`Tree.edge_st`). ``conf``: :func:`settings`; ``ri`` … ``mark``: the sphere checker's kernel
+    states (:attr:`Tree.edge_st`). ``conf``: :func:`settings`; ``ri`` … ``shapes``: the sphere checker's kernel
     inputs; ``confirm``: whether it decides ambiguous states on the exact model (else they collide)."""
     goal_bias, step, goal_range = conf[GOAL_BIAS], conf[STEP], conf[GOAL_RANGE]
     if st[PENDING] == AWAITING_VERDICT:  # the caller decided the pending edge's ambiguous states
@@ -319,7 +319,7 @@ def run(X, coords, parent, expanded, sigma, active, table, st, verdict, max_edge
             st[PENDING], st[KIND], st[FROM], st[INPUT] = PROPOSED, EXTEND, near, u
         edge_end = x_new if st[KIND] == EXTEND else goal
         status = edge_status(X[st[FROM]], edge_end, resolution, base, indices, robot, scene, work, order, queue, q,
-                             ri, rf, sf, grid_i, grid_f, amb, mark, confirm, amb_states, edge_st, roots,
+                             ri, rf, sf, grid_i, grid_f, amb, mark, shapes, confirm, amb_states, edge_st, roots,
                              np.inf)  # fmt: skip
         if status == AMBIGUOUS:
             st[PENDING] = AWAITING_VERDICT

@@ -43,8 +43,10 @@ from maru_planner.collision.sphere_kernels import (
     unpack_robot,
     unpack_scene,
 )
+from maru_planner.collision.support_bounds import NO_SHAPE, convex_bound, load_primitive, new_records, place_shape
 
 SOLVED, RUNNING, NEED_EXACT, FULL = 0, 1, 2, 3  # what run() returns
+CLEAR_BY = 1e-9  # m: GJK stops once a pair's bound is this far past the padding (clear_on_shapes)
 BALANCE, DOMAIN_RADIUS, DOMAIN_ALPHA, DOMAIN_MIN_RADIUS = range(4)  # fields of the tuning array (tuning())
 DIRECT, EXTEND, CONNECT = 0, 1, 2  # phases: the straight start-goal edge, extend toward a sample, connect
 
@@ -372,6 +374,79 @@ def classify(q, robot, scene, work, stop_at_touch):
     return AMBIGUOUS if scene_hit or self_hit else VALID
 
 
+@njit(cache=True, inline="always")
+def _apart_on_shapes(a, b, obstacle, robot, scene, work, shapes, records):
+    """Whether GJK's lower bound (``support_bounds``) keeps group ``a``'s exact shape farther than the padding from
+    obstacle ``b``'s primitive (which contains the obstacle) or, not ``obstacle``, from group ``b``'s shape, at the
+    poses in ``work``; False without a shape (``shapes``: the robot's records; ``records``: two work records)."""
+    g_joint, padding = robot[11], robot[15]
+    rot, pos, gworld = work[0], work[1], work[2]
+    s_kind, s_rot, s_pos, s_size, s_start, verts = shapes
+    kinds, cs, rs, ss, vr = records
+    if s_kind[a] == NO_SHAPE or (not obstacle and s_kind[b] == NO_SHAPE):
+        return False
+    place_shape(a, rot[g_joint[a]], pos[g_joint[a]], s_kind, s_rot, s_pos, s_size, s_start, 0, kinds, cs, rs, ss, vr)
+    if obstacle:
+        box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, _ = scene
+        load_primitive(b, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, 1, kinds, cs, rs, ss)
+    else:
+        place_shape(b, rot[g_joint[b]], pos[g_joint[b]], s_kind, s_rot, s_pos, s_size, s_start, 1, kinds, cs, rs, ss,
+                    vr)  # fmt: skip
+    return convex_bound(kinds, cs, rs, ss, vr, verts, padding + CLEAR_BY, gworld[a]) > padding
+
+
+@njit(cache=True, inline="always")
+def _place_state(q, robot, work):
+    """``work``'s joint poses and group centres for full configuration ``q``, no cluster or sphere placed yet."""
+    parent, kind, axis, prot, ppos, idx_q = robot[:6]
+    rot, pos, gworld, _, _, clusters_placed, spheres_placed, _ = work
+    joint_poses_nb(q, parent, kind, axis, prot, ppos, idx_q, rot, pos)
+    place_points(rot, pos, robot[11], robot[12], 0, robot[11].shape[0], gworld)
+    clusters_placed[:] = False
+    spheres_placed[:] = False
+
+
+@njit(cache=True)
+def clear_on_shapes(q, robot, scene, work, shapes):
+    """Whether every pair of full configuration ``q`` that the sphere model leaves in doubt (outer spheres within
+    the padding, no inner ball hit) is :func:`_apart_on_shapes`: then coal would find no contact either (a mesh's
+    hull contains it, an obstacle's primitive the obstacle). The pairs are found as :func:`classify` finds them;
+    False at the first one not proven apart. Rewrites ``work`` for ``q``."""
+    g_joint, g_radius, self_pairs, padding = robot[11], robot[13], robot[14], robot[15]
+    _place_state(q, robot, work)
+    gworld, records = work[2], new_records()
+    n_obstacles = scene[0].shape[0] + scene[3].shape[0] + scene[5].shape[0]
+    for g in range(g_joint.shape[0]):
+        if g_joint[g] == 0:  # fixed to the world: never tested against the scene
+            continue
+        for k in range(n_obstacles):
+            if _to_obstacle(gworld, g, k, scene) >= g_radius[g] + padding:
+                continue
+            touch = _group_vs_obstacle(g, k, robot, scene, work, False)
+            if touch == 2 or (touch == 1 and not _apart_on_shapes(g, k, True, robot, scene, work, shapes, records)):
+                return False
+    for p in range(self_pairs.shape[0]):
+        a, b = self_pairs[p, 0], self_pairs[p, 1]
+        if row_distance(gworld, a, gworld, b) >= g_radius[a] + g_radius[b] + padding:
+            continue
+        touch = _pair_vs_pair(a, b, robot, work, False)
+        if touch == 2 or (touch == 1 and not _apart_on_shapes(a, b, False, robot, scene, work, shapes, records)):
+            return False
+    return True
+
+
+@njit(cache=True)
+def pairs_clear_on_shapes(q, pairs, robot, scene, work, shapes):
+    """:func:`clear_on_shapes` of the pairs a scan listed in doubt at ``q`` (``scan_nb``'s ``amb``: kind 0 a group
+    and an obstacle, 1 two groups)."""
+    _place_state(q, robot, work)
+    records = new_records()
+    for i in range(pairs.shape[0]):
+        if not _apart_on_shapes(pairs[i, 1], pairs[i, 2], pairs[i, 0] == 0, robot, scene, work, shapes, records):
+            return False
+    return True
+
+
 @njit(cache=True)
 def _near_roots(q, indices, roots, exact_near):
     """Whether full configuration ``q`` is within ``exact_near`` (L∞ over the group's ``indices``) of a root."""
@@ -386,7 +461,8 @@ def _near_roots(q, indices, roots, exact_near):
 
 @njit(cache=True)
 def check_edge(
-    qa, qb, resolution, base, indices, ri, rf, sf, grid_i, grid_f, amb, mark, confirm, amb_states, st, roots, exact_near
+    qa, qb, resolution, base, indices, ri, rf, sf, grid_i, grid_f, amb, mark, shapes, confirm, amb_states, st, roots,
+    exact_near,
 ):
     """VALID, COLLIDING or AMBIGUOUS for the edge qa → qb (qa excluded) on the sphere model.
 
@@ -395,20 +471,22 @@ def check_edge(
     packed robot and scene (``ri``/``rf``/``sf``), or, when the checker looks obstacles up in a grid
     (a large scene, ``grid_i``/``grid_f``), by its own scan (``scan_nb`` with its work arrays
     ``amb``/``mark``). COLLIDING at the first colliding state. With ``confirm``, states that are only
-    ambiguous and within ``exact_near`` (L∞) of one of the ``roots`` (start, goal) are copied to
-    ``amb_states`` (``st[N_AMB]`` of them) and the edge is AMBIGUOUS if no state collides; other
-    ambiguous states collide (the pure, conservative sphere model, everywhere without ``confirm``).
+    ambiguous and within ``exact_near`` (L∞) of one of the ``roots`` (start, goal) are decided on the exact
+    shapes: valid where GJK's bounds clear every pair near contact (:func:`clear_on_shapes`, ``shapes``), else
+    copied to ``amb_states`` (``st[N_AMB]`` of them) for coal, with every later one (coal is asked anyway, and most
+    such states are contacts: GJK's time would be lost), and the edge is AMBIGUOUS if no state collides;
+    other ambiguous states collide (the pure, conservative sphere model, everywhere without ``confirm``).
     """
     robot, scene = unpack_robot(ri, rf), unpack_scene(sf)
     order, queue = edge_buffers(1)
     return edge_status(qa, qb, resolution, base, indices, robot, scene, work_arrays(robot, scene), order, queue,
-                       np.empty(base.shape[0]), ri, rf, sf, grid_i, grid_f, amb, mark, confirm, amb_states, st, roots,
-                       exact_near)  # fmt: skip
+                       np.empty(base.shape[0]), ri, rf, sf, grid_i, grid_f, amb, mark, shapes, confirm, amb_states,
+                       st, roots, exact_near)  # fmt: skip
 
 
 @njit(cache=True)
 def edge_status(qa, qb, resolution, base, indices, robot, scene, work, order, queue, q, ri, rf, sf, grid_i, grid_f,
-                amb, mark, confirm, amb_states, st, roots, exact_near):  # fmt: skip
+                amb, mark, shapes, confirm, amb_states, st, roots, exact_near):  # fmt: skip
     """:func:`check_edge` on the robot and scene its caller unpacked once (:func:`run`, the shortcut kernel of
     :mod:`~maru_planner.planning.compiled_shortcut`), their :func:`work_arrays`, edge buffers (:func:`edge_buffers`;
     larger ones are made for a longer edge) and a configuration buffer ``q``.
@@ -424,8 +502,8 @@ def edge_status(qa, qb, resolution, base, indices, robot, scene, work, order, qu
         order, queue = edge_buffers(n)
     _bisection_order_into(n, order, queue)
     if grid_i[0] > 0:
-        return _check_edge_by_grid(qa, qb, n, order, base, indices, ri, rf, sf, grid_i, grid_f, amb, mark, confirm,
-                                   amb_states, st, roots, exact_near)  # fmt: skip
+        return _check_edge_by_grid(qa, qb, n, order, base, indices, ri, rf, sf, grid_i, grid_f, amb, mark, shapes,
+                                   confirm, amb_states, st, roots, exact_near, robot, scene, work)  # fmt: skip
     n_amb = 0
     for row in range(n):
         t = (order[row] + 1) / n  # the state written out as in _check_edge_by_grid: a shared helper cost 2-3 %
@@ -437,7 +515,7 @@ def edge_status(qa, qb, resolution, base, indices, robot, scene, work, order, qu
         st[CHECKS] += 1
         if status == COLLIDING or (status == AMBIGUOUS and not exact):
             return COLLIDING
-        if status == AMBIGUOUS:
+        if status == AMBIGUOUS and (n_amb > 0 or not clear_on_shapes(q, robot, scene, work, shapes)):
             for a in range(dim):
                 amb_states[n_amb, a] = q[indices[a]]
             n_amb += 1
@@ -446,8 +524,8 @@ def edge_status(qa, qb, resolution, base, indices, robot, scene, work, order, qu
 
 
 @njit(cache=True)
-def _check_edge_by_grid(qa, qb, n, order, base, indices, ri, rf, sf, grid_i, grid_f, amb, mark, confirm, amb_states,
-                        st, roots, exact_near):  # fmt: skip
+def _check_edge_by_grid(qa, qb, n, order, base, indices, ri, rf, sf, grid_i, grid_f, amb, mark, shapes, confirm,
+                        amb_states, st, roots, exact_near, robot, scene, work):  # fmt: skip
     """:func:`check_edge` of an edge of ``n`` states in ``order`` through the checker's grid scan (``scan_nb``)."""
     dim = qa.shape[0]
     states = np.empty((n, base.shape[0]))
@@ -458,7 +536,7 @@ def _check_edge_by_grid(qa, qb, n, order, base, indices, ri, rf, sf, grid_i, gri
             states[r, indices[a]] = qa[a] + t * (qb[a] - qa[a])
     n_amb, row = 0, 0
     while row < n:
-        hit, status, _ = scan_nb(states, row, ri, rf, sf, grid_i, grid_f, amb, mark, True)
+        hit, status, n_pairs = scan_nb(states, row, ri, rf, sf, grid_i, grid_f, amb, mark, True)
         if hit < 0:
             st[CHECKS] += n - row
             break
@@ -468,7 +546,9 @@ def _check_edge_by_grid(qa, qb, n, order, base, indices, ri, rf, sf, grid_i, gri
             status = COLLIDING
         if status == COLLIDING:
             return COLLIDING
-        if status == AMBIGUOUS:
+        in_doubt = amb[:n_pairs]
+        if status == AMBIGUOUS and (n_amb > 0 or not pairs_clear_on_shapes(states[hit], in_doubt, robot, scene, work,
+                                                                         shapes)):  # fmt: skip
             for a in range(dim):
                 amb_states[n_amb, a] = states[hit, indices[a]]
             n_amb += 1
@@ -577,11 +657,11 @@ def _apply(nodes, parent, radius, st, q_new, valid, tuning):
 
 @njit(cache=True)
 def run(nodes, parent, radius, verdict, max_edges, st, q_new, amb_states, tuning, lower, upper, rng, max_range,
-        resolution, base, indices, ri, rf, sf, grid_i, grid_f, amb, mark, confirm, exact_near):  # fmt: skip
+        resolution, base, indices, ri, rf, sf, grid_i, grid_f, amb, mark, shapes, confirm, exact_near):  # fmt: skip
     """Advance the search by at most ``max_edges`` edge checks; SOLVED, RUNNING, NEED_EXACT or FULL (module doc).
 
     ``verdict``: the exact answer for the pending edge after a NEED_EXACT return (ignored otherwise);
-    ``tuning``: :func:`tuning`; ``ri`` … ``mark``: the sphere checker's kernel inputs; ``exact_near``: see
+    ``tuning``: :func:`tuning`; ``ri`` … ``shapes``: the sphere checker's kernel inputs; ``exact_near``: see
     :func:`check_edge`.
     """
     if st[PENDING]:
@@ -602,8 +682,8 @@ def run(nodes, parent, radius, verdict, max_edges, st, q_new, amb_states, tuning
             continue
         tree = st[TREE]
         status = edge_status(nodes[tree, st[FROM]], q_new, resolution, base, indices, robot, scene, work, order,
-                             queue, q, ri, rf, sf, grid_i, grid_f, amb, mark, confirm, amb_states, st, nodes[:, 0],
-                             exact_near)  # fmt: skip
+                             queue, q, ri, rf, sf, grid_i, grid_f, amb, mark, shapes, confirm, amb_states, st,
+                             nodes[:, 0], exact_near)  # fmt: skip
         if status == AMBIGUOUS:
             st[PENDING] = 1
             return NEED_EXACT
