@@ -441,6 +441,36 @@ def _no_shapes(geometries, hulls) -> tuple:
 
 
 @pytest.mark.parametrize("world", [panda_shelf, maru13])
+def test_rows_get_the_poses_and_centres_of_their_chains_as_full_forward_kinematics_gives_them(world):
+    """A later round's few rows per configuration pose only the chains to their pairs' geometries, each as the
+    whole configuration's forward kinematics poses it; a first round's many rows pose every joint."""
+    from maru_planner.collision import certify
+
+    robot, checker = world()
+    certifier = PathCertifier(robot, checker)
+    pairs = certifier._pair_table()
+    rng = np.random.default_rng(2)
+    configs = np.array([robot.random_configuration(rng) for _ in range(6)])
+    tree, joint, local = certifier._tree, certifier._joint, certifier._local
+    nj, ng = robot.model.njoints, len(joint)
+    want = np.empty((6, nj, 3, 3)), np.empty((6, nj, 3)), np.empty((6, ng, 3))
+    certify._poses_nb(configs, *tree, joint, local, *want)
+    for n_rows in (5, 8 * 6):
+        pair = rng.integers(len(pairs.first), size=n_rows)
+        config_of = rng.integers(6, size=n_rows)
+        got = np.full((6, nj, 3, 3), np.nan), np.full((6, nj, 3), np.nan), np.full((6, ng, 3), np.nan)
+        posed = np.zeros((6, nj), dtype=bool)
+        certify._place_rows_nb(configs, config_of, pair, pairs.first, pairs.other, *tree, joint, local, *got, posed)
+        for c, p in zip(config_of, pair, strict=True):
+            for g in (pairs.first[p], pairs.other[p]):
+                assert np.allclose(got[2][c, g], want[2][c, g], atol=1e-12)
+                chain = certifier._levers[g] > 0.0  # the joints that move it
+                assert posed[c, certifier._q_joint[chain]].all()
+        assert np.allclose(got[0][posed], want[0][posed], atol=1e-12) and np.allclose(got[1][posed], want[1][posed])
+        assert posed.all() == (n_rows >= certify.ROWS_FOR_ALL * 6)
+
+
+@pytest.mark.parametrize("world", [panda_shelf, maru13])
 def test_the_kernels_gjk_certifies_like_coal_with_fewer_coal_queries(world, monkeypatch):
     """Pairs of primitives (Maru-1) are measured by GJK in the row kernel, a robot mesh's hull (Panda) bounded
     there: the same verdicts as measuring every such row with coal, with far fewer coal queries."""

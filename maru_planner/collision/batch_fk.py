@@ -115,45 +115,57 @@ def batch_joint_poses(tree: KinematicTree, qs: np.ndarray) -> tuple[np.ndarray, 
     return rot, pos
 
 
-def _joint_poses_py(q, parent, kind, axis, prot, ppos, idx_q, rot, pos):
-    """One configuration's joint world poses, written into ``rot`` (nj,3,3) and ``pos`` (nj,3).
+@njit(cache=True, inline="always")
+def joint_pose_nb(j, q, parent, kind, axis, prot, ppos, idx_q, rot, pos):
+    """Joint ``j``'s world pose, written into ``rot[j]`` and ``pos[j]`` from its parent's (already there).
 
-    Plain loops on purpose: this is compiled by numba (3x3 products unrolled beat BLAS calls; the parent's rotation
-    times the placement is kept in scalars, not a scratch array allocated per call).
+    Plain loops on purpose (numba): 3x3 products unrolled beat BLAS calls; the parent's rotation times the
+    placement is kept in scalars, not a scratch array allocated per call.
     """
-    nj = parent.shape[0]
+    par = parent[j]
+    for a in range(3):
+        pos[j, a] = (pos[par, a] + rot[par, a, 0] * ppos[j, 0] + rot[par, a, 1] * ppos[j, 1]
+                     + rot[par, a, 2] * ppos[j, 2])  # fmt: skip
+    k = kind[j]
+    revolute = k == REVOLUTE or k == REVOLUTE_UNBOUNDED
+    if revolute:
+        i = idx_q[j]
+        ang = q[i] if k == REVOLUTE else np.arctan2(q[i + 1], q[i])
+        x, y, z = axis[j, 0], axis[j, 1], axis[j, 2]
+        c, s = np.cos(ang), np.sin(ang)
+        t = 1.0 - c
+        r00, r01, r02 = t * x * x + c, t * x * y - s * z, t * x * z + s * y
+        r10, r11, r12 = t * x * y + s * z, t * y * y + c, t * y * z - s * x
+        r20, r21, r22 = t * x * z - s * y, t * y * z + s * x, t * z * z + c
+    for a in range(3):
+        m0 = rot[par, a, 0] * prot[j, 0, 0] + rot[par, a, 1] * prot[j, 1, 0] + rot[par, a, 2] * prot[j, 2, 0]
+        m1 = rot[par, a, 0] * prot[j, 0, 1] + rot[par, a, 1] * prot[j, 1, 1] + rot[par, a, 2] * prot[j, 2, 1]
+        m2 = rot[par, a, 0] * prot[j, 0, 2] + rot[par, a, 1] * prot[j, 1, 2] + rot[par, a, 2] * prot[j, 2, 2]
+        if revolute:
+            rot[j, a, 0] = m0 * r00 + m1 * r10 + m2 * r20
+            rot[j, a, 1] = m0 * r01 + m1 * r11 + m2 * r21
+            rot[j, a, 2] = m0 * r02 + m1 * r12 + m2 * r22
+        else:
+            rot[j, a, 0], rot[j, a, 1], rot[j, a, 2] = m0, m1, m2
+            if k == PRISMATIC:
+                pos[j, a] += q[idx_q[j]] * (m0 * axis[j, 0] + m1 * axis[j, 1] + m2 * axis[j, 2])
+
+
+@njit(cache=True, inline="always")
+def root_pose_nb(rot, pos):
+    """The root (world) joint's pose: identity."""
     for a in range(3):
         pos[0, a] = 0.0
         for b in range(3):
             rot[0, a, b] = 1.0 if a == b else 0.0
-    for j in range(1, nj):
-        par = parent[j]
-        for a in range(3):
-            pos[j, a] = (pos[par, a] + rot[par, a, 0] * ppos[j, 0] + rot[par, a, 1] * ppos[j, 1]
-                         + rot[par, a, 2] * ppos[j, 2])  # fmt: skip
-        k = kind[j]
-        revolute = k == REVOLUTE or k == REVOLUTE_UNBOUNDED
-        if revolute:
-            i = idx_q[j]
-            ang = q[i] if k == REVOLUTE else np.arctan2(q[i + 1], q[i])
-            x, y, z = axis[j, 0], axis[j, 1], axis[j, 2]
-            c, s = np.cos(ang), np.sin(ang)
-            t = 1.0 - c
-            r00, r01, r02 = t * x * x + c, t * x * y - s * z, t * x * z + s * y
-            r10, r11, r12 = t * x * y + s * z, t * y * y + c, t * y * z - s * x
-            r20, r21, r22 = t * x * z - s * y, t * y * z + s * x, t * z * z + c
-        for a in range(3):
-            m0 = rot[par, a, 0] * prot[j, 0, 0] + rot[par, a, 1] * prot[j, 1, 0] + rot[par, a, 2] * prot[j, 2, 0]
-            m1 = rot[par, a, 0] * prot[j, 0, 1] + rot[par, a, 1] * prot[j, 1, 1] + rot[par, a, 2] * prot[j, 2, 1]
-            m2 = rot[par, a, 0] * prot[j, 0, 2] + rot[par, a, 1] * prot[j, 1, 2] + rot[par, a, 2] * prot[j, 2, 2]
-            if revolute:
-                rot[j, a, 0] = m0 * r00 + m1 * r10 + m2 * r20
-                rot[j, a, 1] = m0 * r01 + m1 * r11 + m2 * r21
-                rot[j, a, 2] = m0 * r02 + m1 * r12 + m2 * r22
-            else:
-                rot[j, a, 0], rot[j, a, 1], rot[j, a, 2] = m0, m1, m2
-                if k == PRISMATIC:
-                    pos[j, a] += q[idx_q[j]] * (m0 * axis[j, 0] + m1 * axis[j, 1] + m2 * axis[j, 2])
+
+
+@njit(cache=True)
+def joint_poses_nb(q, parent, kind, axis, prot, ppos, idx_q, rot, pos):
+    """One configuration's joint world poses, written into ``rot`` (nj,3,3) and ``pos`` (nj,3)."""
+    root_pose_nb(rot, pos)
+    for j in range(1, parent.shape[0]):
+        joint_pose_nb(j, q, parent, kind, axis, prot, ppos, idx_q, rot, pos)
 
 
 def _sphere_centers_py(rot, pos, sphere_joint, sphere_local, out):
@@ -169,7 +181,6 @@ def _sphere_centers_py(rot, pos, sphere_joint, sphere_local, out):
             )
 
 
-joint_poses_nb = njit(cache=True, fastmath=False)(_joint_poses_py)
 sphere_centers_nb = njit(cache=True)(_sphere_centers_py)
 
 
