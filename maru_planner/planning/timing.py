@@ -294,15 +294,16 @@ def _units(waypoints: np.ndarray) -> np.ndarray:
     return delta / np.linalg.norm(delta, axis=1)[:, None]
 
 
-def parabola_parts(start: np.ndarray, velocity: np.ndarray, acceleration: np.ndarray, length: float,
-                   parts: int = BLEND_BEND_PARTS) -> Curve:  # fmt: skip
-    """``p(σ) = start + velocity·σ + ½·acceleration·σ²`` on ``[0, length]`` as ``parts`` bent segments
-    (:data:`Curve`): ends, no chord deviation, and each part's bend ``½·h²·p''`` (h its length in σ): on it
-    ``p = (1 - t)·p(start) + t·p(end) + (t² - t)·bend``."""
-    sigma = np.linspace(0.0, length, parts + 1)[:, None]
-    ends = start + velocity * sigma + 0.5 * acceleration * sigma**2
-    bend = 0.5 * (length / parts) ** 2 * acceleration
-    return ends, np.zeros(len(start)), np.repeat(bend[None], parts, axis=0)
+def parabola_parts(start: np.ndarray, velocity: np.ndarray, acceleration: np.ndarray, length: np.ndarray,
+                   parts: int = BLEND_BEND_PARTS) -> list[Curve]:  # fmt: skip
+    """Per row k, ``p(σ) = start[k] + velocity[k]·σ + ½·acceleration[k]·σ²`` on ``[0, length[k]]`` as ``parts`` bent
+    segments (:data:`Curve`): ends, no chord deviation, and each part's bend ``½·h²·p''`` (h its length in σ): on it
+    ``p = (1 - t)·p(start) + t·p(end) + (t² - t)·bend``. All rows in one set of array operations."""
+    sigma = np.linspace(0.0, length, parts + 1, axis=1)[..., None]  # (rows, parts + 1, 1)
+    ends = start[:, None] + velocity[:, None] * sigma + 0.5 * acceleration[:, None] * sigma**2
+    bend = 0.5 * ((length / parts) ** 2)[:, None] * acceleration
+    on_chord = np.zeros(start.shape[1])
+    return [(ends[k], on_chord, np.broadcast_to(bend[k], (parts, len(bend[k])))) for k in range(len(length))]
 
 
 def parabola_chords(start: np.ndarray, velocity: np.ndarray, acceleration: np.ndarray, length: float,
@@ -458,7 +459,7 @@ def _certified_half_lengths(
         pending = [k for k in pending if half[k] > 0.0]
         if not pending:
             break
-        curves = [_corner_curve(waypoints, units, k, half[k], check) for k in pending]
+        curves = _corner_curves(waypoints, units, np.array(pending), half, check)
         report.certify_checks += sum(len(curve[0]) for curve in curves)
         failed = [k for k, free in zip(pending, check.many(curves), strict=True) if not free]
         for k in failed:
@@ -471,14 +472,16 @@ def _certified_half_lengths(
     return half
 
 
-def _corner_curve(waypoints: np.ndarray, units: np.ndarray, k: int, half_length: float, check: _Check) -> Curve:
-    """The blend of corner k (the parabola a :class:`BlendedPath` puts there) as ``check`` takes it:
-    :data:`BLEND_BEND_PARTS` bent segments, else chords ``check.step`` apart."""
-    u_in, u_out = units[k - 1], units[k]
-    start, acceleration = waypoints[k] - half_length * u_in, (u_out - u_in) / (2.0 * half_length)
+def _corner_curves(waypoints: np.ndarray, units: np.ndarray, corners: np.ndarray, half: np.ndarray, check: _Check
+                   ) -> list[Curve]:  # fmt: skip
+    """The blends of ``corners`` (the parabolas a :class:`BlendedPath` puts there, ``half`` their sizes by waypoint)
+    as ``check`` takes them: :data:`BLEND_BEND_PARTS` bent segments, else chords ``check.step`` apart."""
+    u_in, u_out, h = units[corners - 1], units[corners], half[corners][:, None]
+    start, acceleration = waypoints[corners] - h * u_in, (u_out - u_in) / (2.0 * h)
     if takes_bends(check.curve_free):
-        return parabola_parts(start, u_in, acceleration, 2.0 * half_length)
-    return parabola_chords(start, u_in, acceleration, 2.0 * half_length, check.step)
+        return parabola_parts(start, u_in, acceleration, 2.0 * h[:, 0])
+    return [parabola_chords(s, v, a, 2.0 * length, check.step)
+            for s, v, a, length in zip(start, u_in, acceleration, h[:, 0], strict=True)]  # fmt: skip
 
 
 def _count_corners(waypoints: np.ndarray, half: np.ndarray, report: TimingReport) -> None:
