@@ -1010,8 +1010,8 @@ def _kernel_primitives(obstacles: list[Obstacle]) -> tuple[tuple, np.ndarray]:
     primitive, then the arrays :func:`~maru_planner.collision.sphere_kernels.obstacle_distance` takes; and per
     obstacle whether its primitive is the obstacle itself."""
     primitives = ScenePrimitives.from_obstacles(obstacles)
-    position = np.array([{id(ob): k for k, ob in enumerate(primitives.obstacles)}[id(ob)] for ob in obstacles],
-                        dtype=np.int64)  # fmt: skip
+    kernel_index = {id(ob): k for k, ob in enumerate(primitives.obstacles)}
+    position = np.array([kernel_index[id(ob)] for ob in obstacles], dtype=np.int64)
     return (position, *primitives.as_tuple()[:-1]), primitives.exact[position]
 
 
