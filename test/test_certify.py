@@ -15,6 +15,7 @@ from maru_planner.collision.certify import (
     MIN_ANCHOR_CLEARANCE,
     Certificate,
     PathCertifier,
+    _kernel_primitives,
     _without_corners,
     certify_and_repair,
     chord_deviation,
@@ -470,6 +471,37 @@ def test_rows_get_the_poses_and_centres_of_their_chains_as_full_forward_kinemati
         assert posed.all() == (n_rows >= certify.ROWS_FOR_ALL * 6)
 
 
+def test_each_obstacle_finds_its_own_primitive_in_the_kernels_order():
+    """Obstacles of mixed kinds in any order: each one's index into the kernel arrays (boxes, spheres, cylinders)
+    leads to its own primitive, exact for these shapes."""
+    kinds = {"box": {"size": (0.1, 0.2, 0.3)}, "sphere": {"radius": 0.05}, "cylinder": {"radius": 0.04, "length": 0.2}}
+    order = ["cylinder", "box", "sphere", "box", "cylinder", "sphere", "box"]
+    obstacles = [Obstacle(f"o{i}", kind, pose=[0.1 * i, 0.0, 0.5], **kinds[kind]) for i, kind in enumerate(order)]
+    (position, box_c, _, _, sph_c, _, cyl_c, *_), exact = _kernel_primitives(obstacles)
+    centres = np.concatenate([box_c, sph_c, cyl_c])
+    assert np.allclose(centres[position], [[0.1 * i, 0.0, 0.5] for i in range(len(order))])
+    assert sorted(position.tolist()) == list(range(len(order))) and exact.all()
+
+
+def _coal_queries_of_two(robot, checker, want: PathCertifier, got: PathCertifier, seed: int) -> tuple[int, int]:
+    """Certify random segments (5 certified, 5 not at least) with both: the same verdicts, every certified one clear
+    by the margin; (coal queries of ``want``, of ``got``)."""
+    rng = np.random.default_rng(seed)
+    outcomes, queries = {True: 0, False: 0}, [0, 0]
+    while min(outcomes.values()) < 5:
+        q0 = robot.random_configuration(rng)
+        q1 = np.clip(q0 + rng.normal(0.0, 1.0, robot.nq), robot.lower_limits, robot.upper_limits)
+        if not (checker.is_valid(q0) and checker.is_valid(q1)):
+            continue
+        a, b = want.certify_segment(q0, q1), got.certify_segment(q0, q1)
+        assert (b.valid, b.reason, b.first_failing_segment) == (a.valid, a.reason, a.first_failing_segment)
+        assert not b.valid or b.min_clearance >= got.safety_margin
+        outcomes[b.valid] += 1
+        queries[0] += a.exact_queries + a.hull_queries
+        queries[1] += b.exact_queries + b.hull_queries
+    return queries[0], queries[1]
+
+
 @pytest.mark.parametrize("world", [panda_shelf, maru13])
 def test_the_kernels_gjk_certifies_like_coal_with_fewer_coal_queries(world, monkeypatch):
     """Pairs of primitives (Maru-1) are measured by GJK in the row kernel, a robot mesh's hull (Panda) bounded
@@ -482,21 +514,8 @@ def test_the_kernels_gjk_certifies_like_coal_with_fewer_coal_queries(world, monk
     with monkeypatch.context() as patch:
         patch.setattr(certify, "robot_shape_records", _no_shapes)
         coal_only = PathCertifier(robot, checker, safety_margin=0.005, spheres=spheres)
-    rng = np.random.default_rng(17)
-    outcomes, queries = {True: 0, False: 0}, {"coal": 0, "kernel": 0}
-    while min(outcomes.values()) < 5:
-        q0 = robot.random_configuration(rng)
-        q1 = np.clip(q0 + rng.normal(0.0, 1.0, robot.nq), robot.lower_limits, robot.upper_limits)
-        if not (checker.is_valid(q0) and checker.is_valid(q1)):
-            continue
-        want, got = coal_only.certify_segment(q0, q1), kernel.certify_segment(q0, q1)
-        assert (got.valid, got.reason, got.first_failing_segment) == (want.valid, want.reason,
-                                                                        want.first_failing_segment)  # fmt: skip
-        assert not got.valid or got.min_clearance >= 0.005
-        outcomes[got.valid] += 1
-        queries["coal"] += want.exact_queries + want.hull_queries
-        queries["kernel"] += got.exact_queries + got.hull_queries
-    assert queries["kernel"] < 0.5 * queries["coal"], queries
+    by_coal, by_kernel = _coal_queries_of_two(robot, checker, coal_only, kernel, 17)
+    assert by_kernel < 0.5 * by_coal, (by_coal, by_kernel)
 
 
 @pytest.mark.parametrize("world", [panda_shelf, maru13])
@@ -510,19 +529,8 @@ def test_the_sphere_cover_certifies_like_the_bounding_spheres_with_fewer_coal_qu
         plain = PathCertifier(robot, checker, safety_margin=0.005)
     covered = PathCertifier(robot, checker, safety_margin=0.005, spheres=load_or_fit_of(robot))
     assert covered._cover.covered.all()  # Panda: the model's spheres; Maru-1's cylinders and boxes: solid_balls
-    rng = np.random.default_rng(13)
-    outcomes, queries = {True: 0, False: 0}, {"plain": 0, "covered": 0}
-    while min(outcomes.values()) < 5:
-        q0 = robot.random_configuration(rng)
-        q1 = np.clip(q0 + rng.normal(0.0, 1.0, robot.nq), robot.lower_limits, robot.upper_limits)
-        if not (checker.is_valid(q0) and checker.is_valid(q1)):
-            continue
-        want, got = plain.certify_segment(q0, q1), covered.certify_segment(q0, q1)
-        assert (got.valid, got.reason) == (want.valid, want.reason)
-        outcomes[got.valid] += 1
-        queries["plain"] += want.exact_queries + want.hull_queries
-        queries["covered"] += got.exact_queries + got.hull_queries
-    assert queries["covered"] < 0.6 * queries["plain"], queries
+    by_plain, by_covered = _coal_queries_of_two(robot, checker, plain, covered, 13)
+    assert by_covered < 0.6 * by_plain, (by_plain, by_covered)
 
 
 def load_or_fit_of(robot: RobotModel):

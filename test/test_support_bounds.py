@@ -49,6 +49,18 @@ def _random_pair(rng, hulls, kind):
     return np.asarray(hull.points(), dtype=float), rot, pos, obstacle, distance
 
 
+def _tally(bounds: list[tuple[float, float]]) -> tuple[int, int]:
+    """Every (bound, coal's distance) sound (<= the distance, <= 0 where they overlap); (placements apart, those
+    whose bound is within GJK's tolerance of the distance)."""
+    apart = close = 0
+    for bound, distance in bounds:
+        assert bound <= max(distance, 0.0) + 1e-9
+        if distance > 1e-4:
+            apart += 1
+            close += bound >= distance - (1e-5 + 2e-3 * distance)
+    return apart, close
+
+
 def _bound(verts, rot, pos, obstacle, enough=np.inf):
     kinds, cs, rs, ss, vr = new_records()
     kinds[0], cs[0], rs[0], vr[0] = HULL, pos, rot, (0, len(verts))
@@ -61,14 +73,8 @@ def test_the_bound_never_exceeds_coals_distance_and_is_tight_when_apart(panda_hu
     """Sound on 300 random placements (overlapping ones included: then it is <= 0) and, where hull and obstacle are
     apart, within GJK's tolerance of coal's distance in nearly every case (a looser one is still a bound)."""
     rng = np.random.default_rng(sorted(KINDS).index(kind))
-    apart = close = 0
-    for _ in range(300):
-        verts, rot, pos, obstacle, distance = _random_pair(rng, panda_hulls, kind)
-        bound = _bound(verts, rot, pos, obstacle)
-        assert bound <= max(distance, 0.0) + 1e-9
-        if distance > 1e-4:
-            apart += 1
-            close += bound >= distance - (1e-5 + 2e-3 * distance)
+    pairs = [_random_pair(rng, panda_hulls, kind) for _ in range(300)]
+    apart, close = _tally([(_bound(*pair[:4]), pair[4]) for pair in pairs])
     assert apart > 50 and close >= 0.95 * apart
 
 
@@ -121,7 +127,7 @@ def test_between_primitives_the_bound_is_coals_distance(kind_a, kind_b):
     """A placed robot primitive against an obstacle's: sound on 200 random placements and, apart, within GJK's
     tolerance of coal's distance in nearly every case (this is what lets certification skip coal for them)."""
     rng = np.random.default_rng(10 * sorted(ROBOT_SHAPES).index(kind_a) + sorted(KINDS).index(kind_b))
-    apart = close = 0
+    bounds = []
     no_verts = np.zeros(2, dtype=np.int64)
     for _ in range(200):
         records = new_records()
@@ -132,18 +138,15 @@ def test_between_primitives_the_bound_is_coals_distance(kind_a, kind_b):
         load_primitive(0, *ScenePrimitives.from_obstacles([obstacle]).as_tuple()[:-1], 1, *records[:4])
         distance = coal.distance(shape, placement, obstacle.geometry(), coal.Transform3s(pose[:3, :3], pose[:3, 3]),
                                  coal.DistanceRequest(), coal.DistanceResult())  # fmt: skip
-        bound = convex_bound(*records, np.zeros((0, 3)), np.inf, records[1][0].copy())
-        assert bound <= max(distance, 0.0) + 1e-9
-        if distance > 1e-4:
-            apart += 1
-            close += bound >= distance - (1e-5 + 2e-3 * distance)
+        bounds.append((convex_bound(*records, np.zeros((0, 3)), np.inf, records[1][0].copy()), distance))
+    apart, close = _tally(bounds)
     assert apart > 30 and close >= 0.95 * apart
 
 
 def test_between_two_placed_hulls_the_bound_holds(panda_hulls):
     """Two robot hulls (a self pair of meshes): sound, and tight where apart."""
     rng = np.random.default_rng(3)
-    apart = close = 0
+    bounds = []
     for _ in range(100):
         picks = rng.integers(len(panda_hulls), size=2)
         verts = [np.asarray(panda_hulls[i].points(), dtype=float) for i in picks]
@@ -157,9 +160,6 @@ def test_between_two_placed_hulls_the_bound_holds(panda_hulls):
             placements.append(coal.Transform3s(rot, pos))
         distance = coal.distance(panda_hulls[picks[0]], placements[0], panda_hulls[picks[1]], placements[1],
                                  coal.DistanceRequest(), coal.DistanceResult())  # fmt: skip
-        bound = convex_bound(*records, np.concatenate(verts), np.inf, records[1][0].copy())
-        assert bound <= max(distance, 0.0) + 1e-9
-        if distance > 1e-4:
-            apart += 1
-            close += bound >= distance - (1e-5 + 2e-3 * distance)
+        bounds.append((convex_bound(*records, np.concatenate(verts), np.inf, records[1][0].copy()), distance))
+    apart, close = _tally(bounds)
     assert apart > 20 and close >= 0.95 * apart
