@@ -347,6 +347,17 @@ def _vs_self(robot, work, stop_at_touch):
 
 
 @njit(cache=True, inline="always")
+def _place_state(q, robot, work):
+    """``work``'s joint poses and group centres for full configuration ``q``, no cluster or sphere placed yet."""
+    parent, kind, axis, prot, ppos, idx_q = robot[:6]
+    rot, pos, gworld, _, _, clusters_placed, spheres_placed, _ = work
+    joint_poses_nb(q, parent, kind, axis, prot, ppos, idx_q, rot, pos)
+    place_points(rot, pos, robot[11], robot[12], 0, robot[11].shape[0], gworld)
+    clusters_placed[:] = False
+    spheres_placed[:] = False
+
+
+@njit(cache=True, inline="always")
 def classify(q, robot, scene, work, stop_at_touch):
     """VALID, COLLIDING or AMBIGUOUS for one full configuration: the answer of the sphere checker's
     classify_state without a grid, computed in a tight loop down the bounding hierarchy. Every group's
@@ -358,13 +369,7 @@ def classify(q, robot, scene, work, stop_at_touch):
     ``robot``/``scene``: unpack_robot/unpack_scene tuples; ``work``: :func:`work_arrays`. Inlined into its
     caller's loop: a call per state, with these tuples as arguments, cost about a third of a microsecond.
     """
-    parent, kind, axis, prot, ppos, idx_q = robot[:6]
-    g_joint, g_center = robot[11], robot[12]
-    rot, pos, gworld, _, _, clusters_placed, spheres_placed, _ = work
-    joint_poses_nb(q, parent, kind, axis, prot, ppos, idx_q, rot, pos)
-    place_points(rot, pos, g_joint, g_center, 0, g_joint.shape[0], gworld)
-    clusters_placed[:] = False
-    spheres_placed[:] = False
+    _place_state(q, robot, work)
     scene_hit = _vs_scene(robot, scene, work, stop_at_touch)
     if scene_hit == 2:
         return COLLIDING
@@ -393,17 +398,6 @@ def _apart_on_shapes(a, b, obstacle, robot, scene, work, shapes, records):
         place_shape(b, rot[g_joint[b]], pos[g_joint[b]], s_kind, s_rot, s_pos, s_size, s_start, 1, kinds, cs, rs, ss,
                     vr)  # fmt: skip
     return convex_bound(kinds, cs, rs, ss, vr, verts, padding + CLEAR_BY, gworld[a]) > padding
-
-
-@njit(cache=True, inline="always")
-def _place_state(q, robot, work):
-    """``work``'s joint poses and group centres for full configuration ``q``, no cluster or sphere placed yet."""
-    parent, kind, axis, prot, ppos, idx_q = robot[:6]
-    rot, pos, gworld, _, _, clusters_placed, spheres_placed, _ = work
-    joint_poses_nb(q, parent, kind, axis, prot, ppos, idx_q, rot, pos)
-    place_points(rot, pos, robot[11], robot[12], 0, robot[11].shape[0], gworld)
-    clusters_placed[:] = False
-    spheres_placed[:] = False
 
 
 @njit(cache=True)
