@@ -111,6 +111,15 @@ def test_drop_collinear_keeps_the_corners_and_the_ends_only():
         assert np.allclose(postprocess.drop_collinear(np.array(dense)), path)
 
 
+def test_drop_collinear_keeps_a_waypoint_farther_than_max_offset_from_its_line():
+    """The angle test lets a waypoint 1e-6 rad off a 2 rad line go; ``max_offset`` keeps it, and not the waypoints on
+    the lines to it."""
+    path = np.array([[0, 0], [0.5, 0.5e-6], [1, 1e-6], [1.5, 0.5e-6], [2, 0]], float)
+    assert len(postprocess.drop_collinear(path)) == 2
+    assert postprocess.drop_collinear(path, max_offset=1e-9).tolist() == path[[0, 2, 4]].tolist()
+    assert len(postprocess.drop_collinear(path, max_offset=1e-5)) == 2
+
+
 def test_time_parameterisation_respects_scaled_limits():
     path = np.array([[0.0, 0.0], [1.0, 0.2], [1.0, 1.2], [1.01, 1.2]])
     vmax, amax = np.array([1.0, 0.5]), np.array([2.0, 1.0])

@@ -218,6 +218,18 @@ def test_repeated_and_collinear_waypoints_are_harmless():
         assert_within_limits(traj, LIMITS3, jerk=method == "ruckig")
 
 
+@pytest.mark.parametrize("method", timing.METHODS)
+def test_a_waypoint_barely_off_the_line_is_still_passed(method):
+    """A waypoint 1e-7 rad off the line between its neighbours passes the angle test for collinear points, yet the
+    trajectory must not cut it short: certification proves the path through it, not the line."""
+    path = np.array([[0.0, 0.0, 0.0], [1.0, 1e-7, 0.0], [2.0, 0.0, 0.0]])
+    traj, _ = parameterize(path, method, curve_free=never_off_path(path))
+    assert timing.deviation_from_path(traj.positions, path).max() <= 1e-9
+    assert np.linalg.norm(traj.positions - path[1], axis=1).min() <= 1e-9
+    on_line = np.array([[0.0, 0.0, 0.0], [1.0, 1e-13, 0.0], [2.0, 0.0, 0.0]])  # rounding off the line: left out
+    assert len(timing._distinct(on_line)) == 2
+
+
 def test_toppra_reports_each_certified_blend_at_the_row_of_the_path_it_rounds():
     """``corner_blends`` lines up with the rows given (a repeated row, the ends and a stopped corner get 0), and the
     trajectory leaves the path only within that far of those corners."""

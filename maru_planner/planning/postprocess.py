@@ -43,10 +43,39 @@ def smoothness(path: np.ndarray) -> float:
     return float(np.sum(k * k))
 
 
-def drop_collinear(path: np.ndarray, tol: float = 1e-9) -> np.ndarray:
-    """Remove interior waypoints lying on the straight line between their neighbours (no checks needed)."""
+def drop_collinear(path: np.ndarray, tol: float = 1e-9, max_offset: float | None = None) -> np.ndarray:
+    """Remove interior waypoints lying on the straight line between their neighbours (no checks needed).
+
+    ``max_offset`` (rad): also keep every waypoint farther than this from the segment between the waypoints kept
+    around it (the angle test alone drops a waypoint up to ~``sqrt(tol / 2)`` off the line).
+    """
     if len(path) < 3:
         return path
+    keep = _collinear_kept(path, tol)
+    # Douglas-Peucker: between two kept rows, also keep the farthest one too far off their segment
+    while max_offset is not None and len(keep) < len(path):
+        off = _offsets(path, keep)
+        far = [a + 1 + int(np.argmax(off[a + 1 : b])) for a, b in zip(keep[:-1], keep[1:], strict=True)
+               if b > a + 1 and off[a + 1 : b].max() > max_offset]  # fmt: skip
+        if not far:
+            break
+        keep = sorted(keep + far)
+    return path[keep]
+
+
+def _offsets(path: np.ndarray, keep: list[int]) -> np.ndarray:
+    """Per row of ``path``, its distance from the segment between the ``keep`` rows around it (0 for kept rows)."""
+    kept = np.asarray(keep)
+    after = kept[np.minimum(np.searchsorted(kept, np.arange(len(path))), len(kept) - 1)]
+    before = kept[np.maximum(np.searchsorted(kept, np.arange(len(path)), side="right") - 1, 0)]
+    a, span = path[before], path[after] - path[before]
+    rel = path - a
+    t = np.clip(np.einsum("ij,ij->i", rel, span) / np.maximum(np.einsum("ij,ij->i", span, span), 1e-300), 0.0, 1.0)
+    return np.linalg.norm(rel - t[:, None] * span, axis=1)
+
+
+def _collinear_kept(path: np.ndarray, tol: float) -> list[int]:
+    """Indices of the rows :func:`drop_collinear`'s angle test keeps."""
     step = np.diff(path, axis=0)
     norms = np.linalg.norm(step, axis=1).tolist()
     turns = np.einsum("ij,ij->i", step[:-1], step[1:]).tolist()  # step i-1 · step i, for the usual case below
@@ -64,7 +93,7 @@ def drop_collinear(path: np.ndarray, tol: float = 1e-9) -> np.ndarray:
             continue
         keep.append(i)
     keep.append(len(path) - 1)
-    return path[keep]
+    return keep
 
 
 def shortcut(path: np.ndarray, edge_valid, rng: np.random.Generator, deadline: float, max_tries: int = 200):
