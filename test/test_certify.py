@@ -618,6 +618,29 @@ def test_a_plan_s_min_clearance_includes_its_blends(arm, monkeypatch):
     assert result.stats.min_clearance == min(measured) >= 0.005
 
 
+def test_a_curve_certified_with_its_blends_is_not_certified_again(arm, monkeypatch):
+    """toppra's blends and the straight parts between them proven in one pass: the path's certification is skipped,
+    the plan still certified, and the trajectory's curve proven (chords plus their error bound); ruckig's curve is
+    not made of those parts, so its path is certified as before."""
+    import maru_planner.collision.certify as certify_module
+
+    calls = []
+    real = certify_module.certify_and_repair
+    monkeypatch.setattr(certify_module, "certify_and_repair", lambda *a, **k: calls.append(1) or real(*a, **k))
+    planner = MotionPlanner.from_scene(arm, Scene([plate_at(0.0)]), PlannerConfig(safety_margin=0.005))
+    request = MotionRequest("all", start={"j1": -0.6, "j2": 0.0}, goal_joints={"j1": 0.6, "j2": 0.0},
+                            planner_id="RRTConnect", time_budget=10.0, seed=3)  # fmt: skip
+    result = planner.plan(request)
+    assert result.success and result.stats.certified and result.curve_certified and not calls, result.message
+    assert np.count_nonzero(result.corner_blends) and 0.005 <= result.stats.min_clearance < np.inf
+    traj = result.trajectory
+    acceleration = np.asarray(arm.acceleration_limits, dtype=float)
+    assert planner.certifier.certify_path(traj.positions, margin=0.005,
+                                          deviation=chord_deviation(traj.times, acceleration)).valid  # fmt: skip
+    ruckig = planner.plan(dataclasses.replace(request, time_parameterization="ruckig"))
+    assert ruckig.success and ruckig.stats.certified and not ruckig.curve_certified and calls == [1]
+
+
 def test_without_corners_clips_each_end_to_its_segment():
     path = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 0.5], [3.0, 0.5]])
     ends = _without_corners(path, np.array([0.0, 0.3, 2.0, 0.0]))

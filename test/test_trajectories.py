@@ -218,6 +218,62 @@ def test_repeated_and_collinear_waypoints_are_harmless():
         assert_within_limits(traj, LIMITS3, jerk=method == "ruckig")
 
 
+class PieceRecorder(BendRecorder):
+    """A bend-taking check that also takes the straight pieces (as the certifier's does); ``fails(curve, call)``
+    says which curves of the ``call``-th check are not free."""
+
+    takes_pieces = True
+
+    def __init__(self, fails=lambda curve, call: False):
+        super().__init__()
+        self.fails, self.calls, self.proven = fails, 0, []
+
+    def many(self, curves):
+        free = [not self.fails(curve, self.calls) for curve in curves]
+        self.calls += 1
+        self.curves += curves
+        self.proven += [curve[0] for curve, ok in zip(curves, free) if ok and len(curve[0]) == 2 and len(curve) == 2]
+        return free
+
+
+def final_straight_parts(path: np.ndarray, half: np.ndarray) -> list[np.ndarray]:
+    """Each segment of ``path`` without the ends its blends (``half`` per waypoint) take, where any is left."""
+    unit = np.diff(path, axis=0) / np.linalg.norm(np.diff(path, axis=0), axis=1)[:, None]
+    parts = [np.stack([path[i] + half[i] * unit[i], path[i + 1] - half[i + 1] * unit[i]]) for i in range(len(unit))]
+    return [part for part, u in zip(parts, unit) if (part[1] - part[0]) @ u > 1e-12]
+
+
+def on_a_piece(part: np.ndarray, pieces: list[np.ndarray]) -> bool:
+    """Whether both ends of ``part`` lie (within 1e-12) on one of the straight ``pieces``."""
+    return any(timing.deviation_from_path(part, piece).max() <= 1e-12 for piece in pieces)
+
+
+def test_straight_pieces_proven_with_the_blends_certify_the_whole_curve():
+    """A check that takes pieces gets, with the blends, the straight parts between them; when every straight part of
+    the final curve lies on one it proved -- also after a blend was shrunk, or became a stop -- the report says the
+    curve is certified; a piece that is not free leaves it to the path's certification."""
+    recorder = PieceRecorder()
+    _, report = parameterize(ZIGZAG, "toppra", curve_free=recorder)
+    parts = final_straight_parts(ZIGZAG, report.corner_blends)
+    assert report.curve_certified and recorder.calls == 1 and len(recorder.proven) == len(parts) == 3  # 1 of 4: blends
+    assert all(on_a_piece(part, recorder.proven) for part in parts)
+
+    def blend_at(corner: int):  # the blend curves of ``corner``: the bent ones that pass nearest to it
+        return lambda curve, _call: len(curve) == 3 and timing.deviation_from_path(ZIGZAG[corner], curve[0]).min() < 0.3
+
+    for fails, stops in ((lambda curve, call: call == 0 and blend_at(2)(curve, call), 0), (blend_at(2), 1)):
+        recorder = PieceRecorder(fails)
+        _, report = parameterize(ZIGZAG, "toppra", curve_free=recorder)
+        assert report.stops == stops and report.curve_certified and recorder.calls > 1
+        assert all(on_a_piece(part, recorder.proven) for part in final_straight_parts(ZIGZAG, report.corner_blends))
+
+    piece_fails = PieceRecorder(lambda curve, _call: len(curve) == 2 and len(curve[0]) == 2)
+    _, report = parameterize(ZIGZAG, "toppra", curve_free=piece_fails)
+    assert report.blends == 3 and not report.curve_certified
+    assert not parameterize(ZIGZAG, "toppra", curve_free=BendRecorder())[1].curve_certified  # no pieces taken
+    assert not parameterize(ZIGZAG, "ruckig", curve_free=PieceRecorder())[1].curve_certified
+
+
 @pytest.mark.parametrize("method", timing.METHODS)
 def test_a_waypoint_barely_off_the_line_is_still_passed(method):
     """A waypoint 1e-7 rad off the line between its neighbours passes the angle test for collinear points, yet the

@@ -255,10 +255,18 @@ class MotionPlanner:
         return result
 
     def _certify_path(self, request: MotionRequest, result: MotionResult, t0: float) -> None:
-        from maru_planner.collision.certify import certify_and_repair  # lazy: numba, as in _make_certifier
+        from maru_planner.collision.certify import Certificate, certify_and_repair  # lazy: numba, as in _make_certifier
 
         stats = result.stats
         self._monitor.report("certify")
+        proof = result.curve_proof
+        if proof is not None:  # every straight part was proven with the blends (_set_path): nothing left
+            stats.certified = True
+            if is_sphere_checker(self.checker):
+                certificate = Certificate(valid=True, margin=self.safety_margin(request), checks=proof.certify_checks,
+                                          seconds=proof.certify_time)  # fmt: skip
+                _record_verification(result, certificate, 0)
+            return
         certify_deadline = time.monotonic() + self.config.certify_timeout
         repaired = certify_and_repair(
             self.certifier,
@@ -336,6 +344,7 @@ class MotionPlanner:
         t_par = time.monotonic()
         result.trajectory, report = self._time_parameterize(req, path, start_full, indices, stats, deadline)
         result.corner_blends = report.corner_blends if self.certifier is not None else None
+        result.curve_proof = report if report.curve_certified and self.certifier is not None else None
         stats.min_clearance = min(stats.min_clearance, report.min_clearance)  # the blends' (the path's: _certify_path)
         stats.parameterize_time += time.monotonic() - t_par
         result.path = path

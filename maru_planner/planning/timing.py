@@ -59,6 +59,7 @@ BLEND_BEND_PARTS = 4
 # rad: farthest a waypoint left out as collinear may be from the curve (bodies then move at most ~their levers x this,
 # far within the DISTANCE_TOLERANCE every certified bound gives away; the angle test alone allowed ~2e-5 rad)
 COLLINEAR_OFFSET = 1e-9
+SHARED_END = 1e-12  # rad: a straight part this short between two blends is their shared end (nothing to prove)
 MIN_BLEND_SPEED = 0.1  # |u_in + u_out| below this (a near reversal): stop instead of blending
 GRID_INTERVALS = 30  # toppra grid intervals along a section (plus ≥ BLEND_INTERVALS per blend)
 BLEND_INTERVALS = 3
@@ -106,7 +107,8 @@ class Limits:
 class CertifiedCurve:
     """A :data:`CurveFree` proving a group curve clear by ``margin`` on ``certifier`` (a ``PathCertifier``), each
     joint's margin grown by how far the curve leaves the chords; the joints outside ``indices`` stay at ``base``.
-    ``many`` proves several curves in one certification pass (the blends of a path)."""
+    ``many`` proves several curves in one certification pass (the blends of a path, and its straight pieces:
+    ``takes_pieces``)."""
 
     certifier: Any
     base: np.ndarray
@@ -115,6 +117,7 @@ class CertifiedCurve:
     margin: float
     clearance: list[float] = field(default_factory=list, compare=False)  # m: least distance on each curve proven
     takes_bends = True  # the certifier proves parabolic segments as they are
+    takes_pieces = True  # worth giving the straight pieces too: then the path's certification has nothing left
 
     def __call__(self, states: np.ndarray, chord_deviation: np.ndarray) -> bool:
         return self.many([(states, chord_deviation)])[0]
@@ -153,6 +156,10 @@ class WatchedCurve:
         return takes_bends(self.curve_free)
 
     @property
+    def takes_pieces(self) -> bool:
+        return takes_pieces(self.curve_free)
+
+    @property
     def clearance(self) -> list[float]:
         return getattr(self.curve_free, "clearance", [])
 
@@ -174,6 +181,12 @@ def certified_clearance(curve_free: CurveFree) -> float:
 def takes_bends(curve_free: CurveFree) -> bool:
     """Whether ``curve_free`` proves curves given with bends (:data:`Curve`), else only sampled chords."""
     return bool(getattr(curve_free, "takes_bends", False))
+
+
+def takes_pieces(curve_free: CurveFree) -> bool:
+    """Whether ``curve_free`` should get the straight pieces of a blended curve too (a :class:`CertifiedCurve`, maybe
+    watched): proven with the blends, they spare the path's certification (``TimingReport.curve_certified``)."""
+    return bool(getattr(curve_free, "takes_pieces", False))
 
 
 def curves_free(curve_free: CurveFree, curves: Sequence[Curve]) -> list[bool]:
@@ -222,6 +235,9 @@ class TimingReport:
     # (toppra; 0: the curve passes it or stops there). None: the curve was not made of certified blends (ruckig's).
     corner_blends: np.ndarray | None = None
     min_clearance: float = math.inf  # m: smallest distance measured on the curves certified (inf: none)
+    # every straight part of the curve was proven with its blends (toppra with a certifier, :func:`takes_pieces`):
+    # the whole curve is certified, the path's certification has nothing left to prove
+    curve_certified: bool = False
 
 
 # --- geometry: the blended curve ---------------------------------------------------------------
@@ -450,22 +466,32 @@ class _ParameterizationFailed(Exception):
 
 # --- blended corners, certified --------------------------------------------------------------
 def _certified_half_lengths(
-    waypoints: np.ndarray, max_deviation: float, check: _Check, report: TimingReport
+    waypoints: np.ndarray, max_deviation: float, check: _Check, report: TimingReport, with_pieces: bool = False
 ) -> np.ndarray:
-    """Blend size per waypoint (0 at the ends and at stops), every blend re-checked (module doc)."""
+    """Blend size per waypoint (0 at the ends and at stops), every blend re-checked (module doc). ``with_pieces``:
+    the checks also prove the straight pieces between the blends (:func:`_pieces_to_prove`); ``report`` tells
+    whether every straight part of the final curve lies on one proven (``curve_certified``)."""
     half = np.zeros(len(waypoints))
     t0 = time.monotonic()
     deviation = np.full(len(waypoints), float(max_deviation))
     pending = list(range(1, len(waypoints) - 1))
     units = _units(waypoints)
-    for _ in range(BLEND_RETRIES + 1):  # all pending corners in one check: they share the certification's work
+    proven_ends = np.full((len(waypoints) - 1, 2), np.inf)  # per segment: the blend sizes its proven piece left out
+    for attempt in range(BLEND_RETRIES + 1):  # all pending corners in one check: they share the certification's work
         half[pending] = blend_half_lengths(waypoints, deviation, units)[pending]
         pending = [k for k in pending if half[k] > 0.0]
         if not pending:
             break
         curves = _corner_curves(waypoints, units, np.array(pending), half, check)
         report.certify_checks += sum(len(curve[0]) for curve in curves)
-        failed = [k for k, free in zip(pending, check.many(curves), strict=True) if not free]
+        segments, ends = _pieces_to_prove(waypoints, half, pending, attempt) if with_pieces else ([], half)
+        pieces = [(np.stack([waypoints[i] + ends[i] * units[i], waypoints[i + 1] - ends[i + 1] * units[i]]),
+                   np.zeros(waypoints.shape[1])) for i in segments]  # fmt: skip
+        free = check.many(curves + pieces)
+        for i, proven in zip(segments, free[len(curves) :], strict=True):
+            if proven:
+                proven_ends[i] = ends[i], ends[i + 1]
+        failed = [k for k, ok in zip(pending, free[: len(curves)], strict=True) if not ok]
         for k in failed:
             report.fallbacks.append(f"blend at waypoint {k} not certified at deviation {deviation[k]:.3g} rad")
             half[k] = 0.0
@@ -473,7 +499,29 @@ def _certified_half_lengths(
         pending = failed
     report.certify_time += time.monotonic() - t0
     _count_corners(waypoints, half, report)
+    if with_pieces:
+        straight = np.linalg.norm(np.diff(waypoints, axis=0), axis=1) - half[:-1] - half[1:] > SHARED_END
+        report.curve_certified = bool(np.all(~straight | ((proven_ends[:, 0] <= half[:-1])
+                                                         & (proven_ends[:, 1] <= half[1:]))))  # fmt: skip
     return half
+
+
+def _pieces_to_prove(waypoints: np.ndarray, half: np.ndarray, pending: list[int], attempt: int
+                     ) -> tuple[list[int], np.ndarray]:  # fmt: skip
+    """The segments whose straight pieces to prove with the blends of ``attempt``, and the blend size left out at
+    each waypoint: first every segment without the ends its blends (``half``) take; at the first retry, the segments
+    next to a retried corner, up to that corner (wherever its blend ends up, or if the motion stops there, the
+    straight part left lies on them); none after."""
+    if attempt == 0:
+        segments, ends = np.arange(len(waypoints) - 1), half
+    elif attempt == 1:
+        segments = np.unique(np.concatenate([np.array(pending) - 1, pending]))
+        ends = half.copy()
+        ends[pending] = 0.0
+    else:
+        return [], half
+    length = np.linalg.norm(waypoints[segments + 1] - waypoints[segments], axis=1)
+    return segments[length - ends[segments] - ends[segments + 1] > SHARED_END].tolist(), ends
 
 
 def _corner_curves(waypoints: np.ndarray, units: np.ndarray, corners: np.ndarray, half: np.ndarray, check: _Check
@@ -543,7 +591,7 @@ class _PathVelocity:
 
 def _toppra(waypoints, limits: Limits, check: _Check, max_deviation: float):
     report = TimingReport("toppra")
-    half = _certified_half_lengths(waypoints, max_deviation, check, report)
+    half = _certified_half_lengths(waypoints, max_deviation, check, report, takes_pieces(check.curve_free))
     report.corner_blends = half
     return [_toppra_section(BlendedPath(w, h), limits) for w, h in _sections(waypoints, half)], report
 

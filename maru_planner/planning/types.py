@@ -14,6 +14,7 @@ from maru_planner.planning.constraints import PathConstraints
 
 if TYPE_CHECKING:  # the sphere module loads numba; results only carry its PathVerification
     from maru_planner.collision.spheres import PathVerification
+    from maru_planner.planning.timing import TimingReport
 
 
 class PlanStatus(enum.Enum):
@@ -160,13 +161,15 @@ class PlanStats:
     raw_path_length: float = 0.0
     collision_model: str = "exact"  # the checker planned on: "exact" or "spheres"
     verified: bool = False  # "spheres": the returned path was re-checked on the exact model and is free
-    verify_time: float = 0.0  # s spent re-checking paths on the exact model
+    verify_time: float = 0.0  # s spent re-checking paths on the exact model (proving them: "spheres" certified)
     replans: int = 0  # re-plans at a finer resolution after a path failed that check
     time_parameterization: str = ""  # the method that made the trajectory (a blended one may fall back)
     # the motion is proven collision-free on the exact model: the path, without the ends of its corners the trajectory
     # rounds with certified blends (MotionResult.corner_blends; docs/certification.md)
     certified: bool = False
-    certify_time: float = 0.0  # s spent certifying (all attempts)
+    # s spent certifying after time parameterisation (all attempts; 0 when the trajectory's whole curve was proven
+    # with its blends, MotionResult.curve_proof: that time is in parameterize_time)
+    certify_time: float = 0.0
     min_clearance: float = math.inf  # m: smallest distance measured while certifying the path and its blends
     repairs: int = 0  # segments that failed certification and were re-planned locally
 
@@ -189,6 +192,14 @@ class MotionResult:
     # per waypoint of ``path``: the half-length (rad) of the parabolic blend the trajectory rounds it with, proven
     # by the certifier (toppra only; 0: the trajectory passes through it or stops there); None: no such blends
     corner_blends: np.ndarray | None = None
+    # the trajectory's whole curve (blends and the straight parts between them) was proven with the blends, by this
+    # timing report (its certify_checks, certify_time): the path's certification has nothing left to prove (toppra with
+    # a certifier; docs/certification.md)
+    curve_proof: TimingReport | None = None
+
+    @property
+    def curve_certified(self) -> bool:
+        return self.curve_proof is not None
 
     @property
     def success(self) -> bool:
