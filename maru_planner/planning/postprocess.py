@@ -20,6 +20,10 @@ import numpy as np
 
 from maru_planner.planning.types import Trajectory
 
+# rad: farthest a waypoint drop_collinear leaves out may be from the line that replaces it (bodies then move at most
+# ~their levers x this: far within the 1e-6 m tolerance every certified bound gives away)
+COLLINEAR_OFFSET = 1e-9
+
 
 def path_length(path: np.ndarray) -> float:
     """Sum of Euclidean joint-space segment lengths (rad)."""
@@ -43,57 +47,42 @@ def smoothness(path: np.ndarray) -> float:
     return float(np.sum(k * k))
 
 
-def drop_collinear(path: np.ndarray, tol: float = 1e-9, max_offset: float | None = None) -> np.ndarray:
-    """Remove interior waypoints lying on the straight line between their neighbours (no checks needed).
+def drop_collinear(path: np.ndarray, tol: float = 1e-9, max_offset: float = COLLINEAR_OFFSET) -> np.ndarray:
+    """Remove interior waypoints lying on the straight line between their neighbours (no checks needed): each one
+    within ``max_offset`` (rad) of the segment between the waypoints kept around it.
 
-    ``max_offset`` (rad): also keep every waypoint farther than this from the segment between the waypoints kept
-    around it (the angle test alone drops a waypoint up to ~``sqrt(tol / 2)`` off the line).
+    A waypoint goes when its steps in and out point the same way (``tol``, on their dot product) or its step in is
+    shorter than ``tol``; then, Douglas-Peucker, between two kept waypoints the farthest one more than
+    ``max_offset`` off their segment is kept too, until none is (so small turns do not add up to a dropped bend).
     """
     if len(path) < 3:
         return path
-    keep = _collinear_kept(path, tol)
-    # Douglas-Peucker: between two kept rows, also keep the farthest one too far off their segment
-    while max_offset is not None and len(keep) < len(path):
+    step = np.diff(path, axis=0)
+    norms = np.linalg.norm(step, axis=1)
+    na, nb = norms[:-1], norms[1:]
+    dots = np.einsum("ij,ij->i", step[:-1], step[1:])
+    on_line = (na < tol) | ((nb > tol) & (np.abs(dots - na * nb) <= tol * np.maximum(1.0, na * nb)))
+    keep = np.flatnonzero(np.concatenate([[True], ~on_line, [True]]))
+    while len(keep) < len(path):
         off = _offsets(path, keep)
-        far = [a + 1 + int(np.argmax(off[a + 1 : b])) for a, b in zip(keep[:-1], keep[1:], strict=True)
-               if b > a + 1 and off[a + 1 : b].max() > max_offset]  # fmt: skip
-        if not far:
+        worst = np.maximum.reduceat(off, keep[:-1])  # per kept segment (its start's offset is 0)
+        far = worst > max_offset
+        if not far.any():
             break
-        keep = sorted(keep + far)
+        ends = np.append(keep[1:], len(path))
+        extra = [a + int(np.argmax(off[a:b])) for a, b in zip(keep[:-1][far], ends[:-1][far], strict=True)]
+        keep = np.sort(np.concatenate([keep, extra]))
     return path[keep]
 
 
-def _offsets(path: np.ndarray, keep: list[int]) -> np.ndarray:
+def _offsets(path: np.ndarray, keep: np.ndarray) -> np.ndarray:
     """Per row of ``path``, its distance from the segment between the ``keep`` rows around it (0 for kept rows)."""
-    kept = np.asarray(keep)
-    after = kept[np.minimum(np.searchsorted(kept, np.arange(len(path))), len(kept) - 1)]
-    before = kept[np.maximum(np.searchsorted(kept, np.arange(len(path)), side="right") - 1, 0)]
-    a, span = path[before], path[after] - path[before]
-    rel = path - a
+    rows = np.arange(len(path))
+    before = keep[np.maximum(np.searchsorted(keep, rows, side="right") - 1, 0)]
+    after = keep[np.minimum(np.searchsorted(keep, rows), len(keep) - 1)]
+    span, rel = path[after] - path[before], path - path[before]
     t = np.clip(np.einsum("ij,ij->i", rel, span) / np.maximum(np.einsum("ij,ij->i", span, span), 1e-300), 0.0, 1.0)
     return np.linalg.norm(rel - t[:, None] * span, axis=1)
-
-
-def _collinear_kept(path: np.ndarray, tol: float) -> list[int]:
-    """Indices of the rows :func:`drop_collinear`'s angle test keeps."""
-    step = np.diff(path, axis=0)
-    norms = np.linalg.norm(step, axis=1).tolist()
-    turns = np.einsum("ij,ij->i", step[:-1], step[1:]).tolist()  # step i-1 · step i, for the usual case below
-    keep = [0]
-    for i in range(1, len(path) - 1):
-        if keep[-1] == i - 1:  # the usual case: the previous waypoint stays, the vectors are the steps
-            na, dot = norms[i - 1], turns[i - 1]
-        else:
-            a = path[i] - path[keep[-1]]
-            na, dot = float(np.linalg.norm(a)), float(a @ step[i])
-        nb = norms[i]
-        if na < tol:
-            continue
-        if nb > tol and abs(dot - na * nb) <= tol * max(1.0, na * nb):
-            continue
-        keep.append(i)
-    keep.append(len(path) - 1)
-    return keep
 
 
 def shortcut(path: np.ndarray, edge_valid, rng: np.random.Generator, deadline: float, max_tries: int = 200):

@@ -56,9 +56,6 @@ BLEND_RETRIES = 2  # retries before a corner becomes a stop
 # A blend is certified as this many bent segments: each gets its own joint-speed bound (dq/dt runs from the incoming
 # to the outgoing direction). 4 took Maru-1's blend certification from 10.7 to 7.5 ms a plan (1 part) and 9.4 (8).
 BLEND_BEND_PARTS = 4
-# rad: farthest a waypoint left out as collinear may be from the curve (bodies then move at most ~their levers x this,
-# far within the DISTANCE_TOLERANCE every certified bound gives away; the angle test alone allowed ~2e-5 rad)
-COLLINEAR_OFFSET = 1e-9
 SHARED_END = 1e-12  # rad: a straight part this short between two blends is their shared end (nothing to prove)
 MIN_BLEND_SPEED = 0.1  # |u_in + u_out| below this (a near reversal): stop instead of blending
 GRID_INTERVALS = 30  # toppra grid intervals along a section (plus ≥ BLEND_INTERVALS per blend)
@@ -443,13 +440,13 @@ class _Check:
 
 
 def _distinct(path: np.ndarray) -> np.ndarray:
-    """``path`` without repeated or collinear interior waypoints: none farther than :data:`COLLINEAR_OFFSET` from
-    the line the curve then follows, so what certification proves of ``path`` holds for the curve."""
+    """``path`` without repeated or collinear interior waypoints: none farther than ``postprocess.COLLINEAR_OFFSET``
+    from the line the curve then follows, so what certification proves of ``path`` holds for the curve."""
     if len(path) < 2:
         return path
     keep = np.concatenate([[True], np.linalg.norm(np.diff(path, axis=0), axis=1) > 1e-12])
     path = path[keep]
-    return postprocess.drop_collinear(path, max_offset=COLLINEAR_OFFSET) if len(path) > 2 else path
+    return postprocess.drop_collinear(path) if len(path) > 2 else path
 
 
 def _trapezoid(waypoints, joint_names, limits: Limits, dt: float, max_points: int) -> Trajectory:
