@@ -687,7 +687,6 @@ class PathCertifier:
         ``(1 - t) * q_i + t * q_i+1 + (t² - t) * bend[i]`` (a blend proven as the curve it is, no chords).
         A curve still unproven at ``deadline`` counts as not certified.
         """
-        margin = self.safety_margin if margin is None else float(margin)
         nq = self._model.nq
         points: list[np.ndarray] = []
         deviation: list[np.ndarray] = []
@@ -705,14 +704,20 @@ class PathCertifier:
             curve += [c] * (len(configs) - 1)
         if not points:
             return np.zeros(0, dtype=bool), np.zeros(0)
-        path = np.concatenate(points)
-        curve_of = np.array(curve, dtype=int)
-        _, run = self._certify(path, np.array(deviation).reshape(-1, nq), curve_of, margin, deadline,
-                               np.concatenate(bends))  # fmt: skip
-        certified = ~run.failed_curves(len(curves))
-        clearance = np.full(len(curves), math.inf)
-        proven = curve_of >= 0
-        np.minimum.at(clearance, curve_of[proven], run.clearance[proven])
+        return self.prove_segments(np.concatenate(points), np.array(deviation).reshape(-1, nq), np.concatenate(bends),
+                                   np.array(curve, dtype=int), len(curves), deadline, margin=margin)  # fmt: skip
+
+    def prove_segments(self, path: np.ndarray, deviation: np.ndarray, bend: np.ndarray, curve: np.ndarray,
+                       n_curves: int, deadline: float | None = None, *, margin: float | None = None
+                       ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+        """:meth:`prove_curves` of ``n_curves`` curves given as arrays: ``path`` (n, nq) and per segment (n - 1) its
+        deviation (nq, >= 0), bend (nq) and curve (-1: a step between two curves, not certified)."""
+        margin = self.safety_margin if margin is None else float(margin)
+        _, run = self._certify(path, deviation, curve, margin, deadline, bend)
+        certified = ~run.failed_curves(n_curves)
+        clearance = np.full(n_curves, math.inf)
+        proven = curve >= 0
+        np.minimum.at(clearance, curve[proven], run.clearance[proven])
         return certified, np.where(certified, clearance, math.nan)
 
     def _certify(

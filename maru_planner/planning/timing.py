@@ -120,17 +120,23 @@ class CertifiedCurve:
         return self.many([(states, chord_deviation)])[0]
 
     def many(self, curves: Sequence[Curve]) -> list[bool]:
-        full = []
-        for states, chord_deviation, *bend in curves:
-            deviation = np.zeros(len(self.base))
-            deviation[self.indices] = chord_deviation
-            curve: list[np.ndarray] = [full_configurations(self.base, self.indices, states), deviation]
-            if bend:
-                full_bend = np.zeros((len(states) - 1, len(self.base)))
-                full_bend[:, self.indices] = bend[0]
-                curve.append(full_bend)
-            full.append(tuple(curve))
-        certified, clearance = self.certifier.prove_curves(full, self.deadline, margin=self.margin)
+        if not curves:
+            return []
+        # All curves as one run of segments (a step between two curves is not proven), in full configurations
+        sizes = np.array([len(curve[0]) for curve in curves])
+        states = np.concatenate([curve[0] for curve in curves])
+        curve_of = np.repeat(np.arange(len(curves)), sizes)[:-1]
+        curve_of[np.cumsum(sizes)[:-1] - 1] = -1
+        nq = len(self.base)
+        deviation, bend = np.zeros((len(curve_of), nq)), np.zeros((len(curve_of), nq))
+        proven, columns = curve_of >= 0, np.asarray(self.indices)
+        deviation[np.ix_(proven, columns)] = np.abs(np.array([curve[1] for curve in curves]))[curve_of[proven]]
+        if any(len(curve) > 2 for curve in curves):
+            bend[np.ix_(proven, columns)] = np.concatenate(
+                [curve[2] if len(curve) > 2 else np.zeros((len(curve[0]) - 1, len(self.indices))) for curve in curves])
+        certified, clearance = self.certifier.prove_segments(
+            full_configurations(self.base, self.indices, states), deviation, bend, curve_of, len(curves), self.deadline,
+            margin=self.margin)  # fmt: skip
         self.clearance.extend(clearance[certified].tolist())
         return certified.tolist()
 
