@@ -323,9 +323,9 @@ def parabola_parts(start: np.ndarray, velocity: np.ndarray, acceleration: np.nda
     ``p = (1 - t)·p(start) + t·p(end) + (t² - t)·bend``. All rows in one set of array operations."""
     sigma = np.linspace(0.0, length, parts + 1, axis=1)[..., None]  # (rows, parts + 1, 1)
     ends = start[:, None] + velocity[:, None] * sigma + 0.5 * acceleration[:, None] * sigma**2
-    bend = 0.5 * ((length / parts) ** 2)[:, None] * acceleration
+    bends = np.repeat((0.5 * ((length / parts) ** 2)[:, None] * acceleration)[:, None], parts, axis=1)
     on_chord = np.zeros(start.shape[1])
-    return [(ends[k], on_chord, np.broadcast_to(bend[k], (parts, len(bend[k])))) for k in range(len(length))]
+    return [(ends[k], on_chord, bends[k]) for k in range(len(length))]
 
 
 def parabola_chords(start: np.ndarray, velocity: np.ndarray, acceleration: np.ndarray, length: float,
@@ -488,8 +488,10 @@ def _certified_half_lengths(
         curves = _corner_curves(waypoints, units, np.array(pending), half, check)
         report.certify_checks += sum(len(curve[0]) for curve in curves)
         segments, ends = _pieces_to_prove(waypoints, half, pending, attempt) if with_pieces else ([], half)
-        pieces = [(np.stack([waypoints[i] + ends[i] * units[i], waypoints[i + 1] - ends[i + 1] * units[i]]),
-                   np.zeros(waypoints.shape[1])) for i in segments]  # fmt: skip
+        rows = np.asarray(segments, dtype=int)
+        lines = np.stack([waypoints[rows] + ends[rows, None] * units[rows],
+                          waypoints[rows + 1] - ends[rows + 1, None] * units[rows]], axis=1)  # fmt: skip
+        pieces = [(line, np.zeros(waypoints.shape[1])) for line in lines]
         free = check.many(curves + pieces)
         for i, proven in zip(segments, free[len(curves) :], strict=True):
             if proven:
