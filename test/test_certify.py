@@ -435,6 +435,20 @@ def test_a_large_scene_certifies_like_its_full_pair_table(monkeypatch):
     assert any(len(table.obstacles) < len(checker.reachable_obstacles) for table in tables)
 
 
+def test_only_a_small_scene_proves_the_straight_pieces_with_the_blends():
+    """In a large scene each pass keeps the obstacles near any of its curves: given the straight pieces too, every
+    blend would be checked against their obstacles, so the blends go alone and the path is certified after."""
+    from maru_planner.planning import timing
+
+    robot, clutter = panda_shelf_and_clutter()
+    _, shelf = panda_shelf()
+    base = robot.neutral()
+    large, small = (timing.certified_curve(PathCertifier(robot, checker), base, [0, 1], None, 0.005)
+                    for checker in (clutter, shelf))  # fmt: skip
+    assert large.certifier.near_path_only and not large.takes_pieces
+    assert not small.certifier.near_path_only and small.takes_pieces
+
+
 def _no_shapes(geometries, hulls) -> tuple:
     """certify's robot shape records with no shape held: the row kernel measures nothing by GJK."""
     kind, *rest = robot_shape_records(geometries, hulls)

@@ -768,6 +768,12 @@ class PathCertifier:
             best = min(best, self._distance(pairs, int(p), False, placed))
         return best
 
+    @property
+    def near_path_only(self) -> bool:
+        """Whether each certification keeps only the obstacles near what it proves (a large scene: at least
+        :data:`NEAR_PATH_MIN_OBSTACLES` reachable obstacles)."""
+        return len(self.checker.reachable_obstacles) >= NEAR_PATH_MIN_OBSTACLES
+
     def prepare(self) -> None:
         """Build what certifying in the checker's current scene needs ahead of the first request: the pair table of
         a small scene, the obstacles' bounding boxes of a large one (both are otherwise built on first use)."""
