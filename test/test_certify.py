@@ -610,7 +610,7 @@ def test_a_plan_s_min_clearance_includes_its_blends(arm, monkeypatch):
     """stats.min_clearance is the least distance measured on the certified path and on the blends its trajectory
     rounds corners with (these replace the path's corners: the robot moves there)."""
     measured = []
-    real_curves, real_path = PathCertifier.prove_segments, PathCertifier.certify_path
+    real_curves, real_path = PathCertifier.prove_curves, PathCertifier.certify_path
 
     def curves(self, *args, **kwargs):
         certified, clearance = real_curves(self, *args, **kwargs)
@@ -622,7 +622,7 @@ def test_a_plan_s_min_clearance_includes_its_blends(arm, monkeypatch):
         measured.append(cert.min_clearance)
         return cert
 
-    monkeypatch.setattr(PathCertifier, "prove_segments", curves)
+    monkeypatch.setattr(PathCertifier, "prove_curves", curves)
     monkeypatch.setattr(PathCertifier, "certify_path", path)
     planner = MotionPlanner.from_scene(arm, Scene([plate_at(0.0)]), PlannerConfig(safety_margin=0.005))
     result = planner.plan(MotionRequest("all", start={"j1": -0.6, "j2": 0.0}, goal_joints={"j1": 0.6, "j2": 0.0},

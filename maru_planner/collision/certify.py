@@ -678,46 +678,40 @@ class PathCertifier:
         """Whether each curve is certified, all in one pass (their pairs share the work): :meth:`prove_curves`."""
         return self.prove_curves(curves, deadline, margin=margin)[0].tolist()
 
-    def prove_curves(self, curves: list[tuple], deadline: float | None = None, *, margin: float | None = None
-                     ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    def prove_curves(self, curves: list[tuple], deadline: float | None = None, *, margin: float | None = None,
+                     base: np.ndarray | None = None, joints=None) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
         """Per curve, whether it is certified and the smallest distance measured on it (NaN where it is not), all
         in one pass (their pairs share the work).
 
         ``curves``: (configurations (n, nq), deviation (nq,)) as :meth:`certify_path` takes them, or
         (configurations, deviation, bend (n - 1, nq)) whose segment i is the parabola
         ``(1 - t) * q_i + t * q_i+1 + (t² - t) * bend[i]`` (a blend proven as the curve it is, no chords).
+        With ``joints``, the curves give those joints only (their columns), the others stay at ``base``.
         A curve still unproven at ``deadline`` counts as not certified.
         """
-        nq = self._model.nq
-        points: list[np.ndarray] = []
-        deviation: list[np.ndarray] = []
-        bends: list[np.ndarray] = []
-        curve: list[int] = []
-        for c, (configs, dev, *bend) in enumerate(curves):
-            configs = np.atleast_2d(np.asarray(configs, dtype=float))
-            if points:  # the straight step from the last curve's end to this curve's start is not certified
-                deviation.append(np.zeros(nq))
-                bends.append(np.zeros((1, nq)))
-                curve.append(-1)
-            points.append(configs)
-            deviation += [np.abs(np.asarray(dev, dtype=float))] * (len(configs) - 1)
-            bends.append(np.reshape(bend[0], (-1, nq)) if bend else np.zeros((len(configs) - 1, nq)))
-            curve += [c] * (len(configs) - 1)
-        if not points:
+        if not curves:
             return np.zeros(0, dtype=bool), np.zeros(0)
-        return self.prove_segments(np.concatenate(points), np.array(deviation).reshape(-1, nq), np.concatenate(bends),
-                                   np.array(curve, dtype=int), len(curves), deadline, margin=margin)  # fmt: skip
-
-    def prove_segments(self, path: np.ndarray, deviation: np.ndarray, bend: np.ndarray, curve: np.ndarray,
-                       n_curves: int, deadline: float | None = None, *, margin: float | None = None
-                       ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
-        """:meth:`prove_curves` of ``n_curves`` curves given as arrays: ``path`` (n, nq) and per segment (n - 1) its
-        deviation (nq, >= 0), bend (nq) and curve (-1: a step between two curves, not certified)."""
         margin = self.safety_margin if margin is None else float(margin)
-        _, run = self._certify(path, deviation, curve, margin, deadline, bend)
-        certified = ~run.failed_curves(n_curves)
-        clearance = np.full(n_curves, math.inf)
+        nq = self._model.nq
+        columns = np.arange(nq) if joints is None else np.asarray(joints)
+        # All curves as one run of segments: the straight step from a curve's end to the next one's start is not proven
+        states = [np.reshape(np.asarray(curve[0], dtype=float), (-1, len(columns))) for curve in curves]
+        sizes = np.array([len(q) for q in states])
+        curve = np.repeat(np.arange(len(curves)), sizes)[:-1]
+        curve[np.cumsum(sizes)[:-1] - 1] = -1
+        rest = np.zeros(nq) if base is None else np.asarray(base, dtype=float)
+        path = np.repeat(rest[None], len(curve) + 1, axis=0)
+        path[:, columns] = np.concatenate(states)
+        deviation, bend = np.zeros((len(curve), nq)), np.zeros((len(curve), nq))
         proven = curve >= 0
+        deviation[np.ix_(proven, columns)] = np.abs(np.array([c[1] for c in curves], dtype=float))[curve[proven]]
+        if any(len(c) > 2 for c in curves):
+            bend[np.ix_(proven, columns)] = np.concatenate(
+                [np.reshape(c[2], (-1, len(columns))) if len(c) > 2 else np.zeros((len(q) - 1, len(columns)))
+                 for c, q in zip(curves, states, strict=True)])  # fmt: skip
+        _, run = self._certify(path, deviation, curve, margin, deadline, bend)
+        certified = ~run.failed_curves(len(curves))
+        clearance = np.full(len(curves), math.inf)
         np.minimum.at(clearance, curve[proven], run.clearance[proven])
         return certified, np.where(certified, clearance, math.nan)
 
@@ -898,7 +892,7 @@ class PathCertifier:
         """The pairs to prove: every pair of the checker in a small scene (or ``near`` None), else the self pairs
         and the pairs of the reachable obstacles ``near`` selects (a bool mask from :meth:`_swept_reach`)."""
         obstacles = self.checker.reachable_obstacles
-        if near is None or len(obstacles) < NEAR_PATH_MIN_OBSTACLES:
+        if near is None or not self.near_path_only:
             if self._pairs is None or self._pairs_owner is not obstacles:
                 self._pairs, self._pairs_owner = self._build_pairs(obstacles), obstacles
             return self._pairs
@@ -952,9 +946,9 @@ class PathCertifier:
 
     def _obstacle_boxes(self) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         """(centres, rotations, half extents) of the reachable obstacles' bounding boxes in a large scene, else None."""
-        obstacles = self.checker.reachable_obstacles
-        if len(obstacles) < NEAR_PATH_MIN_OBSTACLES:
+        if not self.near_path_only:
             return None
+        obstacles = self.checker.reachable_obstacles
         if self._boxes is None or self._boxes[0] is not obstacles:
             boxes = [_bounding_box(ob.geometry(), pin.SE3(ob.pose[:3, :3].copy(), ob.pose[:3, 3].copy()))
                      for ob in obstacles]  # fmt: skip

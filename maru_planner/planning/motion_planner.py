@@ -344,7 +344,7 @@ class MotionPlanner:
         t_par = time.monotonic()
         result.trajectory, report = self._time_parameterize(req, path, start_full, indices, stats, deadline)
         result.corner_blends = report.corner_blends if self.certifier is not None else None
-        result.curve_proof = report if report.curve_certified and self.certifier is not None else None
+        result.curve_proof = report if report.curve_certified else None  # only a certifier's check proves pieces
         stats.min_clearance = min(stats.min_clearance, report.min_clearance)  # the blends' (the path's: _certify_path)
         stats.parameterize_time += time.monotonic() - t_par
         result.path = path

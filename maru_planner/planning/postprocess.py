@@ -69,8 +69,7 @@ def drop_collinear(path: np.ndarray, tol: float = 1e-9, max_offset: float = COLL
         far = worst > max_offset
         if not far.any():
             break
-        ends = np.append(keep[1:], len(path))
-        extra = [a + int(np.argmax(off[a:b])) for a, b in zip(keep[:-1][far], ends[:-1][far], strict=True)]
+        extra = [a + int(np.argmax(off[a:b])) for a, b in zip(keep[:-1][far], keep[1:][far], strict=True)]
         keep = np.sort(np.concatenate([keep, extra]))
     return path[keep]
 

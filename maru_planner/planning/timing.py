@@ -45,7 +45,6 @@ import toppra.interpolator
 from maru_planner import errors
 from maru_planner.planning import postprocess
 from maru_planner.planning.config import TIME_PARAMETERIZATIONS
-from maru_planner.planning.space import full_configurations
 from maru_planner.planning.types import Trajectory
 
 METHODS = TIME_PARAMETERIZATIONS
@@ -126,23 +125,8 @@ class CertifiedCurve:
         return self.many([(states, chord_deviation)])[0]
 
     def many(self, curves: Sequence[Curve]) -> list[bool]:
-        if not curves:
-            return []
-        # All curves as one run of segments (a step between two curves is not proven), in full configurations
-        sizes = np.array([len(curve[0]) for curve in curves])
-        states = np.concatenate([curve[0] for curve in curves])
-        curve_of = np.repeat(np.arange(len(curves)), sizes)[:-1]
-        curve_of[np.cumsum(sizes)[:-1] - 1] = -1
-        nq = len(self.base)
-        deviation, bend = np.zeros((len(curve_of), nq)), np.zeros((len(curve_of), nq))
-        proven, columns = curve_of >= 0, np.asarray(self.indices)
-        deviation[np.ix_(proven, columns)] = np.abs(np.array([curve[1] for curve in curves]))[curve_of[proven]]
-        if any(len(curve) > 2 for curve in curves):
-            bend[np.ix_(proven, columns)] = np.concatenate(
-                [curve[2] if len(curve) > 2 else np.zeros((len(curve[0]) - 1, len(self.indices))) for curve in curves])
-        certified, clearance = self.certifier.prove_segments(
-            full_configurations(self.base, self.indices, states), deviation, bend, curve_of, len(curves), self.deadline,
-            margin=self.margin)  # fmt: skip
+        certified, clearance = self.certifier.prove_curves(list(curves), self.deadline, margin=self.margin,
+                                                           base=self.base, joints=self.indices)  # fmt: skip
         self.clearance.extend(clearance[certified].tolist())
         return certified.tolist()
 
@@ -267,7 +251,7 @@ class BlendedPath(toppra.interpolator.AbstractGeometricPath):
         blend_dd = (units[1:] - units[:-1]) / (2.0 * blend[:, None])
         order = np.empty(2 * inner + 1, dtype=int)  # position of each piece among [lines..., blends...]
         order[0::2], order[1::2] = np.arange(inner + 1), inner + 1 + np.arange(inner)
-        keep = np.concatenate([straight > 1e-12, np.ones(inner, dtype=bool)])[order]
+        keep = np.concatenate([straight > SHARED_END, np.ones(inner, dtype=bool)])[order]
         order = order[keep]
         lengths = np.concatenate([straight, 2.0 * blend])[order]
         self.starts = np.concatenate([[0.0], np.cumsum(lengths)])
@@ -485,6 +469,7 @@ def _certified_half_lengths(
     deviation = np.full(len(waypoints), float(max_deviation))
     pending = list(range(1, len(waypoints) - 1))
     units = _units(waypoints)
+    lengths = np.linalg.norm(np.diff(waypoints, axis=0), axis=1)
     proven_ends = np.full((len(waypoints) - 1, 2), np.inf)  # per segment: the blend sizes its proven piece left out
     for attempt in range(BLEND_RETRIES + 1):  # all pending corners in one check: they share the certification's work
         half[pending] = blend_half_lengths(waypoints, deviation, units)[pending]
@@ -493,11 +478,8 @@ def _certified_half_lengths(
             break
         curves = _corner_curves(waypoints, units, np.array(pending), half, check)
         report.certify_checks += sum(len(curve[0]) for curve in curves)
-        segments, ends = _pieces_to_prove(waypoints, half, pending, attempt) if with_pieces else ([], half)
-        rows = np.asarray(segments, dtype=int)
-        lines = np.stack([waypoints[rows] + ends[rows, None] * units[rows],
-                          waypoints[rows + 1] - ends[rows + 1, None] * units[rows]], axis=1)  # fmt: skip
-        pieces = [(line, np.zeros(waypoints.shape[1])) for line in lines]
+        segments, ends, pieces = _pieces_to_prove(waypoints, units, lengths, half, pending, attempt) if with_pieces \
+            else ([], half, [])
         free = check.many(curves + pieces)
         for i, proven in zip(segments, free[len(curves) :], strict=True):
             if proven:
@@ -511,18 +493,18 @@ def _certified_half_lengths(
     report.certify_time += time.monotonic() - t0
     _count_corners(waypoints, half, report)
     if with_pieces:
-        straight = np.linalg.norm(np.diff(waypoints, axis=0), axis=1) - half[:-1] - half[1:] > SHARED_END
+        straight = lengths - half[:-1] - half[1:] > SHARED_END
         report.curve_certified = bool(np.all(~straight | ((proven_ends[:, 0] <= half[:-1])
                                                          & (proven_ends[:, 1] <= half[1:]))))  # fmt: skip
     return half
 
 
-def _pieces_to_prove(waypoints: np.ndarray, half: np.ndarray, pending: list[int], attempt: int
-                     ) -> tuple[list[int], np.ndarray]:  # fmt: skip
-    """The segments whose straight pieces to prove with the blends of ``attempt``, and the blend size left out at
-    each waypoint: first every segment without the ends its blends (``half``) take; at the first retry, the segments
-    next to a retried corner, up to that corner (wherever its blend ends up, or if the motion stops there, the
-    straight part left lies on them); none after."""
+def _pieces_to_prove(waypoints: np.ndarray, units: np.ndarray, lengths: np.ndarray, half: np.ndarray,
+                     pending: list[int], attempt: int) -> tuple[list[int], np.ndarray, list[Curve]]:  # fmt: skip
+    """The segments whose straight pieces to prove with the blends of ``attempt``, the blend size left out at each
+    waypoint, and the pieces as curves: first every segment without the ends its blends (``half``) take; at the
+    first retry, the segments next to a retried corner, up to that corner (wherever its blend ends up, or if the
+    motion stops there, the straight part left lies on them); none after."""
     if attempt == 0:
         segments, ends = np.arange(len(waypoints) - 1), half
     elif attempt == 1:
@@ -530,9 +512,11 @@ def _pieces_to_prove(waypoints: np.ndarray, half: np.ndarray, pending: list[int]
         ends = half.copy()
         ends[pending] = 0.0
     else:
-        return [], half
-    length = np.linalg.norm(waypoints[segments + 1] - waypoints[segments], axis=1)
-    return segments[length - ends[segments] - ends[segments + 1] > SHARED_END].tolist(), ends
+        return [], half, []
+    segments = segments[lengths[segments] - ends[segments] - ends[segments + 1] > SHARED_END]
+    lines = np.stack([waypoints[segments] + ends[segments, None] * units[segments],
+                      waypoints[segments + 1] - ends[segments + 1, None] * units[segments]], axis=1)  # fmt: skip
+    return segments.tolist(), ends, [(line, np.zeros(waypoints.shape[1])) for line in lines]
 
 
 def _corner_curves(waypoints: np.ndarray, units: np.ndarray, corners: np.ndarray, half: np.ndarray, check: _Check
