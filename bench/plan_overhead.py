@@ -1,39 +1,55 @@
 """Fixed costs of ``MotionPlanner.plan``, stage by stage (issue 16: "trim the fixed costs").
 
-    .venv/bin/python bench/plan_overhead.py [--repeats 50] [--planners CompiledRRTConnect,RRTConnect] [--profile]
+    .venv/bin/python bench/plan_overhead.py [--repeats 50] [--mbm-per-set 10] [--planners CompiledRRTConnect,RRTConnect]
+        [--profile]
 
 Requests, on the Maru-1 sphere checker (``collision_model="spheres"``, resolution 0.05 rad, no simplification):
 - trivial: the 13-DOF start, goal 0.01 rad away on every joint, empty scene (one straight edge);
-- maru13: paper problem 13-DOF (desk and box), seed = repeat index.
+- maru13: paper problem 13-DOF (desk and box), seed = repeat index;
+
+and on the MotionBenchMaker Panda with ``bench/peers_arm.py``'s configuration of ours (0.05 rad, 0.01 m margin, no
+simplification, seed 0, each problem in its own scene):
+- mbm: the first ``--mbm-per-set`` problems of each of the 7 sets;
+- mbm, trapezoid: the same with ``time_parameterization="trapezoid"`` (stops at every waypoint, no blends to prove):
+  what a path without TOPP-RA's blended trajectory costs.
 
 Per stage, the median over the repeats of the facade's own timers (``PlanStats``): validation (start/goal
 collision checks), search (OMPL setup + the planner's solve), simplification, time parameterisation,
 certification (or the exact re-check; with the blends' proof when the whole curve was proven in that one pass, which
 runs inside time parameterisation), and "request + setup" = the rest of the call (request checks, group
-space, conversions, statistics). ``--profile`` prints cProfile's top functions of the trivial request.
+space, conversions, statistics). ``--profile`` prints cProfile's top functions of the trivial request. The
+table also gives the median number of states the search checked.
 
-Outputs bench/results/plan_overhead.{json,md}; the table on stdout.
+Outputs bench/results/plan_overhead.{json,md,png} (the picture: stacked stage medians); the table on stdout.
 """
 
 from __future__ import annotations
 
 import argparse
 import cProfile
-import json
+import dataclasses
 import pstats
 import sys
-import time
 from pathlib import Path
 
-import numpy as np
+import matplotlib
 
-from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig
-from maru_planner.planning.problems import PROBLEMS
-from maru_planner.robot import RobotModel
-from maru_planner.scene import Scene
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from _common import Progress, log, write_results  # noqa: E402
+from peers_arm import TARBALL, Ours, mbm_cases  # noqa: E402
+
+from maru_planner.moveit_scene import mbm_panda  # noqa: E402
+from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig  # noqa: E402
+from maru_planner.planning.problems import PROBLEMS  # noqa: E402
+from maru_planner.robot import RobotModel  # noqa: E402
+from maru_planner.scene import Scene  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
 STAGES = ("request + setup", "validation", "search", "simplification", "time parameterisation", "certification")
+MBM_BUDGET = 1.0  # s, as bench/peers_arm.py gives ours
+Job = tuple[Scene, MotionRequest]
 
 
 def requests(robot: RobotModel, planner_id: str, repeats: int) -> dict[str, tuple[Scene, list[MotionRequest]]]:
@@ -47,6 +63,13 @@ def requests(robot: RobotModel, planner_id: str, repeats: int) -> dict[str, tupl
                               time_budget=1.0, seed=seed, simplify=False) for seed in range(repeats)]  # fmt: skip
 
     return {"trivial": (Scene([]), batch(near)), "maru13": (Scene.from_yaml(problem.scene_path), batch(goal))}
+
+
+def mbm_jobs(ours: Ours, per_set: int) -> dict[str, list[Job]]:
+    """The MotionBenchMaker requests as ``bench/peers_arm.py`` makes ours (seed 0), and the same with trapezoids."""
+    jobs = [(case.scene, ours.request(case, MBM_BUDGET, 0)) for case in mbm_cases(ours.planner.robot, per_set)]
+    return {"mbm": jobs, "mbm, trapezoid": [(scene, dataclasses.replace(request, time_parameterization="trapezoid"))
+                                           for scene, request in jobs]}  # fmt: skip
 
 
 def stage_times(result) -> dict[str, float]:
@@ -64,14 +87,21 @@ def stage_times(result) -> dict[str, float]:
     return {"request + setup": stats.total_time - sum(measured.values()), **measured, "total": stats.total_time}
 
 
-def measure(planner: MotionPlanner, batch: list[MotionRequest]) -> dict:
-    planner.plan(batch[0])  # warm-up: numba loads its cached code, OMPL and toppra build their first objects
-    rows, solved = [], 0
-    for request in batch:
+def measure(planner: MotionPlanner, jobs: list[Job], progress: Progress, label: str) -> dict:
+    """Plan every job (setting its scene when it changes; outside the timed call, as a user's scene update is)."""
+    planner.set_scene(jobs[0][0])
+    planner.plan(jobs[0][1])  # warm-up: numba loads its cached code, OMPL and toppra build their first objects
+    rows, checked, solved, scene = [], [], 0, None
+    for job_scene, request in jobs:
+        if job_scene is not scene:
+            planner.set_scene(job_scene)
+            scene = job_scene
         result = planner.plan(request)
         solved += result.success
         rows.append(stage_times(result))
-    return {"n": len(batch), "solved": solved,
+        checked.append(result.stats.collision_checks)
+        progress.step(label)
+    return {"n": len(jobs), "solved": solved, "median_checked_states": float(np.median(checked)),
             "median_s": {k: float(np.median([r[k] for r in rows])) for k in (*STAGES, "total")}}  # fmt: skip
 
 
@@ -86,39 +116,65 @@ def profile(planner: MotionPlanner, request: MotionRequest, top: int = 30) -> No
 
 def markdown(results: dict) -> str:
     lines = ["# MotionPlanner.plan stage times (median ms per call)", "",
-             "| request | planner | solved | " + " | ".join(STAGES) + " | total |",
-             "|---|---|---|" + "---|" * (len(STAGES) + 1)]  # fmt: skip
+             "| request | planner | solved | " + " | ".join(STAGES) + " | total | states checked |",
+             "|---|---|---|" + "---|" * (len(STAGES) + 2)]  # fmt: skip
     for key, row in results["runs"].items():
         name, planner_id = key.split("/")
         cells = " | ".join(f"{1e3 * row['median_s'][s]:.2f}" for s in (*STAGES, "total"))
-        lines.append(f"| {name} | {planner_id} | {row['solved']}/{row['n']} | {cells} |")
+        lines.append(f"| {name} | {planner_id} | {row['solved']}/{row['n']} | {cells} | "
+                     f"{row['median_checked_states']:.0f} |")  # fmt: skip
+    lines += ["", "Each stage's median is taken on its own, so the stages need not add up to the total's median."]
     return "\n".join(lines) + "\n"
+
+
+def plot(results: dict, path: Path) -> None:
+    """Stacked horizontal bars: each request's stage medians (ms)."""
+    runs = results["runs"]
+    fig, ax = plt.subplots(figsize=(9, 0.45 * len(runs) + 1.6))
+    left = np.zeros(len(runs))
+    for stage in STAGES:
+        width = np.array([1e3 * row["median_s"][stage] for row in runs.values()])
+        ax.barh(list(runs), width, left=left, label=stage)
+        left += width
+    ax.invert_yaxis()
+    ax.set_xlabel("median ms per MotionPlanner.plan call")
+    ax.set_title("Where a plan's time goes, stage by stage")
+    ax.legend(fontsize=8, loc="lower right")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
 
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--repeats", type=int, default=50, help="requests per problem and planner")
+    ap.add_argument("--repeats", type=int, default=50, help="requests per Maru-1 problem and planner")
+    ap.add_argument("--mbm-per-set", type=int, default=10, help="MotionBenchMaker problems per set (0: none)")
     ap.add_argument("--planners", type=lambda text: text.split(","), default=["CompiledRRTConnect", "RRTConnect"])
     ap.add_argument("--profile", action="store_true", help="cProfile the trivial request (stderr)")
     ap.add_argument("--out", type=Path, default=RESULTS / "plan_overhead")
     args = ap.parse_args(argv)
+    if args.mbm_per_set > 0 and not TARBALL.is_file():
+        log(f"no MotionBenchMaker problems at {TARBALL}: the mbm rows are left out")
+        args.mbm_per_set = 0
     robot = RobotModel.maru1()
     planner = MotionPlanner.from_scene(robot, None, PlannerConfig(collision_model="spheres", resolution=0.05))
-    results: dict = {"config": {"repeats": args.repeats, "planners": args.planners}, "runs": {}}
+    panda = mbm_panda() if args.mbm_per_set > 0 else None
+    results: dict = {"config": {"repeats": args.repeats, "mbm_per_set": args.mbm_per_set, "planners": args.planners},
+                     "runs": {}}  # fmt: skip
+    n_mbm = 2 * 7 * args.mbm_per_set
+    progress = Progress(len(args.planners) * (2 * args.repeats + n_mbm))
     for planner_id in args.planners:
         for name, (scene, batch) in requests(robot, planner_id, args.repeats).items():
-            planner.set_scene(scene)
-            t0 = time.monotonic()
-            results["runs"][f"{name}/{planner_id}"] = measure(planner, batch)
-            print(f"{name}/{planner_id}: {time.monotonic() - t0:.1f} s", file=sys.stderr)
+            jobs = [(scene, request) for request in batch]
+            results["runs"][f"{name}/{planner_id}"] = measure(planner, jobs, progress, f"{name}/{planner_id}")
+        if panda is not None:
+            ours = Ours(panda, 0.05, 0.01, planner_id)
+            for name, jobs in mbm_jobs(ours, args.mbm_per_set).items():
+                results["runs"][f"{name}/{planner_id}"] = measure(ours.planner, jobs, progress, f"{name}/{planner_id}")
     if args.profile:
         planner.set_scene(Scene([]))
         profile(planner, requests(robot, args.planners[0], 1)["trivial"][1][0])
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.with_suffix(".json").write_text(json.dumps(results, indent=1))
-    table = markdown(results)
-    args.out.with_suffix(".md").write_text(table)
-    print(table)
+    write_results(args.out, results, markdown(results), lambda path: plot(results, path))
     return 0
 
 
