@@ -128,18 +128,19 @@ def markdown(results: dict) -> str:
 
 
 def plot(results: dict, path: Path) -> None:
-    """Stacked horizontal bars: each request's stage medians (ms)."""
+    """Stacked horizontal bars: each request's stage medians (ms), and issue 16's targets (Maru-1 1 ms, MBM 2 ms)."""
     runs = results["runs"]
-    fig, ax = plt.subplots(figsize=(9, 0.45 * len(runs) + 1.6))
+    fig, ax = plt.subplots(figsize=(10, 0.45 * len(runs) + 2.4))
     left = np.zeros(len(runs))
     for stage in STAGES:
         width = np.array([1e3 * row["median_s"][stage] for row in runs.values()])
         ax.barh(list(runs), width, left=left, label=stage)
         left += width
+    for target, label in ((1.0, "target: Maru-1 1 ms"), (2.0, "target: MotionBenchMaker 2 ms")):
+        ax.axvline(target, color="gray", ls="--" if target < 2 else ":", lw=1, label=label)
     ax.invert_yaxis()
-    ax.set_xlabel("median ms per MotionPlanner.plan call")
-    ax.set_title("Where a plan's time goes, stage by stage")
-    ax.legend(fontsize=8, loc="lower right")
+    ax.set_xlabel("median ms per MotionPlanner.plan call (stage medians, stacked)")
+    ax.legend(fontsize=8, ncol=3, loc="lower center", bbox_to_anchor=(0.5, 1.0), frameon=False)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
