@@ -6,6 +6,8 @@ import threading
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from ompl import geometric as og
 from planning_toys import BoxWorldChecker, ToyRobot, maze_checker
 
@@ -138,6 +140,28 @@ def test_time_parameterisation_respects_scaled_limits():
     fd = np.diff(traj.positions, axis=0) / np.diff(traj.times)[:, None]
     mid = 0.5 * (traj.velocities[1:] + traj.velocities[:-1])
     assert np.max(np.abs(fd - mid)) < 0.05
+
+
+@settings(max_examples=150, deadline=None, derandomize=True)
+@given(st.lists(st.lists(st.sampled_from([0.0, 1e-13, 1e-3, 0.3, -1.0, 2.5]), min_size=3, max_size=3), min_size=1,
+                max_size=8),
+       st.sampled_from([0.001, 0.05, 0.5]), st.sampled_from([2, 7, 10_000]))  # fmt: skip
+def test_trapezoids_keep_the_limits_stop_at_every_waypoint_and_cap_their_samples(steps, dt, max_points):
+    """Any path (repeated and near-repeated waypoints too): increasing times from 0, each waypoint passed exactly at
+    rest, the scaled limits kept, at most max_points samples plus one per segment."""
+    path = np.cumsum(np.array(steps, float), axis=0)
+    vmax, amax = np.array([1.0, 0.5, 2.0]), np.array([2.0, 1.0, 4.0])
+    traj = postprocess.time_parameterize(path, ["a", "b", "c"], vmax, amax, 0.5, 0.25, dt=dt, max_points=max_points)
+    assert traj.times[0] == 0.0 and np.all(np.diff(traj.times) > 0)
+    assert len(traj.times) <= max_points + len(path)
+    assert np.all(np.abs(traj.velocities) <= 0.5 * vmax + 1e-9)
+    assert np.all(np.abs(traj.accelerations) <= 0.25 * amax + 1e-9)
+    moving = np.abs(np.diff(path, axis=0)).max(axis=1, initial=0.0) > 1e-12
+    for k in np.flatnonzero(moving):  # the move to each waypoint ends on it exactly, at rest
+        at = np.flatnonzero((traj.positions == path[k + 1]).all(axis=1))
+        assert len(at) and np.allclose(traj.velocities[at[-1]], 0.0, atol=1e-12)
+    end = path[np.flatnonzero(moving)[-1] + 1] if moving.any() else path[0]  # a last step under 1e-12 rad: not taken
+    assert np.array_equal(traj.positions[-1], end)
 
 
 def test_smoothness_is_zero_for_a_straight_line_and_positive_for_a_corner():

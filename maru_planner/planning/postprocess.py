@@ -125,33 +125,33 @@ def _untried_pairs(live: list[int], failed: set[tuple[int, int]]) -> int:
     return sum((live[i], live[j]) not in failed for i in range(m) for j in range(i + 2, m))
 
 
-def _segment_profile(delta: np.ndarray, vmax: np.ndarray, amax: np.ndarray):
-    """Duration and (s_dot_max, s_ddot_max, t_accel) of a rest-to-rest move along ``delta``."""
-    moving = np.abs(delta) > 1e-12
-    if not moving.any():
-        return 0.0, 0.0, 0.0, 0.0
-    sd = float(np.min(vmax[moving] / np.abs(delta[moving])))
-    sdd = float(np.min(amax[moving] / np.abs(delta[moving])))
-    if sd * sd / sdd >= 1.0:  # triangular: the peak speed is never reached
-        ta = math.sqrt(1.0 / sdd)
-        return 2.0 * ta, sdd * ta, sdd, ta
-    ta = sd / sdd
-    return 1.0 / sd + ta, sd, sdd, ta
+def _segment_profiles(deltas: np.ndarray, vmax: np.ndarray, amax: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Per segment (row of ``deltas``), its rest-to-rest move: duration, peak path speed ``sd``, path acceleration
+    ``sdd`` and acceleration time ``ta`` (all 0 for a segment that does not move)."""
+    size = np.abs(deltas)
+    moving = size > 1e-12
+    with np.errstate(divide="ignore"):
+        sd = np.where(moving, vmax / size, np.inf).min(axis=1, initial=np.inf)
+        sdd = np.where(moving, amax / size, np.inf).min(axis=1, initial=np.inf)
+    still = ~moving.any(axis=1)
+    sd[still], sdd[still] = 1.0, 1.0  # placeholders, zeroed below
+    triangular = sd * sd / sdd >= 1.0  # the peak speed is never reached
+    ta = np.where(triangular, np.sqrt(1.0 / sdd), sd / sdd)
+    duration = np.where(triangular, 2.0 * ta, 1.0 / sd + ta)
+    sd = np.where(triangular, sdd * ta, sd)
+    for values in (duration, sd, sdd, ta):
+        values[still] = 0.0
+    return duration, sd, sdd, ta
 
 
-def _sample_segment(t: np.ndarray, duration: float, sd: float, sdd: float, ta: float):
-    """s(t), ṡ(t), s̈(t) of the trapezoid on [0, duration]."""
-    s = np.empty_like(t)
-    v = np.empty_like(t)
-    a = np.empty_like(t)
+def _trapezoid_states(t: np.ndarray, duration: np.ndarray, sd: np.ndarray, sdd: np.ndarray, ta: np.ndarray):
+    """s(t), ṡ(t), s̈(t) of each sample's trapezoid (``t`` from its segment's start; the others per sample)."""
     acc = t < ta
     dec = t > duration - ta
-    cruise = ~(acc | dec)
-    s[acc], v[acc], a[acc] = 0.5 * sdd * t[acc] ** 2, sdd * t[acc], sdd
-    tc = t[cruise]
-    s[cruise], v[cruise], a[cruise] = 0.5 * sdd * ta**2 + sd * (tc - ta), sd, 0.0
-    td = duration - t[dec]
-    s[dec], v[dec], a[dec] = 1.0 - 0.5 * sdd * td**2, sdd * td, -sdd
+    td = duration - t
+    s = np.where(dec, 1.0 - 0.5 * sdd * td**2, np.where(acc, 0.5 * sdd * t**2, 0.5 * sdd * ta**2 + sd * (t - ta)))
+    v = np.where(dec, sdd * td, np.where(acc, sdd * t, sd))
+    a = np.where(dec, -sdd, np.where(acc, sdd, 0.0))
     return np.clip(s, 0.0, 1.0), v, a
 
 
@@ -169,35 +169,32 @@ def time_parameterize(
 
     The sample period grows past ``dt`` when the duration would need more than ``max_points``
     points (every waypoint is still a sample, so a path with more segments than that gets one more
-    sample per segment).
+    sample per segment). All segments in one set of array operations.
     """
+    path = np.asarray(path, float)
     vmax = np.asarray(velocity_limits, float) * velocity_scaling
     amax = np.asarray(acceleration_limits, float) * acceleration_scaling
     deltas = np.diff(path, axis=0)
-    profiles = [_segment_profile(delta, vmax, amax) for delta in deltas]
-    total = sum(profile[0] for profile in profiles)
-    period = max(dt, total / max(1, max_points - 1 - len(profiles)))
-    times, pos, vel, acc = [np.zeros(1)], [path[:1]], [np.zeros((1, path.shape[1]))], [np.zeros((1, path.shape[1]))]
-    t0 = 0.0
-    for k, (delta, (duration, sd, sdd, ta)) in enumerate(zip(deltas, profiles, strict=True)):
-        if duration <= 0.0:
-            continue
-        n = max(1, math.ceil(duration / period))
-        t = np.linspace(0.0, duration, n + 1)[1:]
-        s, v, a = _sample_segment(t, duration, sd, sdd, ta)
-        times.append(t0 + t)
-        positions = path[k] + s[:, None] * delta
-        positions[-1] = path[k + 1]  # exactly, not up to rounding
-        pos.append(positions)
-        vel.append(v[:, None] * delta)
-        acc.append(a[:, None] * delta)
-        t0 += duration
-    velocities = np.vstack(vel)
+    duration, sd, sdd, ta = _segment_profiles(deltas, vmax, amax)
+    ends = np.cumsum(duration)  # in order, as the samples' times add up
+    starts = np.concatenate([[0.0], ends[:-1]])
+    period = max(dt, float(ends[-1] if len(ends) else 0.0) / max(1, max_points - 1 - len(deltas)))
+    moving = np.flatnonzero(duration > 0.0)
+    n = np.maximum(1, np.ceil(duration[moving] / period)).astype(int)
+    seg = np.repeat(moving, n)  # each sample's segment
+    step = np.arange(1, len(seg) + 1) - np.repeat(np.cumsum(n) - n, n)  # 1..n within its segment
+    t = step * (duration[seg] / n.repeat(n))  # np.linspace's arithmetic
+    last = np.cumsum(n) - 1
+    t[last] = duration[moving]
+    s, v, a = _trapezoid_states(t, duration[seg], sd[seg], sdd[seg], ta[seg])
+    positions = path[seg] + s[:, None] * deltas[seg]
+    positions[last] = path[moving + 1]  # exactly, not up to rounding
+    velocities = np.vstack([np.zeros((1, path.shape[1])), v[:, None] * deltas[seg]])
     velocities[-1] = 0.0
     return Trajectory(
         joint_names=list(joint_names),
-        times=np.concatenate(times),
-        positions=np.vstack(pos),
+        times=np.concatenate([[0.0], starts[seg] + t]),
+        positions=np.vstack([path[:1], positions]),
         velocities=velocities,
-        accelerations=np.vstack(acc),
+        accelerations=np.vstack([np.zeros((1, path.shape[1])), a[:, None] * deltas[seg]]),
     )
