@@ -1,6 +1,6 @@
 """Cost of one checked state in the search kernel, against the naive per-state exact check (issue 16's floor).
 
-    .venv/bin/python bench/kernel_costs.py [--mbm-per-set 3] [--seeds 5] [--repeats 20]
+    .venv/bin/python bench/kernel_costs.py [--mbm-per-set 3] [--seeds 5] [--repeats 20] [--quick]
 
 What ``CompiledRRTConnect`` pays per state it checks, on the states of real problems:
 - path: the certified paths ours plans (``bench/peers_arm.py``'s configuration of ours), every 0.05 rad (L-inf):
@@ -179,8 +179,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--mbm-per-set", type=int, default=3, help="MotionBenchMaker problems per set (0: none)")
     ap.add_argument("--seeds", type=int, default=5, help="seeds of the Maru-1 problem")
     ap.add_argument("--repeats", type=int, default=20, help="timed passes over each problem's states")
+    ap.add_argument("--quick", action="store_true", help="1 problem per MotionBenchMaker set, 1 seed, 3 repeats")
     ap.add_argument("--out", type=Path, default=RESULTS / "kernel_costs")
     args = ap.parse_args(argv)
+    if args.quick:
+        args.mbm_per_set, args.seeds, args.repeats = min(args.mbm_per_set, 1), 1, 3
     if args.mbm_per_set > 0 and not TARBALL.is_file():
         log(f"no MotionBenchMaker problems at {TARBALL}: the mbm rows are left out")
         args.mbm_per_set = 0

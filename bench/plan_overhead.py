@@ -1,7 +1,7 @@
 """Fixed costs of ``MotionPlanner.plan``, stage by stage (issue 16: "trim the fixed costs").
 
     .venv/bin/python bench/plan_overhead.py [--repeats 50] [--mbm-per-set 10] [--planners CompiledRRTConnect,RRTConnect]
-        [--profile]
+        [--profile] [--quick]
 
 Requests, on the Maru-1 sphere checker (``collision_model="spheres"``, resolution 0.05 rad, no simplification):
 - trivial: the 13-DOF start, goal 0.01 rad away on every joint, empty scene (one straight edge);
@@ -152,8 +152,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--mbm-per-set", type=int, default=10, help="MotionBenchMaker problems per set (0: none)")
     ap.add_argument("--planners", type=lambda text: text.split(","), default=["CompiledRRTConnect", "RRTConnect"])
     ap.add_argument("--profile", action="store_true", help="cProfile the trivial request (stderr)")
+    ap.add_argument("--quick", action="store_true", help="5 repeats, 1 MotionBenchMaker problem per set")
     ap.add_argument("--out", type=Path, default=RESULTS / "plan_overhead")
     args = ap.parse_args(argv)
+    if args.quick:
+        args.repeats, args.mbm_per_set = 5, min(args.mbm_per_set, 1)
     if args.mbm_per_set > 0 and not TARBALL.is_file():
         log(f"no MotionBenchMaker problems at {TARBALL}: the mbm rows are left out")
         args.mbm_per_set = 0
