@@ -157,6 +157,8 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     if args.quick:
         args.repeats, args.mbm_per_set = 5, min(args.mbm_per_set, 1)
+    if args.repeats < 1 or args.mbm_per_set < 0:
+        ap.error("--repeats must be >= 1 and --mbm-per-set >= 0")
     if args.mbm_per_set > 0 and not TARBALL.is_file():
         log(f"no MotionBenchMaker problems at {TARBALL}: the mbm rows are left out")
         args.mbm_per_set = 0
