@@ -38,6 +38,7 @@ from maru_planner.collision.batch_fk import joint_poses_nb  # noqa: E402
 from maru_planner.collision.sphere_kernels import unpack_robot, unpack_scene  # noqa: E402
 from maru_planner.moveit_scene import mbm_panda  # noqa: E402
 from maru_planner.planning.rrtc_kernel import classify, work_arrays  # noqa: E402
+from maru_planner.planning.space import edge_states, full_configurations  # noqa: E402
 from maru_planner.robot import RobotModel  # noqa: E402
 
 STEP = 0.05  # rad, L-inf: the motion resolution of ours in bench/peers_arm.py
@@ -72,7 +73,7 @@ def _sphere_costs(states: np.ndarray, kernel_inputs: tuple, repeats: int) -> tup
     """Seconds per state of forward kinematics alone and of the sphere model's whole answer; how many collide."""
     ri, rf, sf = kernel_inputs
     _forward_kinematics(states[:1], ri, rf, sf, 1)  # compiled or loaded before the clock starts
-    colliding = _classify_all(states[:1], ri, rf, sf, 1)
+    _classify_all(states[:1], ri, rf, sf, 1)
     t0 = time.perf_counter()
     _forward_kinematics(states, ri, rf, sf, repeats)
     t1 = time.perf_counter()
@@ -82,34 +83,34 @@ def _sphere_costs(states: np.ndarray, kernel_inputs: tuple, repeats: int) -> tup
     return (t1 - t0) / n, (t2 - t1) / n, int(colliding)
 
 
-def _exact_cost(case: Case, states: np.ndarray, repeats: int) -> float:
-    """Seconds per state of ``pinocchio.computeCollisions`` on the exact model (the naive OMPL peer's check)."""
-    model, geom = peer_geometry(case.robot, case.scene, None)
-    data, gdata = model.createData(), pin.GeometryData(geom)
-    t0 = time.perf_counter()
-    for _ in range(repeats):
-        for q in states:
-            pin.computeCollisions(model, data, geom, gdata, q, True)
-    return (time.perf_counter() - t0) / (repeats * len(states))
+class _ExactCheck:
+    """``pinocchio.computeCollisions`` on ``case``'s exact model (the naive OMPL peer's check), built once."""
+
+    def __init__(self, case: Case):
+        self.model, self.geom = peer_geometry(case.robot, case.scene, None)
+        self.data, self.gdata = self.model.createData(), pin.GeometryData(self.geom)
+
+    def seconds_per_state(self, states: np.ndarray, repeats: int) -> float:
+        t0 = time.perf_counter()
+        for _ in range(repeats):
+            for q in states:
+                pin.computeCollisions(self.model, self.data, self.geom, self.gdata, q, True)
+        return (time.perf_counter() - t0) / (repeats * len(states))
 
 
 def _states(case: Case, ours: Ours, seed: int, rng: np.random.Generator) -> dict[str, np.ndarray] | None:
-    """Full configurations along ours' path of ``case`` every STEP, and RANDOM_STATES uniform in the group's limits."""
+    """Full configurations along ours' path of ``case`` every STEP (the states an edge check makes), and
+    RANDOM_STATES uniform in the group's limits."""
     result = ours.planner.plan(ours.request(case, 1.0, seed))
     if not result.success:
         return None
     robot = case.robot
     indices = robot.joint_indices(result.joint_names)
     path = np.asarray(result.path, dtype=float)
-    counts = np.maximum(1, np.ceil(np.abs(np.diff(path, axis=0)).max(axis=1) / STEP)).astype(int)
-    rows = [path[:1]] + [a + np.outer(np.arange(1, n + 1) / n, b - a) for a, b, n in zip(path[:-1], path[1:], counts)]
+    along = np.concatenate([path[:1]] + [edge_states(a, b, STEP) for a, b in zip(path[:-1], path[1:])])
+    random = rng.uniform(robot.lower_limits[indices], robot.upper_limits[indices], (RANDOM_STATES, len(indices)))
     base = full_q(robot, case.start)
-    along = np.repeat(base[None], sum(len(r) for r in rows), axis=0)
-    along[:, indices] = np.concatenate(rows)
-    random = np.repeat(base[None], RANDOM_STATES, axis=0)
-    random[:, indices] = rng.uniform(robot.lower_limits[indices], robot.upper_limits[indices],
-                                     (RANDOM_STATES, len(indices)))  # fmt: skip
-    return {"path": along, "random": random}
+    return {"path": full_configurations(base, indices, along), "random": full_configurations(base, indices, random)}
 
 
 def measure(family: str, cases: list[tuple[Case, int]], ours: Ours, repeats: int, progress: Progress) -> dict:
@@ -124,12 +125,13 @@ def measure(family: str, cases: list[tuple[Case, int]], ours: Ours, repeats: int
         inputs = ours.planner.checker.kernel_inputs()
         if inputs[3][0] > 0:  # the kernel would scan its grid, not classify: not this measurement
             continue
+        exact = _ExactCheck(case)
         for kind, q in states.items():
-            fk, sphere, colliding = _sphere_costs(np.ascontiguousarray(q), inputs[:3], repeats)
+            fk, sphere, colliding = _sphere_costs(q, inputs[:3], repeats)
             row = per_kind.setdefault(kind, {"fk": [], "sphere": [], "exact": [], "colliding": [], "states": []})
             row["fk"].append(fk)
             row["sphere"].append(sphere)
-            row["exact"].append(_exact_cost(case, q, max(1, repeats // 10)))
+            row["exact"].append(exact.seconds_per_state(q, max(1, repeats // 10)))
             row["colliding"].append(colliding / len(q))
             row["states"].append(len(q))
     return {kind: {"problems": len(row["fk"]), "states": int(np.sum(row["states"])),

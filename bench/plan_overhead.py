@@ -37,8 +37,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from _common import Progress, log, write_results  # noqa: E402
-from peers_arm import TARBALL, Ours, mbm_cases  # noqa: E402
+from _common import RESULTS, Progress, log, write_results  # noqa: E402
+from peers_arm import TARBALL, Case, Ours, mbm_cases  # noqa: E402
 
 from maru_planner.moveit_scene import mbm_panda  # noqa: E402
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig  # noqa: E402
@@ -46,28 +46,29 @@ from maru_planner.planning.problems import PROBLEMS  # noqa: E402
 from maru_planner.robot import RobotModel  # noqa: E402
 from maru_planner.scene import Scene  # noqa: E402
 
-RESULTS = Path(__file__).resolve().parent / "results"
 STAGES = ("request + setup", "validation", "search", "simplification", "time parameterisation", "certification")
 MBM_BUDGET = 1.0  # s, as bench/peers_arm.py gives ours
 Job = tuple[Scene, MotionRequest]
 
 
-def requests(robot: RobotModel, planner_id: str, repeats: int) -> dict[str, tuple[Scene, list[MotionRequest]]]:
+def requests(robot: RobotModel, planner_id: str, repeats: int) -> dict[str, list[Job]]:
+    """The Maru-1 requests: trivial (empty scene) and maru13 (its desk and box), one per seed."""
     problem = PROBLEMS["maru13"]
     names = robot.groups[problem.group]
     start, goal = problem.start_dict(names), problem.goal_dict(names)
     near = {name: value + 0.01 for name, value in start.items()}
 
-    def batch(goal_joints: dict) -> list[MotionRequest]:
-        return [MotionRequest(problem.group, start=start, goal_joints=goal_joints, planner_id=planner_id,
-                              time_budget=1.0, seed=seed, simplify=False) for seed in range(repeats)]  # fmt: skip
+    def batch(scene: Scene, goal_joints: dict) -> list[Job]:
+        return [(scene, MotionRequest(problem.group, start=start, goal_joints=goal_joints, planner_id=planner_id,
+                                      time_budget=1.0, seed=seed, simplify=False))
+                for seed in range(repeats)]  # fmt: skip
 
-    return {"trivial": (Scene([]), batch(near)), "maru13": (Scene.from_yaml(problem.scene_path), batch(goal))}
+    return {"trivial": batch(Scene([]), near), "maru13": batch(Scene.from_yaml(problem.scene_path), goal)}
 
 
-def mbm_jobs(ours: Ours, per_set: int) -> dict[str, list[Job]]:
+def mbm_jobs(ours: Ours, cases: list[Case]) -> dict[str, list[Job]]:
     """The MotionBenchMaker requests as ``bench/peers_arm.py`` makes ours (seed 0), and the same with trapezoids."""
-    jobs = [(case.scene, ours.request(case, MBM_BUDGET, 0)) for case in mbm_cases(ours.planner.robot, per_set)]
+    jobs = [(case.scene, ours.request(case, MBM_BUDGET, 0)) for case in cases]
     return {"mbm": jobs, "mbm, trapezoid": [(scene, dataclasses.replace(request, time_parameterization="trapezoid"))
                                            for scene, request in jobs]}  # fmt: skip
 
@@ -89,9 +90,10 @@ def stage_times(result) -> dict[str, float]:
 
 def measure(planner: MotionPlanner, jobs: list[Job], progress: Progress, label: str) -> dict:
     """Plan every job (setting its scene when it changes; outside the timed call, as a user's scene update is)."""
-    planner.set_scene(jobs[0][0])
+    scene = jobs[0][0]
+    planner.set_scene(scene)
     planner.plan(jobs[0][1])  # warm-up: numba loads its cached code, OMPL and toppra build their first objects
-    rows, checked, solved, scene = [], [], 0, None
+    rows, checked, solved = [], [], 0
     for job_scene, request in jobs:
         if job_scene is not scene:
             planner.set_scene(job_scene)
@@ -165,21 +167,20 @@ def main(argv: list[str] | None = None) -> int:
     robot = RobotModel.maru1()
     planner = MotionPlanner.from_scene(robot, None, PlannerConfig(collision_model="spheres", resolution=0.05))
     panda = mbm_panda() if args.mbm_per_set > 0 else None
+    cases = mbm_cases(panda, args.mbm_per_set) if panda is not None else []
     results: dict = {"config": {"repeats": args.repeats, "mbm_per_set": args.mbm_per_set, "planners": args.planners},
                      "runs": {}}  # fmt: skip
-    n_mbm = 2 * 7 * args.mbm_per_set
-    progress = Progress(len(args.planners) * (2 * args.repeats + n_mbm))
+    progress = Progress(len(args.planners) * 2 * (args.repeats + len(cases)))
     for planner_id in args.planners:
-        for name, (scene, batch) in requests(robot, planner_id, args.repeats).items():
-            jobs = [(scene, request) for request in batch]
+        for name, jobs in requests(robot, planner_id, args.repeats).items():
             results["runs"][f"{name}/{planner_id}"] = measure(planner, jobs, progress, f"{name}/{planner_id}")
-        if panda is not None:
+        if cases:
             ours = Ours(panda, 0.05, 0.01, planner_id)
-            for name, jobs in mbm_jobs(ours, args.mbm_per_set).items():
+            for name, jobs in mbm_jobs(ours, cases).items():
                 results["runs"][f"{name}/{planner_id}"] = measure(ours.planner, jobs, progress, f"{name}/{planner_id}")
     if args.profile:
         planner.set_scene(Scene([]))
-        profile(planner, requests(robot, args.planners[0], 1)["trivial"][1][0])
+        profile(planner, requests(robot, args.planners[0], 1)["trivial"][0][1])
     write_results(args.out, results, markdown(results), lambda path: plot(results, path))
     return 0
 

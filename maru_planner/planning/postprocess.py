@@ -181,10 +181,10 @@ def time_parameterize(
     period = max(dt, float(ends[-1] if len(ends) else 0.0) / max(1, max_points - 1 - len(deltas)))
     moving = np.flatnonzero(duration > 0.0)
     n = np.maximum(1, np.ceil(duration[moving] / period)).astype(int)
+    last = np.cumsum(n) - 1  # each segment's last sample
     seg = np.repeat(moving, n)  # each sample's segment
-    step = np.arange(1, len(seg) + 1) - np.repeat(np.cumsum(n) - n, n)  # 1..n within its segment
+    step = np.arange(len(seg)) - np.repeat(last - n, n)  # 1..n within its segment
     t = step * (duration[seg] / n.repeat(n))  # np.linspace's arithmetic
-    last = np.cumsum(n) - 1
     t[last] = duration[moving]
     s, v, a = _trapezoid_states(t, duration[seg], sd[seg], sdd[seg], ta[seg])
     positions = path[seg] + s[:, None] * deltas[seg]
