@@ -1,6 +1,6 @@
-# Two commands: `make demo` runs the main job, `make test` runs the suite.
-# Both set up .venv on first use (idempotent): pip install -r requirements.txt,
-# the package itself (editable) and our ROS 2 interfaces built from the wheels.
+# Two commands: `make demo` runs the main job, `make test` runs the suite (every lane; `make test-fast`: the unit
+# lane only). Both set up .venv on first use (idempotent): pip install -r requirements.txt, the package itself
+# (editable, `pip install -e .`: its manifest is at the repository root) and our ROS 2 interfaces built from the wheels.
 SHELL := /bin/bash
 PYTHON ?= python3
 VENV := $(CURDIR)/.venv
@@ -11,18 +11,16 @@ STAMP := $(VENV)/.requirements.stamp
 unexport _ROS_WHEELS_BOOTSTRAP_COMPLETE
 export PIP_DISABLE_PIP_VERSION_CHECK := 1
 
-.PHONY: setup demo test lint bench bench-deps interfaces clean
+.PHONY: setup demo test test-fast lint bench bench-deps interfaces clean
 
 KERNELS := $(VENV)/.kernels.stamp
 setup: $(STAMP) interfaces $(KERNELS)
 
-PACKAGE_DIR := packaging/maru_planner
-
-$(STAMP): requirements.txt $(PACKAGE_DIR)/setup.py $(PACKAGE_DIR)/package.xml
+$(STAMP): requirements.txt setup.py package.xml
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	@echo "[setup] installing pinned requirements into .venv (first run takes a few minutes)"
 	@$(PY) -m pip install --progress-bar off -q -r requirements.txt
-	@$(PY) -m pip install --progress-bar off -q --no-deps -e $(PACKAGE_DIR)
+	@$(PY) -m pip install --progress-bar off -q --no-deps -e .
 	@touch $(STAMP)
 
 # numba compiles the planning kernels at first use and caches them on disk: done here once per source change, so
@@ -41,6 +39,10 @@ demo: setup
 test: setup
 	@$(PY) -m pytest -p no:cacheprovider test
 
+# the unit lane: no rclpy node, colcon build or hostile-input sweep (test/ros/, test/hostile/, test/architecture/)
+test-fast: setup
+	@$(PY) -m pytest -p no:cacheprovider test/unit
+
 lint: setup
 	@$(VENV)/bin/ruff check maru_planner bench test scripts launch
 	@$(VENV)/bin/mypy
@@ -52,5 +54,7 @@ bench-deps: setup
 bench: bench-deps
 	@for b in bench/*.py; do echo "== $$b"; $(PY) $$b || exit 1; done
 
+# what the build (setup, colcon, pip's egg-info), the demo and pytest write into the tree; .venv stays
 clean:
-	rm -rf build demo_output .pytest_cache
+	rm -rf build install log demo_output .pytest_cache
+	find . -path ./.venv -prune -o -name '*.egg-info' -type d -prune -exec rm -rf {} +

@@ -7,12 +7,12 @@ What ``CompiledRRTConnect`` pays per state it checks, on the states of real prob
   free states, many near obstacles;
 - random: uniform in the group's joint limits (the others at the start): what the sampler proposes, many colliding.
 
-Per state, the median over the problems of: forward kinematics alone (``batch_fk.joint_poses_nb``), the sphere
-model's whole answer (``rrtc_kernel.classify``: kinematics, robot spheres against the scene and the self pairs, as
-the search kernel runs it; pure sphere model, first touch ends it), and the baseline: ``pinocchio.computeCollisions``
-on the exact meshes, the naive OMPL peer's check. Problems: the first ``--mbm-per-set`` MotionBenchMaker Panda
-problems of each set and ``--seeds`` seeds of the Maru-1 13-DOF problem. VAMP's published figure (whole problems,
-35 µs median, C++ SIMD) is quoted, not measured.
+Per state, the median over the problems of: forward kinematics alone (``kernels.fk.joint_poses_nb``), the sphere
+model's whole answer (``kernels.state_validity.classify``: kinematics, robot spheres against the scene and the self
+pairs, as the search kernel runs it; pure sphere model, first touch ends it), and the baseline:
+``pinocchio.computeCollisions`` on the exact meshes, the naive OMPL peer's check. Problems: the first
+``--mbm-per-set`` MotionBenchMaker Panda problems of each set and ``--seeds`` seeds of the Maru-1 13-DOF problem.
+VAMP's published figure (whole problems, 35 µs median, C++ SIMD) is quoted, not measured.
 
 Outputs bench/results/kernel_costs.{json,md,png}; progress on stderr.
 """
@@ -34,10 +34,10 @@ from _common import RESULTS, Progress, log, write_results  # noqa: E402
 from numba import njit  # noqa: E402
 from peers_arm import TARBALL, VAMP_PUBLISHED, Case, Ours, full_q, maru13_case, mbm_cases, peer_geometry  # noqa: E402
 
-from maru_planner.collision.batch_fk import joint_poses_nb  # noqa: E402
-from maru_planner.collision.sphere_kernels import unpack_robot, unpack_scene  # noqa: E402
-from maru_planner.moveit_scene import mbm_panda  # noqa: E402
-from maru_planner.planning.rrtc_kernel import classify, work_arrays  # noqa: E402
+from maru_planner.collision.kernels.fk import joint_poses_nb  # noqa: E402
+from maru_planner.collision.kernels.packing import unpack_robot, unpack_scene  # noqa: E402
+from maru_planner.collision.kernels.state_validity import classify, work_arrays  # noqa: E402
+from maru_planner.robot.robots.panda import mbm_panda  # noqa: E402
 from maru_planner.planning.space import edge_states, full_configurations  # noqa: E402
 from maru_planner.robot import RobotModel  # noqa: E402
 

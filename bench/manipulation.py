@@ -43,10 +43,10 @@ from maru_planner.planning import MotionPlanner, MotionRequest  # noqa: E402
 from maru_planner.planning.cartesian import CartesianRequest  # noqa: E402
 from maru_planner.planning.constraints import OrientationConstraint, PathConstraints  # noqa: E402
 from maru_planner.planning.dual_arm import DUAL_CARRY, relative_pose_error  # noqa: E402
-from maru_planner.planning.postprocess import path_length  # noqa: E402
 from maru_planner.planning.types import MotionResult, PlanStats, PlanStatus  # noqa: E402
 from maru_planner.robot import RobotModel  # noqa: E402
 from maru_planner.scene import Scene  # noqa: E402
+from maru_planner.trajectory import path_length  # noqa: E402
 
 TOLERANCE = 0.1  # rad: the constrained suite's orientation tolerance about x and y
 MIN_SINGULAR_VALUE = 0.05

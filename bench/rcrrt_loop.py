@@ -5,7 +5,7 @@
 Every request goes through ``MotionPlanner.plan`` with ``PlannerConfig()`` (sphere checker, 0.02 rad, 1 cm margin,
 certification, toppra) and planner "RCRRT", one seed per request, the same seeds for each loop:
 
-- compiled: what a user gets (the loop in :mod:`maru_planner.planning.rcrrt_kernel`);
+- compiled: what a user gets (the loop in :mod:`maru_planner.planning.planners.kernels.rcrrt`);
 - Python loop: the same planner with its compiled loop switched off (the baseline: the loop before issue 16);
 - Python loop, exact checker: ``collision_model="exact"`` (what ``bench/paper000.py`` measures by default).
 
@@ -30,7 +30,7 @@ from _common import RESULTS, Progress, log, write_results  # noqa: E402
 
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig  # noqa: E402
 from maru_planner.planning.problems import PROBLEMS  # noqa: E402
-from maru_planner.planning.rc_rrt import RCRRT  # noqa: E402
+from maru_planner.planning.planners.rc_rrt import RCRRT  # noqa: E402
 from maru_planner.robot import RobotModel  # noqa: E402
 from maru_planner.scene import Scene  # noqa: E402
 

@@ -5,13 +5,13 @@
 Paths: the Maru-1 13-DOF problem (``--seeds`` seeds) and ``--per-set`` MotionBenchMaker Panda problems per set,
 planned as ``bench/peers_arm.py``'s "ours-compiled" (``CompiledRRTConnect`` on the sphere checker, 0.05 rad, no
 simplification). Each path's corners are blended at the planner's ``blend_deviation`` (all blends as if certified)
-and cut into sections at near reversals, as :func:`maru_planner.planning.timing.parameterize` does; then for every
+and cut into sections at near reversals, as :func:`maru_planner.trajectory.parameterize` does; then for every
 section, on the same grid and the same joint velocity and acceleration constraints:
 
 - toppra's driver: ``toppra.algorithm.TOPPRA(..., solver_wrapper="seidel").compute_parameterization(0, 0)``
-  (the baseline: what ``timing`` called before);
-- ours: ``timing._rest_to_rest_speeds``, the same programs solved in closed form in one numba call
-  (:mod:`maru_planner.planning.topp_kernel`; what ``timing`` calls now).
+  (the baseline: what the toppra timing called before);
+- ours: ``trajectory.toppra.rest_to_rest_speeds``, the same programs solved in closed form in one numba call
+  (:mod:`maru_planner.trajectory.toppra_kernel`; what the toppra timing calls now).
 
 Both times include evaluating the path on the grid (toppra's: building its LP wrapper); the constraint objects are
 built once per path, outside the time. Each is the best of ``--repeats`` alternating runs. Reported per family:
@@ -36,12 +36,16 @@ sys.path.insert(0, str(ROOT))
 
 from _common import RESULTS, Progress, log, write_results  # noqa: E402
 
-from maru_planner.moveit_scene import PANDA_FINGERS_OPEN, iter_mbm_problems, mbm_panda  # noqa: E402
 from maru_planner.paths import benchmarks_dir  # noqa: E402
-from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig, timing  # noqa: E402
+from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig  # noqa: E402
 from maru_planner.planning.problems import PROBLEMS  # noqa: E402
 from maru_planner.robot import RobotModel  # noqa: E402
+from maru_planner.robot.robots.panda import PANDA_FINGERS_OPEN, mbm_panda  # noqa: E402
 from maru_planner.scene import Scene  # noqa: E402
+from maru_planner.scene.motion_bench_maker import iter_mbm_problems  # noqa: E402
+from maru_planner.trajectory import Limits  # noqa: E402
+from maru_planner.trajectory.blends import BlendedPath, blend_half_lengths, distinct, sections  # noqa: E402
+from maru_planner.trajectory.toppra import rest_to_rest_speeds  # noqa: E402
 
 DRIVERS = ("toppra's driver", "ours")
 TARBALL = benchmarks_dir() / "motionbenchmaker" / "vamp_panda_problems.tar.bz2"
@@ -79,13 +83,13 @@ def planned_paths(robot: RobotModel, cases: list[tuple[Scene, MotionRequest]], p
     return out
 
 
-def sections(path: np.ndarray) -> list[timing.BlendedPath]:
-    waypoints = timing._distinct(np.asarray(path, float))
-    half = timing.blend_half_lengths(waypoints, np.full(len(waypoints), CONFIG.blend_deviation))
-    return [timing.BlendedPath(w, h) for w, h in timing._sections(waypoints, half)]
+def blended_sections(path: np.ndarray) -> list[BlendedPath]:
+    waypoints = distinct(np.asarray(path, float))
+    half = blend_half_lengths(waypoints, np.full(len(waypoints), CONFIG.blend_deviation))
+    return [BlendedPath(w, h) for w, h in sections(waypoints, half)]
 
 
-def toppras_driver(constraints: list, path: timing.BlendedPath, grid: np.ndarray) -> np.ndarray | None:
+def toppras_driver(constraints: list, path: BlendedPath, grid: np.ndarray) -> np.ndarray | None:
     instance = toppra.algorithm.TOPPRA(constraints, path, gridpoints=grid, solver_wrapper="seidel")
     return instance.compute_parameterization(0.0, 0.0)[1]
 
@@ -95,12 +99,12 @@ def measure(item: dict, repeats: int) -> dict:
     and the largest speed difference relative to the profile's peak."""
     constraints = [toppra.constraint.JointVelocityConstraint(item["velocity"]),
                    toppra.constraint.JointAccelerationConstraint(item["acceleration"])]  # fmt: skip
-    limits = timing.Limits.scaled(item["velocity"], item["acceleration"])
+    limits = Limits.scaled(item["velocity"], item["acceleration"])
     drivers = (lambda path, grid: toppras_driver(constraints, path, grid),
-               lambda path, grid: timing._rest_to_rest_speeds(path, grid, limits))  # fmt: skip
+               lambda path, grid: rest_to_rest_speeds(path, grid, limits))  # fmt: skip
     seconds = dict.fromkeys(DRIVERS, 0.0)
     points, difference = 0, 0.0
-    for path in sections(item["path"]):
+    for path in blended_sections(item["path"]):
         grid, _ = path.grid()
         points += len(grid)
         best = dict.fromkeys(DRIVERS, np.inf)

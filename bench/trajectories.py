@@ -5,8 +5,8 @@
 Paths: the paper's 13-DOF and 6-DOF Maru-1 problems (``--seeds`` seeds each) and ``--mbm``
 MotionBenchMaker Panda problems (spread over the sets), planned by ``MotionPlanner`` (RRTConnect,
 sphere checker, verified on the exact model, shortcut). Every path is then time-parameterised by
-each method of :mod:`maru_planner.planning.timing` with the same limits, blend deviation and
-blend certification as the planner uses (``PathCertifier`` through ``timing.certified_curve``: continuous,
+each method of :mod:`maru_planner.trajectory` with the same limits, blend deviation and
+blend certification as the planner uses (``PathCertifier`` through ``trajectory.certified_curve``: continuous,
 the safety margin, toppra's blends as the parabolas they are, Ruckig's curves as chords ``resolution``
 apart plus their error).
 
@@ -42,12 +42,22 @@ sys.path.insert(0, str(ROOT))
 
 from maru_planner.collision import CollisionChecker  # noqa: E402
 from maru_planner.collision.certify import PathCertifier  # noqa: E402
-from maru_planner.moveit_scene import PANDA_FINGERS_OPEN, iter_mbm_problems, mbm_panda  # noqa: E402
 from maru_planner.paths import benchmarks_dir  # noqa: E402
-from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig, timing  # noqa: E402
+from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig  # noqa: E402
 from maru_planner.planning.problems import PROBLEMS  # noqa: E402
 from maru_planner.robot import RobotModel  # noqa: E402
+from maru_planner.robot.robots.panda import PANDA_FINGERS_OPEN, mbm_panda  # noqa: E402
 from maru_planner.scene import Scene  # noqa: E402
+from maru_planner.scene.motion_bench_maker import iter_mbm_problems  # noqa: E402
+from maru_planner.trajectory import (  # noqa: E402
+    CERTIFY_STEP,
+    METHODS,
+    CertifiedCurve,
+    Limits,
+    certified_curve,
+    deviation_from_path,
+    parameterize,
+)
 
 RESULTS = ROOT / "bench" / "results"
 TARBALL = benchmarks_dir() / "motionbenchmaker" / "vamp_panda_problems.tar.bz2"
@@ -63,7 +73,7 @@ def log(msg: str) -> None:
 class Case:
     """One planned path (rows: group configurations) and what checks it.
 
-    Blends are certified as ``MotionPlanner`` does (``timing.certified_curve`` on ``PathCertifier``, the
+    Blends are certified as ``MotionPlanner`` does (``trajectory.certified_curve`` on ``PathCertifier``, the
     planner's safety margin); the finished trajectory is re-checked on the exact checker alone, finely.
     """
 
@@ -71,7 +81,7 @@ class Case:
     name: str
     joint_names: list[str]
     path: np.ndarray
-    limits: timing.Limits
+    limits: Limits
     exact_checker: CollisionChecker
     certifier: PathCertifier
     base: np.ndarray  # full configuration: joints outside the group
@@ -85,7 +95,7 @@ class Case:
 
     @property
     def curve_free(self) -> _TimedCheck:
-        check = timing.certified_curve(self.certifier, self.base, self.indices, None, self.certifier.safety_margin)
+        check = certified_curve(self.certifier, self.base, self.indices, None, self.certifier.safety_margin)
         return _TimedCheck(check, self)
 
 
@@ -93,7 +103,7 @@ class Case:
 class _TimedCheck:
     """The planner's blend check (one certification pass per call, bent blends), its CPU time added to the case's."""
 
-    check: timing.CertifiedCurve
+    check: CertifiedCurve
     case: Case
     takes_bends = True
 
@@ -123,7 +133,7 @@ def planned_case(
     indices = [robot.joint_names.index(n) for n in result.joint_names]
     base = np.asarray(robot.neutral(), float).copy()
     base[robot.joint_indices(list(request.start))] = list(request.start.values())
-    limits = timing.Limits.scaled(robot.velocity_limits[indices], robot.acceleration_limits[indices])
+    limits = Limits.scaled(robot.velocity_limits[indices], robot.acceleration_limits[indices])
     return Case(family, name, list(result.joint_names), np.asarray(result.path), limits, certifier.checker,
                 certifier, base, indices)  # fmt: skip
 
@@ -171,12 +181,12 @@ def mbm_cases(count: int) -> list[Case]:
 
 
 # ---------------------------------------------------------------------------------------- metrics --
-def cruise_bound(path: np.ndarray, limits: timing.Limits) -> float:
+def cruise_bound(path: np.ndarray, limits: Limits) -> float:
     """Every segment at its fastest synchronised speed, no acceleration: a lower bound on any duration."""
     return float(sum(np.max(np.abs(d) / limits.velocity) for d in np.diff(path, axis=0)))
 
 
-def limit_ratios(traj, limits: timing.Limits) -> tuple[float, float, float]:
+def limit_ratios(traj, limits: Limits) -> tuple[float, float, float]:
     """Largest |v|/v_max, |a|/a_max, |jerk|/j_max from the samples alone (values and finite differences)."""
     dt = np.diff(traj.times)[:, None]
     v = max(np.max(np.abs(traj.velocities) / limits.velocity),
@@ -189,14 +199,14 @@ def limit_ratios(traj, limits: timing.Limits) -> tuple[float, float, float]:
 
 def measure(case: Case, method: str, config: PlannerConfig) -> tuple[dict, object]:
     t0, cpu0, check0 = time.perf_counter(), time.thread_time(), case.check_cpu
-    traj, report = timing.parameterize(case.path, case.joint_names, case.limits, method, curve_free=case.curve_free,
+    traj, report = parameterize(case.path, case.joint_names, case.limits, method, curve_free=case.curve_free,
                                        max_deviation=config.blend_deviation, dt=config.trajectory_dt,
                                        max_points=config.max_trajectory_points,
                                        certify_step=config.resolution)  # fmt: skip
     elapsed = time.perf_counter() - t0
     cpu = time.thread_time() - cpu0 - (case.check_cpu - check0)
-    fine_dt = timing.CERTIFY_STEP / float(np.max(case.limits.velocity))
-    fine, _ = timing.parameterize(case.path, case.joint_names, case.limits, method, curve_free=case.curve_free,
+    fine_dt = CERTIFY_STEP / float(np.max(case.limits.velocity))
+    fine, _ = parameterize(case.path, case.joint_names, case.limits, method, curve_free=case.curve_free,
                                   max_deviation=config.blend_deviation, dt=fine_dt, max_points=10**7,
                                   certify_step=config.resolution)  # fmt: skip
     v, a, j = limit_ratios(fine, case.limits)
@@ -215,7 +225,7 @@ def measure(case: Case, method: str, config: PlannerConfig) -> tuple[dict, objec
         "velocity_ratio": v,
         "acceleration_ratio": a,
         "jerk_ratio": j if report.method == "ruckig" else None,  # the others jump in acceleration
-        "max_deviation": float(timing.deviation_from_path(fine.positions, case.path).max()),
+        "max_deviation": float(deviation_from_path(fine.positions, case.path).max()),
         "blends": report.blends,
         "stops": report.stops,
         "fallbacks": len(report.fallbacks),
@@ -230,7 +240,7 @@ def summarize(rows: list[dict]) -> dict:
     for r in rows:
         by_case.setdefault(r["case"], {})[r["requested"]] = r
     out = {}
-    for method in timing.METHODS:
+    for method in METHODS:
         mine = [r for r in rows if r["requested"] == method]
         if not mine:
             continue
@@ -345,7 +355,7 @@ def main() -> None:
     for family, cases in families.items():
         for case in cases:
             fines = {}
-            for method in timing.METHODS:
+            for method in METHODS:
                 row, fines[method] = measure(case, method, config)
                 row.update(family=family, requested=method)
                 rows.append(row)

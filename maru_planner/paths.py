@@ -7,8 +7,8 @@ import sys
 from pathlib import Path
 
 PACKAGE_NAME = "maru_planner"
-# The colcon/ament package of the repository (package.xml, setup.py; its sources are symlinks to the root).
-PACKAGE_MANIFEST_DIR = Path("packaging") / PACKAGE_NAME
+# Where the colcon/ament manifest (package.xml, setup.py) sits, relative to the repository root: the root itself.
+PACKAGE_MANIFEST_DIR = Path(".")
 
 
 def share_dir() -> Path:

@@ -21,7 +21,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from maru_planner.moveit_scene import PANDA_FINGERS_OPEN, iter_mbm_problems
+from maru_planner.robot.robots.panda import PANDA_FINGERS_OPEN
+from maru_planner.scene.motion_bench_maker import iter_mbm_problems
 from maru_planner.paths import benchmarks_dir, config_path
 from maru_planner.planning.problems import PROBLEMS
 from maru_planner.robot import RobotModel, load_example_robot

@@ -15,8 +15,8 @@ from ompl import geometric as og
 from ompl import util as ou
 
 from maru_planner.params import ParamSpec
-from maru_planner.planning.planner_params import PlannerParams
-from maru_planner.planning.registry import ArmPlannerSpec, register
+from maru_planner.planning.planners.planner_params import PlannerParams
+from maru_planner.planning.planners.registry import ArmPlannerSpec, register
 
 TOY_PARAMS = {
     "step": ParamSpec("step", 0.05, "RRT extension length (rad)", lower=1e-3, upper=1.0),

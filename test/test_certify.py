@@ -24,7 +24,7 @@ from maru_planner.collision.certify import (
 from maru_planner.collision.checker import convex_hull
 from maru_planner.collision.spheres import densify, verify_path
 from maru_planner.collision.support_bounds import NO_SHAPE, robot_shape_records
-from maru_planner.moveit_scene import mbm_panda
+from maru_planner.robot.robots.panda import mbm_panda
 from maru_planner.paths import config_path
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig, PlanStatus
 from maru_planner.planning.config import COLLISION_MODELS
@@ -368,7 +368,7 @@ def test_motion_planner_searches_with_the_margin(arm, model):
     result = planner.plan(near)
     assert result.success and result.stats.certified, result.message
     clearance = planner.certifier.clearance(np.array([0.0, 0.0]))
-    assert planner._search_checker.padding == pytest.approx(0.75 * clearance)
+    assert planner.context.last_search_checker.padding == pytest.approx(0.75 * clearance)
     assert result.stats.min_clearance > 0.5 * clearance
 
 
@@ -438,12 +438,12 @@ def test_a_large_scene_certifies_like_its_full_pair_table(monkeypatch):
 def test_only_a_small_scene_proves_the_straight_pieces_with_the_blends():
     """In a large scene each pass keeps the obstacles near any of its curves: given the straight pieces too, every
     blend would be checked against their obstacles, so the blends go alone and the path is certified after."""
-    from maru_planner.planning import timing
+    from maru_planner.trajectory import certified_curve
 
     robot, clutter = panda_shelf_and_clutter()
     _, shelf = panda_shelf()
     base = robot.neutral()
-    large, small = (timing.certified_curve(PathCertifier(robot, checker), base, [0, 1], None, 0.005)
+    large, small = (certified_curve(PathCertifier(robot, checker), base, [0, 1], None, 0.005)
                     for checker in (clutter, shelf))  # fmt: skip
     assert large.certifier.near_path_only and not large.takes_pieces
     assert not small.certifier.near_path_only and small.takes_pieces

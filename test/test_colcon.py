@@ -13,6 +13,8 @@ import pytest
 REPO_ROOT = Path(__file__).resolve().parent.parent
 COLCON = Path(sys.executable).parent / "colcon"
 PACKAGES = {"maru_planner": "ros.ament_python", "maru_planner_interfaces": "ros.ament_cmake"}
+# README's command, from the repository root: the root is maru_planner's package, where a crawl stops
+BASE_PATHS = [".", "interfaces"]
 INTERFACES_BUILD = REPO_ROOT / "build" / "maru_planner_interfaces"  # scripts/build_interfaces.sh's build tree
 INTERFACES_LOCK = "/tmp/maru_interfaces.lock"
 
@@ -21,7 +23,8 @@ pytestmark = pytest.mark.ros
 
 def test_colcon_finds_both_packages(tmp_path):
     listed = subprocess.run(
-        [str(COLCON), "--log-base", str(tmp_path), "list", "--base-paths", str(REPO_ROOT)],
+        [str(COLCON), "--log-base", str(tmp_path), "list", "--base-paths", *BASE_PATHS],
+        cwd=REPO_ROOT,
         capture_output=True,
         text=True,
         check=True,
@@ -67,7 +70,13 @@ def _install_env(install: Path) -> dict[str, str]:
 
 def test_install_space_holds_the_package_its_data_and_the_interfaces(install_space):
     share = install_space / "maru_planner" / "share" / "maru_planner"
-    for relative in ("package.xml", "launch/planning.launch.py", "config/planner.yaml", "urdf/maru1_upper_body.urdf"):
+    data_files = (
+        "launch/planning.launch.py",
+        "config/planner.yaml",
+        "config/rviz/planning.rviz",
+        "config/maps/house_250.yaml",
+    )
+    for relative in ("package.xml", "urdf/maru1_upper_body.urdf", *data_files):
         assert (share / relative).is_file(), relative
     probe = subprocess.run(
         [

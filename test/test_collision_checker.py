@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from maru_planner.collision import CollisionChecker
-from maru_planner.collision.checker import bisection_order
+from maru_planner.collision.kernels.bisection import bisection_order
 from maru_planner.paths import config_path
 from maru_planner.robot import RobotModel
-from maru_planner.robot.profiles import example_robot_data_dir
+from maru_planner.robot.robot_profile import example_robot_data_dir
 from maru_planner.scene import Obstacle, Scene
 
 DOWN = [-1.57, 1.57, 1.57, 0, -1.57, -1.57]

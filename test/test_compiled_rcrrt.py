@@ -10,9 +10,10 @@ from ompl import base as ob
 from ompl import geometric as og
 
 from maru_planner.collision.spheres import SphereCollisionChecker
-from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig, PlanStatus, rc_rrt
+from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig, PlanStatus
+from maru_planner.planning.planners import rc_rrt
 from maru_planner.planning.problems import PROBLEMS
-from maru_planner.planning.rc_rrt import RCRRT
+from maru_planner.planning.planners.rc_rrt import RCRRT
 from maru_planner.planning.space import EdgeChecker, GroupSpace
 from maru_planner.scene import Obstacle, Scene
 

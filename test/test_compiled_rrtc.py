@@ -10,16 +10,20 @@ from ompl import base as ob
 from ompl import geometric as og
 
 from maru_planner.collision import CollisionChecker
-from maru_planner.collision.checker import bisection_order
-from maru_planner.collision.sphere_kernels import scan_nb, unpack_robot, unpack_scene
+from maru_planner.collision.kernels import edge_validity, state_validity
+from maru_planner.collision.kernels.bisection import bisection_order
+from maru_planner.collision.kernels.edge_validity import bisection_order_into, edge_buffers
+from maru_planner.collision.kernels.packing import unpack_robot, unpack_scene
+from maru_planner.collision.kernels.primitives import AMBIGUOUS, COLLIDING, VALID
+from maru_planner.collision.kernels.sphere_scan import scan_nb
 from maru_planner.collision.spheres import SphereCollisionChecker, verify_path
-from maru_planner.moveit_scene import mbm_panda
 from maru_planner.planning import PLANNERS, MotionPlanner, MotionRequest, PlannerConfig, PlanStatus
-from maru_planner.planning import rrtc_kernel as kernel
-from maru_planner.planning.compiled_rrtc import CompiledRRTConnect
+from maru_planner.planning.planners.compiled_rrtc import CompiledRRTConnect
+from maru_planner.planning.planners.kernels import rrtc as kernel
 from maru_planner.planning.problems import PROBLEMS
 from maru_planner.planning.space import EdgeChecker, GroupSpace
 from maru_planner.robot import RobotModel
+from maru_planner.robot.robots.panda import mbm_panda
 from maru_planner.scene import Obstacle, Scene
 
 ARM = [f"panda_joint{i}" for i in range(1, 8)]
@@ -46,12 +50,12 @@ def arm_space(robot) -> GroupSpace:
 def kernel_edge(checker, gs: GroupSpace, qa, qb, exact_near: float = np.inf) -> tuple[int, np.ndarray]:
     """(VALID | COLLIDING | AMBIGUOUS, the ambiguous states) of the kernel's check of qa → qb, ambiguous states
     within ``exact_near`` of qa left to the exact model."""
-    st = np.zeros(len(kernel.STATE_FIELDS), dtype=np.int64)
+    st = edge_validity.new_counters()
     amb_states = np.empty((int(np.ceil(np.abs(qb - qa).max() / RESOLUTION)) + 1, gs.dim))
-    status = kernel.check_edge(np.asarray(qa, float), np.asarray(qb, float), RESOLUTION, gs.base,
-                               gs.indices.astype(np.int64), *checker.kernel_inputs(), checker.confirm,
-                               amb_states, st, np.array([qa, qa], dtype=float), exact_near)  # fmt: skip
-    return int(status), amb_states[: st[kernel.N_AMB]]
+    status = edge_validity.check_edge(np.asarray(qa, float), np.asarray(qb, float), RESOLUTION, gs.base,
+                                      gs.indices.astype(np.int64), *checker.kernel_inputs(), checker.confirm,
+                                      amb_states, st, np.array([qa, qa], dtype=float), exact_near)  # fmt: skip
+    return int(status), amb_states[: st[edge_validity.N_AMB]]
 
 
 def random_edges(gs: GroupSpace, n: int, seed: int) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -75,8 +79,8 @@ def test_edge_answers_equal_the_pure_sphere_model(panda, grid):
     edges = EdgeChecker(gs, checker, RESOLUTION)
     answers = [kernel_edge(checker, gs, qa, qb)[0] for qa, qb in random_edges(gs, 120, 2)]
     expected = [edges.edge_valid(qa, qb) for qa, qb in random_edges(gs, 120, 2)]
-    assert [a == kernel.VALID for a in answers] == expected
-    assert kernel.AMBIGUOUS not in answers and 20 < sum(expected) < 100  # both kinds of edge were tested
+    assert [a == VALID for a in answers] == expected
+    assert AMBIGUOUS not in answers and 20 < sum(expected) < 100  # both kinds of edge were tested
 
 
 def test_single_states_equal_the_sphere_checker(panda):
@@ -84,7 +88,7 @@ def test_single_states_equal_the_sphere_checker(panda):
     gs = arm_space(panda)
     rng = np.random.default_rng(4)
     states = rng.uniform(gs.lower, gs.upper, (150, gs.dim))
-    short = [kernel_edge(checker, gs, q - 0.5 * RESOLUTION, q)[0] == kernel.VALID for q in states]  # one state: q
+    short = [kernel_edge(checker, gs, q - 0.5 * RESOLUTION, q)[0] == VALID for q in states]  # one state: q
     assert short == checker.are_valid(gs.full(states)).tolist()
 
 
@@ -96,12 +100,12 @@ def test_with_confirmation_ambiguous_edges_get_the_checkers_exact_answer(panda):
     for qa, qb in random_edges(gs, 160, 6):
         status, ambiguous = kernel_edge(checker, gs, qa, qb)
         seen.add(status)
-        if status == kernel.AMBIGUOUS:
+        if status == AMBIGUOUS:
             valid = checker.first_invalid(gs.full(ambiguous)) < 0
         else:
-            valid = status == kernel.VALID
+            valid = status == VALID
         assert valid == edges.edge_valid(qa, qb)
-    assert seen == {kernel.VALID, kernel.COLLIDING, kernel.AMBIGUOUS}
+    assert seen == {VALID, COLLIDING, AMBIGUOUS}
 
 
 def test_away_from_the_start_and_goal_ambiguous_states_collide(panda):
@@ -111,7 +115,7 @@ def test_away_from_the_start_and_goal_ambiguous_states_collide(panda):
     gs = arm_space(panda)
     for qa, qb in random_edges(gs, 80, 6):
         status = kernel_edge(confirmed, gs, qa, qb, exact_near=0.0)[0]
-        assert status != kernel.AMBIGUOUS and (status == kernel.VALID) == pure.edge_valid(qa, qb)
+        assert status != AMBIGUOUS and (status == VALID) == pure.edge_valid(qa, qb)
 
 
 @pytest.mark.parametrize("robot_name", ["panda", "maru1"])
@@ -123,17 +127,17 @@ def test_classify_answers_each_state_like_the_sphere_checker(robot_name, request
     ri, rf, sf, grid_i, grid_f, amb, mark, _shapes = checker.kernel_inputs()
     assert not checker.uses_grid  # classify is the grid-less path
     robot_arrays, scene_arrays = unpack_robot(ri, rf), unpack_scene(sf)
-    work = kernel.work_arrays(robot_arrays, scene_arrays)
+    work = state_validity.work_arrays(robot_arrays, scene_arrays)
     rng = np.random.default_rng(10)
     states = np.array([robot.random_configuration(rng) for _ in range(2000)])
     expected = [scan_nb(q[None], 0, ri, rf, sf, grid_i, grid_f, amb, mark, True)[1] for q in states]
-    answers = [kernel.classify(q, robot_arrays, scene_arrays, work, False) for q in states]
+    answers = [state_validity.classify(q, robot_arrays, scene_arrays, work, False) for q in states]
     assert answers == expected
-    first_touch = [kernel.classify(q, robot_arrays, scene_arrays, work, True) for q in states]
-    assert first_touch == [kernel.VALID if e == kernel.VALID else kernel.COLLIDING for e in expected]
+    first_touch = [state_validity.classify(q, robot_arrays, scene_arrays, work, True) for q in states]
+    assert first_touch == [VALID if e == VALID else COLLIDING for e in expected]
     numpy_path = SphereCollisionChecker(robot, panda_clutter(9), confirm=False, use_numba=False)  # slow: fewer states
-    assert numpy_path.are_valid(states[:150]).tolist() == [e == kernel.VALID for e in expected[:150]]
-    assert set(expected) == {kernel.VALID, kernel.COLLIDING, kernel.AMBIGUOUS}
+    assert numpy_path.are_valid(states[:150]).tolist() == [e == VALID for e in expected[:150]]
+    assert set(expected) == {VALID, COLLIDING, AMBIGUOUS}
 
 
 @pytest.mark.parametrize(("robot_name", "grid"), [("maru1", False), ("maru1", True), ("panda", False)])
@@ -146,16 +150,16 @@ def test_near_contacts_on_primitives_are_cleared_in_the_kernel_only_where_coal_c
     assert checker.uses_grid == grid
     ri, rf, sf, grid_i, grid_f, amb, mark, shapes = checker.kernel_inputs()
     robot_arrays, scene_arrays = unpack_robot(ri, rf), unpack_scene(sf)
-    work = kernel.work_arrays(robot_arrays, scene_arrays)
+    work = state_validity.work_arrays(robot_arrays, scene_arrays)
     rng = np.random.default_rng(4)
     in_doubt = valid = cleared = 0
     for _ in range(6000):
         q = robot.random_configuration(rng)
         _row, status, n_pairs = scan_nb(q[None], 0, ri, rf, sf, grid_i, grid_f, amb, mark, True)
-        if status != kernel.AMBIGUOUS:
+        if status != AMBIGUOUS:
             continue
-        listed = kernel.pairs_clear_on_shapes(q, amb[:n_pairs].copy(), robot_arrays, scene_arrays, work, shapes)
-        clear = listed if grid else kernel.clear_on_shapes(q, robot_arrays, scene_arrays, work, shapes)
+        listed = state_validity.pairs_clear_on_shapes(q, amb[:n_pairs].copy(), robot_arrays, scene_arrays, work, shapes)
+        clear = listed if grid else state_validity.clear_on_shapes(q, robot_arrays, scene_arrays, work, shapes)
         assert clear == listed
         exact_valid = checker.first_invalid(q[None]) < 0
         assert exact_valid or not clear
@@ -169,7 +173,9 @@ def test_near_contacts_on_primitives_are_cleared_in_the_kernel_only_where_coal_c
 
 def test_edge_states_are_checked_in_bisection_order():
     for n in (1, 2, 3, 7, 64, 100):
-        assert np.array_equal(kernel.bisection_order(n), bisection_order(n, include_first=False))
+        order, queue = edge_buffers(n)
+        bisection_order_into(n, order, queue, False)  # compiled, as the edge kernels order their states
+        assert np.array_equal(order, bisection_order(n, include_first=False))
 
 
 # --- through the facade ----------------------------------------------------------------------
@@ -254,18 +260,18 @@ def test_on_the_exact_checker_it_falls_back_to_ompl_rrtconnect(maru1, panda):
 def test_a_failed_extension_gives_its_node_a_dynamic_domain_that_shrinks_and_grows():
     tune = kernel.tuning(True, 4.0, 0.1, 3.5)
     radius = np.full((2, 4), np.inf)
-    kernel._update_domain(radius, 1, 0, True, tune)
+    kernel.update_domain(radius, 1, 0, True, tune)
     assert radius[1, 0] == np.inf  # a success leaves an unbounded domain unbounded
-    kernel._update_domain(radius, 1, 0, False, tune)
+    kernel.update_domain(radius, 1, 0, False, tune)
     assert radius[1, 0] == 4.0
-    kernel._update_domain(radius, 1, 0, False, tune)
+    kernel.update_domain(radius, 1, 0, False, tune)
     assert radius[1, 0] == pytest.approx(3.6)
-    kernel._update_domain(radius, 1, 0, False, tune)
+    kernel.update_domain(radius, 1, 0, False, tune)
     assert radius[1, 0] == 3.5  # not below the smallest domain
-    kernel._update_domain(radius, 1, 0, True, tune)
+    kernel.update_domain(radius, 1, 0, True, tune)
     assert radius[1, 0] == pytest.approx(3.85)
     off = np.full((2, 4), np.inf)
-    kernel._update_domain(off, 1, 0, False, kernel.tuning(True, 0.0, 0.1, 3.5))
+    kernel.update_domain(off, 1, 0, False, kernel.tuning(True, 0.0, 0.1, 3.5))
     assert off[1, 0] == np.inf
 
 
@@ -277,14 +283,14 @@ def test_extensions_sample_inside_the_dynamic_domain_of_their_nearest_node():
     rng, q_new = kernel.seed_rng(5), np.empty(3)
     proposed = []
     for _ in range(20_000):
-        if kernel._propose(nodes, radius, st, q_new, lower, upper, rng, 1.0):
+        if kernel.propose(nodes, radius, st, q_new, lower, upper, rng, 1.0):
             proposed.append(np.linalg.norm(q_new))
             assert st[kernel.REACHED]
     # a sample lands in the ball of 0.3 rad with probability 4.6e-4: the others are rejected, without an edge
     assert 0 < len(proposed) < 30 and max(proposed) <= 0.3
     radius[0, 0] = np.inf
     far = [np.linalg.norm(q_new) for _ in range(50)
-           if kernel._propose(nodes, radius, st, q_new, lower, upper, rng, 1.0)]  # fmt: skip
+           if kernel.propose(nodes, radius, st, q_new, lower, upper, rng, 1.0)]  # fmt: skip
     assert len(far) == 50 and max(far) == pytest.approx(1.0)  # unbounded: every sample, steered to full range
 
 
@@ -292,11 +298,11 @@ def test_balancing_extends_the_smaller_tree_until_the_other_has_less_than_twice_
     st = np.zeros(len(kernel.STATE_FIELDS), dtype=np.int64)
     st[kernel.N0], st[kernel.N1] = 2, 1
     balanced, alternating = kernel.tuning(True, 0.0, 0.0, 0.0), kernel.tuning(False, 0.0, 0.0, 0.0)
-    assert kernel._next_extension(st, 1, balanced) == 1  # the goal's tree stays stuck at one node: it goes on
-    assert kernel._next_extension(st, 1, alternating) == 0
-    assert kernel._next_extension(st, 0, balanced) == 1
+    assert kernel.next_extension(st, 1, balanced) == 1  # the goal's tree stays stuck at one node: it goes on
+    assert kernel.next_extension(st, 1, alternating) == 0
+    assert kernel.next_extension(st, 0, balanced) == 1
     st[kernel.N0] = 1
-    assert kernel._next_extension(st, 1, balanced) == 0
+    assert kernel.next_extension(st, 1, balanced) == 0
 
 
 @needs_mbm

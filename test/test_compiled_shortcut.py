@@ -15,6 +15,7 @@ from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig, p
 from maru_planner.planning.compiled_shortcut import shortcut
 from maru_planner.planning.space import EdgeChecker, GroupSpace
 from maru_planner.scene import Scene
+from maru_planner.trajectory import drop_collinear, path_length
 
 ARM = [f"panda_joint{i}" for i in range(1, 8)]
 RESOLUTION = 0.05
@@ -49,7 +50,7 @@ def test_kept_edges_are_free_and_no_pair_of_waypoints_can_be_joined(setting):
         assert np.array_equal(short[0], raw[0]) and np.array_equal(short[-1], raw[-1])
         assert all(any(np.array_equal(q, r) for r in raw) for q in short)  # waypoints of the raw path
         assert all(edges.edge_valid(a, b) for a, b in zip(short[:-1], short[1:], strict=True))
-        assert postprocess.path_length(short) <= postprocess.path_length(raw) + 1e-12
+        assert path_length(short) <= path_length(raw) + 1e-12
         for i, j in itertools.combinations(range(len(short)), 2):
             if j - i >= 2:
                 assert not edges.edge_valid(short[i], short[j])
@@ -113,16 +114,16 @@ def test_free_space_leaves_one_edge(panda):
 def test_the_kernel_warm_up_runs_it(maru1, monkeypatch):
     """The warm-up's plans may leave nothing to shortcut (a straight motion): it shortcuts a bent path itself."""
     from maru_planner.planning import compiled_shortcut
-    from maru_planner.planning import warm_up as warm
+    from maru_planner.runtime import warm_up as warm
 
     calls = []
     real = compiled_shortcut.shortcut
     monkeypatch.setattr(compiled_shortcut, "shortcut", lambda *args: calls.append(args[0]) or real(*args))
-    planner = MotionPlanner.from_scene(maru1, warm._boxes(maru1, 1), PlannerConfig(collision_model="spheres"))
+    planner = MotionPlanner.from_scene(maru1, warm.boxes(maru1, 1), PlannerConfig(collision_model="spheres"))
     group = max(maru1.groups, key=lambda name: len(maru1.groups[name]))
-    warm._shortcut_bent_path(planner, group, *warm._free_pair(planner, group))
-    assert [len(postprocess.drop_collinear(path)) for path in calls] == [3]
+    warm.shortcut_bent_path(planner, group, *warm.free_pair(planner, group))
+    assert [len(drop_collinear(path)) for path in calls] == [3]
     assert compiled_shortcut.run.signatures  # compiled (or loaded from numba's cache)
     exact = MotionPlanner.from_scene(maru1, None, PlannerConfig(collision_model="exact"))
-    warm._shortcut_bent_path(exact, group, *warm._free_pair(exact, group))
+    warm.shortcut_bent_path(exact, group, *warm.free_pair(exact, group))
     assert len(calls) == 1  # nothing to compile on the exact checker

@@ -89,7 +89,7 @@ def test_loopback_environment_is_set_for_this_run():
 
 
 def test_package_xml_is_ament_python_format3():
-    root = ET.parse(REPO_ROOT / "packaging" / "maru_planner" / "package.xml").getroot()
+    root = ET.parse(REPO_ROOT / "package.xml").getroot()
     assert root.get("format") == "3"
     assert root.findtext("name") == "maru_planner"
     assert root.find("export/build_type").text == "ament_python"
@@ -98,7 +98,7 @@ def test_package_xml_is_ament_python_format3():
 
 
 def test_console_scripts_point_at_existing_modules():
-    setup_py = (REPO_ROOT / "packaging" / "maru_planner" / "setup.py").read_text()
+    setup_py = (REPO_ROOT / "setup.py").read_text()
     modules = [line.split("=")[1].split(":")[0].strip() for line in setup_py.splitlines() if " = maru_planner" in line]
     assert modules, "no console_scripts found in setup.py"
     missing = [m for m in modules if importlib.util.find_spec(m) is None]

@@ -45,11 +45,11 @@ def _code(name: str) -> int:
 
 
 def test_query_planners_lists_the_registry_and_cbirrt(client):
-    from maru_planner.planning.registry import PLANNERS
+    from maru_planner.planning.planners.registry import PLANNERS
 
     response = client.query_planners()
     by_id = {p.id: p for p in response.planners}
-    assert list(by_id) == [*PLANNERS, "CBiRRT"]
+    assert list(by_id) == list(PLANNERS)
     assert response.default_planner in by_id
     assert "path_constraints" in by_id["CBiRRT"].capabilities
     for planner_id, spec in PLANNERS.items():

@@ -8,14 +8,10 @@ from conftest import MBM_TARBALL, needs_mbm
 
 from maru_planner.collision import CollisionChecker
 from maru_planner.errors import InvalidRequest, InvalidScene
-from maru_planner.moveit_scene import (
-    PANDA_FINGERS_OPEN,
-    iter_mbm_problems,
-    quaternion_matrix,
-    request_from_moveit,
-    scene_from_moveit,
-)
 from maru_planner.robot import load_example_robot
+from maru_planner.robot.robots.panda import PANDA_FINGERS_OPEN
+from maru_planner.scene.motion_bench_maker import iter_mbm_problems
+from maru_planner.scene.moveit import quaternion_matrix, request_from_moveit, scene_from_moveit
 
 SCENE = """
 robot_state:

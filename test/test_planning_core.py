@@ -20,10 +20,10 @@ from maru_planner.planning import (
     PlanStatus,
     planner_ids,
     postprocess,
-    timing,
 )
 from maru_planner.planning.space import BatchedMotionValidator, EdgeChecker, GroupSpace, edge_states
 from maru_planner.planning.types import status_of_error
+from maru_planner.trajectory import deviation_from_path, drop_collinear, path_length, smoothness, time_parameterize
 
 START = {"j0": 0.05, "j1": 0.05}
 GOAL = {"j0": 0.95, "j1": 0.95}
@@ -94,7 +94,7 @@ def test_shortcut_stays_collision_free_and_shortens():
     short, checks = postprocess.shortcut(zigzag, edges.edge_valid, np.random.default_rng(0), 1e18, 50)
     assert checks > 0
     assert edges.path_valid(short)
-    assert postprocess.path_length(short) < postprocess.path_length(zigzag)
+    assert path_length(short) < path_length(zigzag)
     assert np.allclose(short[0], zigzag[0]) and np.allclose(short[-1], zigzag[-1])
 
 
@@ -102,33 +102,33 @@ def test_drop_collinear_keeps_the_corners_and_the_ends_only():
     """Waypoints on the line between their neighbours go (also several in a row: the test is against the last
     waypoint kept, not the dropped one); corners and both ends stay."""
     corner = np.array([[0, 0], [1, 0], [1.5, 0], [2, 0], [2, 1], [2, 1.5], [2, 3]], float)
-    assert postprocess.drop_collinear(corner).tolist() == [[0, 0], [2, 0], [2, 3]]
+    assert drop_collinear(corner).tolist() == [[0, 0], [2, 0], [2, 3]]
     back = np.array([[0, 0], [2, 0], [1, 0]], float)  # turning back on the line is a corner
-    assert postprocess.drop_collinear(back).tolist() == back.tolist()
+    assert drop_collinear(back).tolist() == back.tolist()
     rng = np.random.default_rng(0)
     for _ in range(200):  # a random polyline with points inserted on its segments: the polyline comes back
         path = rng.normal(size=(int(rng.integers(2, 8)), 5))
         dense = [path[0]]
         for a, b in zip(path[:-1], path[1:], strict=True):
             dense += [a + t * (b - a) for t in np.sort(rng.choice([0.25, 0.5, 0.9], size=2, replace=False))] + [b]
-        assert np.allclose(postprocess.drop_collinear(np.array(dense)), path)
+        assert np.allclose(drop_collinear(np.array(dense)), path)
 
 
 def test_drop_collinear_keeps_a_waypoint_farther_than_max_offset_from_its_line():
     """The angle test lets a waypoint 1e-6 rad off a 2 rad line go; ``max_offset`` (1e-9 rad by default) keeps it,
     and not the waypoints on the lines to it; small turns do not add up to a dropped bend."""
     path = np.array([[0, 0], [0.5, 0.5e-6], [1, 1e-6], [1.5, 0.5e-6], [2, 0]], float)
-    assert postprocess.drop_collinear(path).tolist() == path[[0, 2, 4]].tolist()
-    assert len(postprocess.drop_collinear(path, max_offset=1e-5)) == 2
+    assert drop_collinear(path).tolist() == path[[0, 2, 4]].tolist()
+    assert len(drop_collinear(path, max_offset=1e-5)) == 2
     arc = np.stack([np.cos(np.linspace(0, 0.04, 1001)), np.sin(np.linspace(0, 0.04, 1001))], axis=1)  # 4e-5 a step
-    kept = postprocess.drop_collinear(arc)
-    assert 2 < len(kept) < len(arc) and timing.deviation_from_path(arc, kept).max() <= 1e-9
+    kept = drop_collinear(arc)
+    assert 2 < len(kept) < len(arc) and deviation_from_path(arc, kept).max() <= 1e-9
 
 
 def test_time_parameterisation_respects_scaled_limits():
     path = np.array([[0.0, 0.0], [1.0, 0.2], [1.0, 1.2], [1.01, 1.2]])
     vmax, amax = np.array([1.0, 0.5]), np.array([2.0, 1.0])
-    traj = postprocess.time_parameterize(path, ["a", "b"], vmax, amax, 0.5, 0.25, dt=0.01)
+    traj = time_parameterize(path, ["a", "b"], vmax, amax, 0.5, 0.25, dt=0.01)
     assert np.all(np.diff(traj.times) > 0)
     assert np.allclose(traj.positions[0], path[0]) and np.allclose(traj.positions[-1], path[-1])
     assert np.all(np.abs(traj.velocities) <= vmax * 0.5 + 1e-9)
@@ -151,7 +151,7 @@ def test_trapezoids_keep_the_limits_stop_at_every_waypoint_and_cap_their_samples
     rest, the scaled limits kept, at most max_points samples plus one per segment."""
     path = np.cumsum(np.array(steps, float), axis=0)
     vmax, amax = np.array([1.0, 0.5, 2.0]), np.array([2.0, 1.0, 4.0])
-    traj = postprocess.time_parameterize(path, ["a", "b", "c"], vmax, amax, 0.5, 0.25, dt=dt, max_points=max_points)
+    traj = time_parameterize(path, ["a", "b", "c"], vmax, amax, 0.5, 0.25, dt=dt, max_points=max_points)
     assert traj.times[0] == 0.0 and np.all(np.diff(traj.times) > 0)
     assert len(traj.times) <= max_points + len(path)
     assert np.all(np.abs(traj.velocities) <= 0.5 * vmax + 1e-9)
@@ -165,12 +165,12 @@ def test_trapezoids_keep_the_limits_stop_at_every_waypoint_and_cap_their_samples
 
 
 def test_smoothness_is_zero_for_a_straight_line_and_positive_for_a_corner():
-    assert postprocess.smoothness(np.array([[0, 0], [1, 0], [2, 0]], float)) == 0.0
-    assert postprocess.smoothness(np.array([[0, 0], [1, 0], [1, 1]], float)) == pytest.approx(np.pi**2 / 4)  # (2·½π/2)²
+    assert smoothness(np.array([[0, 0], [1, 0], [2, 0]], float)) == 0.0
+    assert smoothness(np.array([[0, 0], [1, 0], [1, 1]], float)) == pytest.approx(np.pi**2 / 4)  # (2·½π/2)²
     # as OMPL's: triples with a repeated waypoint count nothing (here the corner at it), the 90° turn over segments
     # of 1 and 2 after it counts (2·½π/3)²
     square = np.array([[0, 0], [1, 0], [1, 0], [1, 1], [-1, 1]], float)
-    assert postprocess.smoothness(square) == pytest.approx(np.pi**2 / 9)
+    assert smoothness(square) == pytest.approx(np.pi**2 / 9)
 
 
 # --- facade: every planner -------------------------------------------------------------------
@@ -331,7 +331,7 @@ def test_concurrent_plans_from_several_threads():
 
 
 def test_roadmap_query_phase_runs_on_the_graph_and_grows_only_when_needed():
-    from maru_planner.planning.roadmap import Roadmap
+    from maru_planner.planning.planners.roadmap import Roadmap
 
     gs = GroupSpace(["x", "y"], [0, 1], [0, 0], [1, 1], [0.5, 0.5])
     roadmap = Roadmap(gs, maze_checker(), 0.01)

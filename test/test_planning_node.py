@@ -120,7 +120,7 @@ def _shuffled(values: dict[str, float]) -> dict[str, float]:
 
 
 def _full_q(robot, values: dict[str, float]) -> np.ndarray:
-    from maru_planner.ros.planning_conversions import configuration
+    from maru_planner.runtime import configuration
 
     return configuration(robot, values)
 

@@ -10,8 +10,9 @@ from geometry_msgs.msg import Pose, PoseStamped
 from shape_msgs.msg import SolidPrimitive
 
 from maru_planner import errors
-from maru_planner.planning.types import PlanStats, PlanStatus, Trajectory
+from maru_planner.planning.types import PlanStats, PlanStatus
 from maru_planner.ros import planning_conversions as conv
+from maru_planner.trajectory import Trajectory
 from maru_planner_interfaces.msg import PlanningError
 
 

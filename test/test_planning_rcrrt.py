@@ -10,7 +10,7 @@ from planning_toys import BoxWorldChecker, closed_maze_checker, maze_checker
 
 from maru_planner.errors import InvalidRequest
 from maru_planner.planning.motion_planner import seeded_ompl
-from maru_planner.planning.rc_rrt import RCRRT
+from maru_planner.planning.planners.rc_rrt import RCRRT
 from maru_planner.planning.space import BatchedMotionValidator, EdgeChecker, GroupSpace, make_validity_fn
 
 START = [0.05, 0.05]

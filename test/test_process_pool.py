@@ -20,7 +20,7 @@ from maru_planner import errors
 from maru_planner.monitor import PlanMonitor
 from maru_planner.paths import config_path, urdf_path
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig, PlanStatus
-from maru_planner.planning.process_pool import ProcessPool, RobotSource
+from maru_planner.runtime import ProcessPool, RobotSource
 from maru_planner.scene import Scene
 
 GROUP = "upper_body"

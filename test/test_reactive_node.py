@@ -552,7 +552,7 @@ def test_launch_file_starts_the_node_with_the_shipped_config(monkeypatch):
     assert file == "<params_file>"
     assert overrides == {"strip": "<strip>", "use_sim_time": "<use_sim_time>", "autostart": "<autostart>"}
     assert defaults["use_sim_time"] == "false"
-    setup_py = REPO_ROOT / "packaging" / "maru_planner" / "setup.py"
+    setup_py = REPO_ROOT / "setup.py"
     assert "reactive_node = maru_planner.ros.reactive_node:main" in setup_py.read_text()
     remapped = dict(node.kwargs["remappings"])
     assert set(remapped) == {"scan", "odom", "plan", "goal_pose", "cmd_vel"}

@@ -8,7 +8,7 @@ import pytest
 from maru_planner.errors import InvalidGroup, NoIKSolution
 from maru_planner.robot import RobotModel
 from maru_planner.robot.ik import solve_ik
-from maru_planner.robot.maru1_ik import arm_ik_closed_form, two_hand_ik, waist_angle_from_hands
+from maru_planner.robot.robots.maru1 import arm_ik_closed_form, two_hand_ik, waist_angle_from_hands
 
 START13 = np.array([-0.9, -0.7, 1.57, 0.7, 0.7, -0.9, -0.9, -0.8, 1.57, 2.0, 0.7, -1.9, -1.25])
 

@@ -8,7 +8,7 @@ import pytest
 from maru_planner.errors import InvalidGroup
 from maru_planner.paths import urdf_path
 from maru_planner.robot import RobotModel
-from maru_planner.robot import maru1_description as desc
+from maru_planner.robot.robots import maru1 as desc
 
 ORDER = ["waist_yaw"] + [f"r_arm_j{i}" for i in range(1, 7)] + [f"l_arm_j{i}" for i in range(1, 7)]
 START6 = [0, 1.57, 1.57, 0, -1.57, -1.57]

@@ -9,8 +9,9 @@ import pytest
 
 from maru_planner.errors import InvalidRequest
 from maru_planner.paths import urdf_path
-from maru_planner.robot import RobotModel, load_example_robot, maru1_ik, profiles
+from maru_planner.robot import RobotModel, load_example_robot, profiles
 from maru_planner.robot.ik import solve_ik
+from maru_planner.robot.robots import maru1
 
 
 @pytest.fixture
@@ -46,7 +47,7 @@ def test_a_new_robot_is_one_profile_entry(toy_profile):
 def test_maru1_profile_and_loading_by_path_share_the_ik_strategies():
     by_name = RobotModel.maru1()
     by_path = RobotModel.from_urdf(urdf_path("maru1_upper_body.urdf"), urdf_path("maru1_upper_body.srdf"))
-    expected = (maru1_ik.one_arm_strategy, maru1_ik.two_hands_strategy)
+    expected = (maru1.one_arm_strategy, maru1.two_hands_strategy)
     assert by_name.ik_strategies == by_path.ik_strategies == expected
     assert load_example_robot("panda").ik_strategies == ()
 
@@ -55,9 +56,9 @@ def test_two_hand_strategy_answers_only_its_request():
     robot = RobotModel.maru1()
     q = robot.named_state("home")
     hands = {f: robot.frame_pose(q, f) for f in ("r_hand", "l_hand")}
-    assert maru1_ik.two_hands_strategy(robot, hands, q, "right_arm") is None
-    assert maru1_ik.one_arm_strategy(robot, hands, q, "right_arm") is None
-    solution = maru1_ik.two_hands_strategy(robot, hands, robot.neutral(), "upper_body")
+    assert maru1.two_hands_strategy(robot, hands, q, "right_arm") is None
+    assert maru1.one_arm_strategy(robot, hands, q, "right_arm") is None
+    solution = maru1.two_hands_strategy(robot, hands, robot.neutral(), "upper_body")
     assert all(np.abs(robot.frame_pose(solution, f) - T).max() < 1e-6 for f, T in hands.items())
 
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from maru_planner.robot.render import render_paper_tasks
+from maru_planner.viz.robot import render_paper_tasks
 
 
 def test_render_writes_png(tmp_path):

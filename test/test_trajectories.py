@@ -1,4 +1,4 @@
-"""Time parameterisation (planning/timing.py): limits, endpoints, deviation, blend fallbacks, point cap."""
+"""Time parameterisation (maru_planner/trajectory/): limits, endpoints, deviation, blend fallbacks, point cap."""
 
 from __future__ import annotations
 
@@ -12,16 +12,29 @@ from planning_toys import BoxWorldChecker, ToyRobot, maze_checker
 
 from maru_planner import errors
 from maru_planner.collision.certify import chord_deviation
-from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig, PlanStatus, timing
+from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig, PlanStatus
 from maru_planner.planning.problems import PROBLEMS
 from maru_planner.robot import RobotModel
 from maru_planner.ros.planning_conversions import code_name, duration_seconds
 from maru_planner.scene import Scene
+from maru_planner.trajectory import (
+    JERK_RAMP_TIME,
+    METHODS,
+    BlendedPath,
+    Limits,
+    blend_half_lengths,
+    default_jerk_limits,
+    deviation_from_path,
+)
+from maru_planner.trajectory import parameterize as parameterize_path
+from maru_planner.trajectory import toppra as toppra_timing
+from maru_planner.trajectory.blends import BLEND_BEND_PARTS, BLEND_INTERVALS, distinct, sections
+from maru_planner.trajectory.toppra import rest_to_rest_speeds, toppra_section
 
 TOL = 1e-6
 NAMES3 = ["a", "b", "c"]
 ZIGZAG = np.array([[0.0, 0.0, 0.0], [1.0, 0.3, 0.1], [1.2, 1.3, -0.2], [2.2, 1.5, 0.4], [2.4, 0.2, 0.5]])
-LIMITS3 = timing.Limits.scaled([1.0, 1.5, 2.0], [2.0, 3.0, 4.0])
+LIMITS3 = Limits.scaled([1.0, 1.5, 2.0], [2.0, 3.0, 4.0])
 
 
 def always_free(_states: np.ndarray, _deviation: np.ndarray) -> bool:
@@ -29,22 +42,22 @@ def always_free(_states: np.ndarray, _deviation: np.ndarray) -> bool:
 
 
 def parameterize(path, method, *, limits=LIMITS3, **options):
-    """``timing.parameterize`` with the test's joint names, every curve free and a 0.3 rad deviation by default."""
+    """``trajectory.parameterize`` with the test's joint names, every curve free and a 0.3 rad deviation by default."""
     options.setdefault("curve_free", always_free)
     options.setdefault("max_deviation", 0.3)
-    return timing.parameterize(path, NAMES3[: np.shape(path)[1]], limits, method, **options)
+    return parameterize_path(path, NAMES3[: np.shape(path)[1]], limits, method, **options)
 
 
 def never_off_path(path: np.ndarray):
     """A curve check rejecting anything farther than 1e-9 rad from ``path`` (every blend collides)."""
 
     def free(states: np.ndarray, _deviation: np.ndarray) -> bool:
-        return bool(np.all(timing.deviation_from_path(states, path) <= 1e-9))
+        return bool(np.all(deviation_from_path(states, path) <= 1e-9))
 
     return free
 
 
-def assert_within_limits(traj, limits: timing.Limits, jerk: bool = False) -> None:
+def assert_within_limits(traj, limits: Limits, jerk: bool = False) -> None:
     """Limits checked from the samples alone: reported values and finite differences (mean value theorem)."""
     dt = np.diff(traj.times)[:, None]
     assert np.all(dt > 0)
@@ -63,7 +76,7 @@ def assert_consistent(traj) -> None:
     assert np.max(np.abs(predicted - traj.positions[1:])) < 1e-3
 
 
-@pytest.mark.parametrize("method", timing.METHODS)
+@pytest.mark.parametrize("method", METHODS)
 def test_every_method_respects_the_limits_and_hits_the_endpoints_exactly(method):
     traj, report = parameterize(ZIGZAG, method, max_deviation=0.3, dt=0.005)
     assert report.method == method
@@ -81,7 +94,7 @@ def test_blends_stay_within_the_deviation_and_beat_the_trapezoids(method):
         traj, report = parameterize(ZIGZAG, method, max_deviation=max_deviation, dt=0.005)
         assert report.blends == len(ZIGZAG) - 2 and report.stops == 0 and not report.fallbacks
         assert 0.0 < report.max_deviation <= max_deviation + 1e-12
-        assert timing.deviation_from_path(traj.positions, ZIGZAG).max() <= max_deviation + 1e-9
+        assert deviation_from_path(traj.positions, ZIGZAG).max() <= max_deviation + 1e-9
         assert traj.duration < trapezoid.duration
 
 
@@ -99,7 +112,7 @@ def test_a_colliding_blend_is_shrunk_then_the_motion_stops_at_that_corner():
     turn = (ZIGZAG[3] - corner) / np.linalg.norm(ZIGZAG[3] - corner) - (corner - ZIGZAG[1]) / np.linalg.norm(
         corner - ZIGZAG[1]
     )
-    middle = corner + 0.25 * timing.blend_half_lengths(ZIGZAG, np.full(len(ZIGZAG), 0.3))[2] * turn
+    middle = corner + 0.25 * blend_half_lengths(ZIGZAG, np.full(len(ZIGZAG), 0.3))[2] * turn
     box = BoxWorldChecker([(middle[:2] - 0.02, middle[:2] + 0.02)])
 
     def free(states, _deviation):
@@ -115,7 +128,7 @@ def test_a_colliding_blend_is_shrunk_then_the_motion_stops_at_that_corner():
 
         stopped, report = parameterize(ZIGZAG, method, curve_free=never_off_path(ZIGZAG), max_deviation=0.3)
         assert report.blends == 0 and report.stops == 3
-        assert timing.deviation_from_path(stopped.positions, ZIGZAG).max() <= 1e-9
+        assert deviation_from_path(stopped.positions, ZIGZAG).max() <= 1e-9
         assert_within_limits(stopped, LIMITS3, jerk=method == "ruckig")
         for q in ZIGZAG:  # every waypoint is reached (at rest)
             k = np.argmin(np.linalg.norm(stopped.positions - q, axis=1))
@@ -164,12 +177,12 @@ def test_a_bend_taking_check_gets_each_blend_as_exact_parabola_parts():
     parameterize(ZIGZAG, "toppra", curve_free=recorder, max_deviation=deviation)
     assert len(recorder.curves) == len(ZIGZAG) - 2  # every corner once: none failed
     tau = np.linspace(0.0, 1.0, 11)
-    half_lengths = timing.blend_half_lengths(ZIGZAG, np.full(len(ZIGZAG), deviation))
+    half_lengths = blend_half_lengths(ZIGZAG, np.full(len(ZIGZAG), deviation))
     for k, (ends, off_chord, bends) in enumerate(recorder.curves, start=1):
-        parts = timing.BLEND_BEND_PARTS
+        parts = BLEND_BEND_PARTS
         assert len(ends) == parts + 1 and len(bends) == parts and not off_chord.any()
         half_length = half_lengths[k]
-        blend = timing.BlendedPath(ZIGZAG[k - 1 : k + 2], np.array([0.0, half_length, 0.0]))  # corner k alone
+        blend = BlendedPath(ZIGZAG[k - 1 : k + 2], np.array([0.0, half_length, 0.0]))  # corner k alone
         s0, s1 = blend.starts[1], blend.starts[2]
         for j, (a, b, bend) in enumerate(zip(ends[:-1], ends[1:], bends, strict=True)):
             on_part = (1.0 - tau)[:, None] * a + tau[:, None] * b + (tau * tau - tau)[:, None] * bend
@@ -177,9 +190,9 @@ def test_a_bend_taking_check_gets_each_blend_as_exact_parabola_parts():
             assert np.allclose(on_part, blend.at(sigma, np.ones(len(sigma), dtype=int), 0), atol=1e-12)
 
 
-@pytest.mark.parametrize("method", timing.METHODS)
+@pytest.mark.parametrize("method", METHODS)
 def test_tiny_velocity_scaling_stays_within_the_point_cap(method):
-    limits = timing.Limits.scaled([1.0, 1.5, 2.0], [2.0, 3.0, 4.0], velocity_scaling=1e-4)
+    limits = Limits.scaled([1.0, 1.5, 2.0], [2.0, 3.0, 4.0], velocity_scaling=1e-4)
     traj, _ = parameterize(ZIGZAG, method, limits=limits, max_points=500)
     assert len(traj.times) <= 500
     assert traj.duration > 1e4  # 1e-4 of the speed: the motion really is that slow
@@ -189,7 +202,7 @@ def test_tiny_velocity_scaling_stays_within_the_point_cap(method):
 
 @pytest.mark.parametrize("method", ["toppra", "ruckig"])
 def test_when_toppra_fails_numerically_the_trapezoids_are_used(method, monkeypatch):
-    monkeypatch.setattr(timing, "_rest_to_rest_speeds", lambda *args: None)
+    monkeypatch.setattr(toppra_timing, "rest_to_rest_speeds", lambda *args: None)
     traj, report = parameterize(ZIGZAG, method)
     assert report.method == "trapezoid" and report.fallbacks and "toppra" in report.fallbacks[0]
     assert_within_limits(traj, LIMITS3)
@@ -200,19 +213,19 @@ def test_when_toppra_fails_numerically_the_trapezoids_are_used(method, monkeypat
 def test_past_the_deadline_no_blend_is_certified_and_every_corner_stops(method):
     traj, report = parameterize(ZIGZAG, method, deadline=time.monotonic() - 1.0)
     assert report.method == method and report.blends == 0 and report.stops == 3
-    assert timing.deviation_from_path(traj.positions, ZIGZAG).max() <= 1e-9
+    assert deviation_from_path(traj.positions, ZIGZAG).max() <= 1e-9
     assert_within_limits(traj, LIMITS3, jerk=method == "ruckig")
 
 
 def test_zero_deviation_means_rest_at_every_corner():
     traj, report = parameterize(ZIGZAG, "toppra", max_deviation=0.0)
     assert report.blends == 0 and report.stops == 3
-    assert timing.deviation_from_path(traj.positions, ZIGZAG).max() <= 1e-9
+    assert deviation_from_path(traj.positions, ZIGZAG).max() <= 1e-9
 
 
 def test_repeated_and_collinear_waypoints_are_harmless():
     path = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.5, 0.5, 0.5], [1.0, 1.0, 1.0], [1.0, 1.0, 1.0]])
-    for method in timing.METHODS:
+    for method in METHODS:
         traj, _ = parameterize(path, method)
         assert np.array_equal(traj.positions[-1], path[-1])
         assert_within_limits(traj, LIMITS3, jerk=method == "ruckig")
@@ -245,7 +258,7 @@ def final_straight_parts(path: np.ndarray, half: np.ndarray) -> list[np.ndarray]
 
 def on_a_piece(part: np.ndarray, pieces: list[np.ndarray]) -> bool:
     """Whether both ends of ``part`` lie (within 1e-12) on one of the straight ``pieces``."""
-    return any(timing.deviation_from_path(part, piece).max() <= 1e-12 for piece in pieces)
+    return any(deviation_from_path(part, piece).max() <= 1e-12 for piece in pieces)
 
 
 def test_straight_pieces_proven_with_the_blends_certify_the_whole_curve():
@@ -259,7 +272,7 @@ def test_straight_pieces_proven_with_the_blends_certify_the_whole_curve():
     assert all(on_a_piece(part, recorder.proven) for part in parts)
 
     def blend_at(corner: int):  # the blend curves of ``corner``: the bent ones that pass nearest to it
-        return lambda curve, _call: len(curve) == 3 and timing.deviation_from_path(ZIGZAG[corner], curve[0]).min() < 0.3
+        return lambda curve, _call: len(curve) == 3 and deviation_from_path(ZIGZAG[corner], curve[0]).min() < 0.3
 
     for fails, stops in ((lambda curve, call: call == 0 and blend_at(2)(curve, call), 0), (blend_at(2), 1)):
         recorder = PieceRecorder(fails)
@@ -274,16 +287,16 @@ def test_straight_pieces_proven_with_the_blends_certify_the_whole_curve():
     assert not parameterize(ZIGZAG, "ruckig", curve_free=PieceRecorder())[1].curve_certified
 
 
-@pytest.mark.parametrize("method", timing.METHODS)
+@pytest.mark.parametrize("method", METHODS)
 def test_a_waypoint_barely_off_the_line_is_still_passed(method):
     """A waypoint 1e-7 rad off the line between its neighbours passes the angle test for collinear points, yet the
     trajectory must not cut it short: certification proves the path through it, not the line."""
     path = np.array([[0.0, 0.0, 0.0], [1.0, 1e-7, 0.0], [2.0, 0.0, 0.0]])
     traj, _ = parameterize(path, method, curve_free=never_off_path(path))
-    assert timing.deviation_from_path(traj.positions, path).max() <= 1e-9
+    assert deviation_from_path(traj.positions, path).max() <= 1e-9
     assert np.linalg.norm(traj.positions - path[1], axis=1).min() <= 1e-9
     on_line = np.array([[0.0, 0.0, 0.0], [1.0, 1e-13, 0.0], [2.0, 0.0, 0.0]])  # rounding off the line: left out
-    assert len(timing._distinct(on_line)) == 2
+    assert len(distinct(on_line)) == 2
 
 
 def test_toppra_reports_each_certified_blend_at_the_row_of_the_path_it_rounds():
@@ -292,12 +305,12 @@ def test_toppra_reports_each_certified_blend_at_the_row_of_the_path_it_rounds():
     path = np.insert(ZIGZAG, 2, ZIGZAG[1], axis=0)  # row 1 twice
 
     def corner_3_collides(states: np.ndarray, _deviation: np.ndarray) -> bool:
-        return timing.deviation_from_path(ZIGZAG[3], states).min() > 0.3  # a blend near ZIGZAG[3]
+        return deviation_from_path(ZIGZAG[3], states).min() > 0.3  # a blend near ZIGZAG[3]
 
     traj, report = parameterize(path, "toppra", curve_free=corner_3_collides)
     blends = report.corner_blends
     assert len(blends) == len(path) and blends[[0, 2, 4, 5]].tolist() == [0.0] * 4 and blends[[1, 3]].min() > 0
-    far = timing.deviation_from_path(traj.positions, path) > 1e-9
+    far = deviation_from_path(traj.positions, path) > 1e-9
     near_a_blend = np.zeros(len(traj.positions), dtype=bool)
     for row in (1, 3):
         near_a_blend |= np.linalg.norm(traj.positions - path[row], axis=1) <= blends[row] + 1e-9
@@ -321,14 +334,14 @@ def test_bad_method_deviation_and_point_cap_raise_typed_errors():
 
 
 def test_default_jerk_limits_reach_full_acceleration_in_the_ramp_time():
-    assert np.allclose(timing.default_jerk_limits([4.0, 15.0]), [4.0 / timing.JERK_RAMP_TIME, 150.0])
-    limits = timing.Limits.scaled([1.0], [4.0], 0.5, 0.25, jerk_scaling=0.1)
+    assert np.allclose(default_jerk_limits([4.0, 15.0]), [4.0 / JERK_RAMP_TIME, 150.0])
+    limits = Limits.scaled([1.0], [4.0], 0.5, 0.25, jerk_scaling=0.1)
     assert np.allclose([limits.velocity[0], limits.acceleration[0], limits.jerk[0]], [0.5, 1.0, 4.0])
 
 
 @pytest.mark.parametrize("seed", range(40))
 def test_the_speeds_are_toppras_own(seed):
-    """``_rest_to_rest_speeds`` (toppra's stage programs in closed form) gives ``TOPPRA.compute_parameterization(0,
+    """``rest_to_rest_speeds`` (toppra's stage programs in closed form) gives ``TOPPRA.compute_parameterization(0,
     0)``'s profile on blended random paths of 2 to 13 joints, some with a joint that never moves, under binding
     velocity limits (toppra rounds their bound on ṡ to single precision: ~1e-7 of the peak) or none."""
     rng = np.random.default_rng(seed)
@@ -336,18 +349,19 @@ def test_the_speeds_are_toppras_own(seed):
     waypoints = np.cumsum(rng.uniform(-1.0, 1.0, (int(rng.integers(3, 9)), dof)) * rng.uniform(0.05, 2.0), axis=0)
     if seed % 3 == 0:
         waypoints[:, 0] = 0.25
-    half = timing.blend_half_lengths(waypoints, np.full(len(waypoints), 0.2))
-    section = max(timing._sections(waypoints, half), key=lambda s: len(s[0]))  # cut at reversals, as parameterize
-    path = timing.BlendedPath(*section)
+    half = blend_half_lengths(waypoints, np.full(len(waypoints), 0.2))
+    section = max(sections(waypoints, half), key=lambda s: len(s[0]))  # cut at reversals, as parameterize
+    path = BlendedPath(*section)
     grid, _ = path.grid()
     binding = seed % 2 == 0
     velocity = rng.uniform(0.5, 3.0, dof) if binding else np.full(dof, 1e3)
-    limits = timing.Limits.scaled(velocity, rng.uniform(1.0, 10.0, dof))
+    limits = Limits.scaled(velocity, rng.uniform(1.0, 10.0, dof))
     constraints = [toppra.constraint.JointVelocityConstraint(limits.velocity),
                    toppra.constraint.JointAccelerationConstraint(limits.acceleration)]  # fmt: skip
-    _sdd, expected, _v = toppra.algorithm.TOPPRA(constraints, path, gridpoints=grid,
-                                                 solver_wrapper="seidel").compute_parameterization(0.0, 0.0)
-    ours = timing._rest_to_rest_speeds(path, grid, limits)
+    _sdd, expected, _v = toppra.algorithm.TOPPRA(
+        constraints, path, gridpoints=grid, solver_wrapper="seidel"
+    ).compute_parameterization(0.0, 0.0)
+    ours = rest_to_rest_speeds(path, grid, limits)
     assert expected is not None and ours is not None
     assert np.max(expected) > 0.1
     assert np.max(np.abs(ours - expected)) <= (2e-6 if binding else 1e-9) * np.max(expected)
@@ -356,9 +370,9 @@ def test_the_speeds_are_toppras_own(seed):
 def test_a_profiles_states_follow_its_path_and_speeds():
     """At the times the profile reaches its grid points, the sampled state is the path's point there, its velocity
     the path's slope times ṡ; between them the acceleration is the path's curvature times ṡ² plus slope times s̈."""
-    path = timing.BlendedPath(ZIGZAG, timing.blend_half_lengths(ZIGZAG, np.full(len(ZIGZAG), 0.3)))
-    limits = timing.Limits.scaled(np.full(3, 1.5), np.full(3, 4.0))
-    profile = timing._toppra_section(path, limits)
+    path = BlendedPath(ZIGZAG, blend_half_lengths(ZIGZAG, np.full(len(ZIGZAG), 0.3)))
+    limits = Limits.scaled(np.full(3, 1.5), np.full(3, 4.0))
+    profile = toppra_section(path, limits)
     q, qd, _qdd = profile.state(profile.times[:-1])
     assert np.allclose(q, path(profile.grid[:-1]), atol=1e-9)
     assert np.allclose(qd, path(profile.grid[:-1], 1) * profile.sd[:-1, None], atol=1e-9)
@@ -378,7 +392,7 @@ def test_a_profiles_states_follow_its_path_and_speeds():
 
 @pytest.mark.parametrize("deviation", [0.05, 0.3, 10.0])  # 10 rad: blends take whole segments, no straight left
 def test_the_blended_curve_is_continuous_and_its_grid_covers_every_piece(deviation):
-    path = timing.BlendedPath(ZIGZAG, timing.blend_half_lengths(ZIGZAG, np.full(len(ZIGZAG), deviation)))
+    path = BlendedPath(ZIGZAG, blend_half_lengths(ZIGZAG, np.full(len(ZIGZAG), deviation)))
     assert np.array_equal(path.blend_of[path.blend_of >= 0], np.arange(1, len(ZIGZAG) - 1))  # each corner, in order
     ends = path(path.starts[1:-1] - 1e-12)  # the end of each piece is where the next one starts, in value and slope
     assert np.allclose(ends, path.p0[1:], atol=1e-9)
@@ -388,14 +402,14 @@ def test_the_blended_curve_is_continuous_and_its_grid_covers_every_piece(deviati
     assert np.all(np.diff(grid) > 0) and grid[0] == 0.0 and grid[-1] == path.starts[-1]
     assert set(path.starts.tolist()) <= set(grid.tolist())  # every piece boundary is a grid point
     per_piece = np.bincount(pieces, minlength=len(path.p0))
-    assert np.all(per_piece[path.blend_of >= 0] >= timing.BLEND_INTERVALS) and np.all(per_piece >= 1)
+    assert np.all(per_piece[path.blend_of >= 0] >= BLEND_INTERVALS) and np.all(per_piece >= 1)
     assert np.all((grid[:-1] >= path.starts[pieces]) & (grid[:-1] < path.starts[pieces + 1]))
 
 
 def test_deviation_from_path_is_the_distance_to_the_nearest_segment():
     path = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]])
     points = np.array([[0.5, 0.2], [1.3, 0.5], [2.0, 2.0], [1.0, 0.0]])
-    assert np.allclose(timing.deviation_from_path(points, path), [0.2, 0.3, np.sqrt(2.0), 0.0])
+    assert np.allclose(deviation_from_path(points, path), [0.2, 0.3, np.sqrt(2.0), 0.0])
 
 
 # --- through MotionPlanner.plan ----------------------------------------------------------------
@@ -409,7 +423,7 @@ def maze_request(**kw) -> MotionRequest:
                          planner_id="RRTConnect", time_budget=5.0, seed=3, **kw)  # fmt: skip
 
 
-@pytest.mark.parametrize("method", timing.METHODS)
+@pytest.mark.parametrize("method", METHODS)
 def test_each_method_through_the_planner_gives_a_free_trajectory_within_the_limits(method):
     planner = maze_planner()
     result = planner.plan(maze_request(time_parameterization=method, velocity_scaling=0.5, jerk_scaling=0.5))
@@ -417,11 +431,11 @@ def test_each_method_through_the_planner_gives_a_free_trajectory_within_the_limi
     assert result.stats.time_parameterization == method and method in result.message
     traj = result.trajectory
     robot = planner.robot
-    limits = timing.Limits.scaled(robot.velocity_limits, robot.acceleration_limits, 0.5, 1.0, 0.5)
+    limits = Limits.scaled(robot.velocity_limits, robot.acceleration_limits, 0.5, 1.0, 0.5)
     assert_within_limits(traj, limits, jerk=method == "ruckig")
     assert np.array_equal(traj.positions[0], result.path[0]) and np.array_equal(traj.positions[-1], result.path[-1])
     assert maze_checker().first_invalid(traj.positions) < 0
-    assert timing.deviation_from_path(traj.positions, result.path).max() <= planner.config.blend_deviation + 1e-9
+    assert deviation_from_path(traj.positions, result.path).max() <= planner.config.blend_deviation + 1e-9
 
 
 def test_the_planner_uses_its_configured_method_when_the_request_names_none():
@@ -447,7 +461,7 @@ def test_bad_time_parameterization_fields_are_invalid_requests(field, value):
 
 # --- through planning_node (PlanMotion.time_parameterization) ------------------------------------
 MARU13_JOINTS = ["waist_yaw"] + [f"r_arm_j{i}" for i in range(1, 7)] + [f"l_arm_j{i}" for i in range(1, 7)]
-MARU1_JERK = float(timing.default_jerk_limits([4.0])[0])  # every Maru-1 joint: 4 rad/s² -> 40 rad/s³
+MARU1_JERK = float(default_jerk_limits([4.0])[0])  # every Maru-1 joint: 4 rad/s² -> 40 rad/s³
 
 
 @pytest.fixture(scope="module")
@@ -530,7 +544,7 @@ def test_one_straight_segment_is_timed_in_closed_form_as_toppra_would():
     path = np.array([[0.0, 0.0, 0.0], [1.2, -0.4, 2.5]])
     trajectory, report = parameterize(path, "toppra")
     assert report.method == "toppra" and report.certify_checks == 0
-    solver = timing._toppra_section(timing.BlendedPath(path, np.zeros(2)), LIMITS3)
+    solver = toppra_section(BlendedPath(path, np.zeros(2)), LIMITS3)
     assert trajectory.duration <= solver.duration + 1e-9
     assert trajectory.duration == pytest.approx(solver.duration, rel=0.02)
     assert np.allclose(trajectory.positions[-1], path[-1])

@@ -1,4 +1,4 @@
-"""Kernel warm-up before the first request (maru_planner.planning.warm_up)."""
+"""Kernel warm-up before the first request (maru_planner.runtime.warm_up)."""
 
 from __future__ import annotations
 
@@ -6,14 +6,14 @@ import dataclasses
 
 import pytest
 
-from maru_planner.planning import PlannerConfig
-from maru_planner.planning import warm_up as warm
+from maru_planner.planning import MotionPlanner, PlannerConfig
+from maru_planner.runtime import warm_up as warm
 
 
 @pytest.fixture
 def fresh_process(monkeypatch):
     """As if this process had warmed up for no config yet."""
-    monkeypatch.setattr(warm, "_warmed", set())
+    monkeypatch.setattr(warm, "warmed_configs", set())
 
 
 def test_warm_up_plans_with_each_planner_the_config_runs_once_per_process(maru1, fresh_process):
@@ -36,13 +36,13 @@ def test_warm_up_scenes_reach_the_large_scene_paths(maru1):
     from maru_planner.collision.certify import NEAR_PATH_MIN_OBSTACLES
     from maru_planner.collision.spheres import GRID_MIN_OBSTACLES
 
-    scene = warm._boxes(maru1, warm.MANY_BOXES)
+    scene = warm.boxes(maru1, warm.MANY_BOXES)
     assert len(scene.obstacles) == warm.MANY_BOXES >= max(NEAR_PATH_MIN_OBSTACLES, GRID_MIN_OBSTACLES)
-    planner = warm.MotionPlanner.from_scene(maru1, scene, PlannerConfig())  # the default: spheres, exact-verified
+    planner = MotionPlanner.from_scene(maru1, scene, PlannerConfig())  # the default: spheres, exact-verified
     # none dropped by either checker's broad phase, and the sphere kernels look them up in their grid
     assert len(planner.exact_checker.reachable_obstacles) == warm.MANY_BOXES
     assert len(planner.checker.primitives.names) == warm.MANY_BOXES and planner.checker.uses_grid
-    exact = warm.MotionPlanner.from_scene(maru1, scene, PlannerConfig(collision_model="exact"))
+    exact = MotionPlanner.from_scene(maru1, scene, PlannerConfig(collision_model="exact"))
     assert len(exact.checker.reachable_obstacles) == warm.MANY_BOXES
 
 

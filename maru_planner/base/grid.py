@@ -17,6 +17,8 @@ and ``biped/``):
   centre lies within ``radius`` metres (inclusive) of the centre of an
   occupied cell: the convolution of the grid with a disc, exact to the cell
   (Euclidean distance transform). Space outside the map is not an obstacle.
+- ``grid.distance_field(d)``: the same exact distances (metres) as an array, ``inf`` beyond ``d``
+  (the cost layer of ``costmap.py`` is made from it).
 - ``OccupancyGrid.from_yaml(path)``, ``grid.save_yaml(path)``,
   ``OccupancyGrid(occupied, resolution, origin)``.
 
@@ -146,21 +148,35 @@ class OccupancyGrid:
         Computed in strips of rows, each with the obstacles within ``radius`` around it (farther
         ones cannot reach), so ``deadline`` is checked between strips.
         """
+        grown = np.zeros(self.shape, dtype=bool)
+        limit = radius + 1e-9 * self.resolution
+        for top, bottom, distance in self._strip_distances(radius, "inflating the map", deadline):
+            grown[top:bottom] = distance <= limit
+        return self.with_occupied(grown)
+
+    def distance_field(self, max_distance: float, deadline: Deadline | None = None) -> np.ndarray:
+        """Exact distance (m, float64) from each cell centre to the nearest occupied cell centre, where it is at
+        most ``max_distance`` (+1e-9 cell); ``inf`` farther out. Strips and deadline as :meth:`inflate`."""
+        field = np.full(self.shape, np.inf)
+        limit = max_distance + 1e-9 * self.resolution
+        for top, bottom, distance in self._strip_distances(max_distance, "computing the cost map", deadline):
+            field[top:bottom] = np.where(distance <= limit, distance, np.inf)
+        return field
+
+    def _strip_distances(self, radius: float, what: str, deadline: Deadline | None):
+        """(top, bottom, distances of rows top..bottom) for every strip with an obstacle within ``radius``."""
         if not (math.isfinite(radius) and radius >= 0):
             raise InvalidRequest(f"inflation radius must be finite and >= 0, got {radius}")
         deadline = deadline or unlimited()
         reach = int(math.ceil(radius / self.resolution)) + 1
-        grown = np.zeros(self.shape, dtype=bool)
-        limit = radius + 1e-9 * self.resolution
         for top in range(0, self.height, _INFLATE_STRIP_ROWS):
-            deadline.check_now("inflating the map")
+            deadline.check_now(what)
             bottom = min(top + _INFLATE_STRIP_ROWS, self.height)
             lo, hi = max(top - reach, 0), min(bottom + reach, self.height)
             window = self.occupied[lo:hi]
             if window.any():
                 distance = ndimage.distance_transform_edt(~window) * self.resolution
-                grown[top:bottom] = distance[top - lo : bottom - lo] <= limit
-        return self.with_occupied(grown)
+                yield top, bottom, distance[top - lo : bottom - lo]
 
     def with_occupied(self, occupied: np.ndarray) -> OccupancyGrid:
         """Same geometry, different occupancy (unknown cells carried over as information only)."""

@@ -32,6 +32,7 @@ import numpy as np
 import pinocchio as pin
 
 from maru_planner.collision.broadphase import SceneTree, robot_reach
+from maru_planner.collision.kernels.bisection import bisection_order
 from maru_planner.robot.model import RobotModel
 from maru_planner.scene import BuildClock, Obstacle, Scene
 
@@ -43,38 +44,6 @@ BROADPHASES = {
     "naive": pin.BroadPhaseManager_NaiveCollisionManager,
     "aabb_tree": pin.BroadPhaseManager_DynamicAABBTreeCollisionManager,
 }
-_BISECTION_CACHE: dict[tuple[int, bool], np.ndarray] = {}
-
-
-def bisection_order(n: int, include_first: bool = True) -> np.ndarray:
-    """Indices 0..n-1: last, first, then midpoints of ever finer halves (cached per n).
-
-    ``include_first=False`` is for edge states that exclude the (already valid) edge start:
-    index 0 is then one step from it and is not moved to the front.
-    """
-    key = (n, include_first)
-    order = _BISECTION_CACHE.get(key)
-    if order is None:
-        out = [n - 1] if n > 0 else []
-        if include_first and n > 1:
-            out.append(0)
-        seen = set(out)
-        segments = [(0 if include_first else -1, n - 1)]
-        while segments:
-            nxt = []
-            for a, b in segments:
-                if b - a < 2:
-                    continue
-                m = (a + b) // 2
-                if m not in seen:
-                    seen.add(m)
-                    out.append(m)
-                nxt += [(a, m), (m, b)]
-            segments = nxt
-        order = np.array(out, dtype=int)
-        if len(_BISECTION_CACHE) < 4096:
-            _BISECTION_CACHE[key] = order
-    return order
 
 
 def self_collision_pairs(robot: RobotModel) -> list[tuple[int, int]]:

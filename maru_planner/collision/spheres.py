@@ -3,7 +3,7 @@
 The robot's collision geometry is covered by spheres (:mod:`maru_planner.collision.sphere_model`:
 every surface triangle of every link lies inside a sphere, so the spheres over-approximate the
 links); forward kinematics and all tests for a whole batch of configurations run in one numba call
-(:mod:`maru_planner.collision.sphere_kernels`), with a pure-numpy path that gives the same answers.
+(:mod:`maru_planner.collision.kernels.sphere_scan`), with a pure-numpy path that gives the same answers.
 Each obstacle is tested as the kernel primitive its shape's table entry gives (``maru_planner/shapes.py``):
 boxes, spheres and cylinders exactly; a mesh by its oriented bounding box, whose touches the exact
 model decides.
@@ -26,22 +26,18 @@ from typing import Any
 import coal
 import numpy as np
 
-from maru_planner.collision import sphere_kernels as _kernels
-from maru_planner.collision.batch_fk import (
-    KinematicTree,
-    batch_joint_poses,
-    frame_placements_nb,
-    joint_poses_nb,
-    sphere_centers_nb,
-)
 from maru_planner.collision.broadphase import robot_reach
 from maru_planner.collision.checker import hull_or_self, robot_hull, self_collision_pairs
+from maru_planner.collision.kernels.fk import frame_placements_nb, joint_poses_nb, sphere_centers_nb
+from maru_planner.collision.kernels.grid import NO_GRID, build_grid
+from maru_planner.collision.kernels.packing import pack_robot, pack_scene
+from maru_planner.collision.kernels.primitives import AMBIGUOUS, COLLIDING, VALID
+from maru_planner.collision.kernels.sphere_scan import scan_nb, sphere_obstacle_distances_nb
+from maru_planner.collision.kinematic_tree import KinematicTree, batch_joint_poses
+from maru_planner.collision.shape_records import robot_shape_records
 from maru_planner.collision.sphere_model import SphereFitOptions, SphereModel, load_or_fit
-from maru_planner.collision.support_bounds import robot_shape_records
 from maru_planner.scene import BuildClock, Obstacle, Scene
-from maru_planner.shapes import KERNEL_KINDS, KernelPrimitive
-
-VALID, COLLIDING, AMBIGUOUS = 0, 1, 2  # same codes as sphere_kernels
+from maru_planner.scene.shapes import KERNEL_KINDS, KernelPrimitive
 
 DEFAULT_PADDING = 0.0  # m added to every robot sphere; the spheres already cover the links (module doc)
 GRID_MIN_OBSTACLES = 32  # reachable obstacles from which the kernels look them up in a grid
@@ -174,7 +170,7 @@ class SphereCollisionChecker:
             sm.group_center, sm.group_radius, self.self_pairs, self.padding,
         )  # fmt: skip
         clusters = (sm.cluster_start, sm.cluster_joint, sm.cluster_center, sm.cluster_radius, sm.group_clusters)
-        self._packed_robot = _kernels.pack_robot(*self._robot_args, *clusters) if self.use_numba else None
+        self._packed_robot = pack_robot(*self._robot_args, *clusters) if self.use_numba else None
         self._robot_geoms = list(robot.collision_model.geometryObjects)
         self._exact_shapes = [obj.geometry for obj in self._robot_geoms]  # the exact checker's own shapes
         # each geometry's joint and placement in it, and its world placement at the last _exact_hit's state
@@ -200,7 +196,7 @@ class SphereCollisionChecker:
         clock = BuildClock(self.build_budget, len(scene.obstacles) if scene is not None else 0)
         self.primitives = ScenePrimitives.from_scene(scene, self.reach + self.padding, clock)
         self._scene_args = self.primitives.as_tuple()
-        self._packed_scene = _kernels.pack_scene(*self._scene_args) if self.use_numba else None
+        self._packed_scene = pack_scene(*self._scene_args) if self.use_numba else None
         self._grid = self._build_grid()
         self._mark = np.zeros((2, len(self.primitives.names) + 1), dtype=np.int64)
         self._scene_version = getattr(scene, "version", None)
@@ -216,7 +212,7 @@ class SphereCollisionChecker:
     def kernel_inputs(self) -> tuple:
         """The current scene's arrays for compiled callers, in ``scan_nb``'s order after ``Q, start``: packed
         robot (ints, floats), packed scene, grid (ints, floats) and the work arrays ``amb``, ``mark`` (numba only);
-        then the records of the robot's primitive shapes (``support_bounds.robot_shape_records``), on which the
+        then the records of the robot's primitive shapes (``shape_records.robot_shape_records``), on which the
         search kernels settle near contacts before asking coal."""
         self._sync()
         ri, rf, scene = self._packed()
@@ -231,12 +227,12 @@ class SphereCollisionChecker:
     def _build_grid(self) -> tuple[np.ndarray, np.ndarray]:
         """Grid broad phase over the reachable obstacles, cells about one robot sphere cluster's bound across."""
         if not self.use_numba or len(self.primitives.names) < self.grid_min_obstacles:
-            return _kernels.NO_GRID
+            return NO_GRID
         lo, hi = self.primitives.boxes()
         moving = self.spheres.cluster_joint != 0
         cell = float(np.median(self.spheres.cluster_radius[moving])) if moving.any() else 0.1
         cell = max(cell, float((hi.max(axis=0) - lo.min(axis=0)).max()) / 64.0, 1e-3)
-        return _kernels.build_grid(lo - self.padding, hi + self.padding, cell, GRID_MAX_CELLS)
+        return build_grid(lo - self.padding, hi + self.padding, cell, GRID_MAX_CELLS)
 
     def reset_count(self) -> None:
         self.check_count = 0
@@ -327,7 +323,7 @@ class SphereCollisionChecker:
         """First row >= start that is not clearly valid: (row, status, number of ambiguous pairs)."""
         if self.use_numba:
             ri, rf, scene = self._packed()
-            row, status, n_amb = _kernels.scan_nb(
+            row, status, n_amb = scan_nb(
                 Q, start, ri, rf, scene, *self._grid, self._amb, self._mark, self.confirm
             )
             return int(row), int(status), int(n_amb)
@@ -456,7 +452,7 @@ class SphereCollisionChecker:
         env = np.full((self.spheres.n_groups, len(self.primitives.names)), np.inf)
         if self.use_numba:
             world = self.sphere_centers(q)
-            dist = _kernels.sphere_obstacle_distances_nb(world, self._packed_scene) if self.primitives.names else None
+            dist = sphere_obstacle_distances_nb(world, self._packed_scene) if self.primitives.names else None
             if dist is not None:
                 dist[self.spheres.joint == 0] = np.inf
                 env_outer = dist - self.spheres.radius[:, None] - self.padding

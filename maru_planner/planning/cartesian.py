@@ -12,7 +12,7 @@ stops at the first step that
   cannot prove the joint-space segment to it collision-free with the planner's safety margin.
 
 The answer reports the ``fraction`` of the requested steps achieved and a trajectory through the
-achieved states, timed by :mod:`maru_planner.planning.timing` (corners blended by at most
+achieved states, timed by :mod:`maru_planner.trajectory` (corners blended by at most
 :data:`BLEND_DEVIATION` rad, blends certified like the path). Nothing is achieved (fraction 0) is an
 error with its own status; a partial path is a success with the reason it stopped.
 """
@@ -27,10 +27,11 @@ import numpy as np
 import pinocchio as pin
 
 from maru_planner import errors
-from maru_planner.planning import timing
 from maru_planner.planning.links import check_link
-from maru_planner.planning.types import PlanStatus, Trajectory, answer_json, set_failure
+from maru_planner.planning.requests import check_free, start_configuration
+from maru_planner.planning.types import PlanStatus, answer_json, set_failure
 from maru_planner.robot.ik import DampedLeastSquares
+from maru_planner.trajectory import CurveFree, Limits, Trajectory, certified_curve, check_scaling, parameterize
 
 ROTATION_STEP_RADIUS = 0.1  # m: a rotation step of max_step / this radius moves a point this far as much as max_step
 IK_ITERATIONS = 20
@@ -153,12 +154,13 @@ class _StepIK:
         return None
 
 
-def compute_cartesian_path(planner, request: CartesianRequest) -> CartesianResult:
-    """The Cartesian path of ``request`` on ``planner``'s robot, checker and certifier (a :class:`MotionPlanner`)."""
+def compute_cartesian_path(context, request: CartesianRequest) -> CartesianResult:
+    """The Cartesian path of ``request`` on the robot, checker and certifier of ``context`` (a
+    :class:`~maru_planner.planning.context.PlanningContext`)."""
     t0 = time.monotonic()
     result = CartesianResult(status=PlanStatus.PLANNING_FAILED)
     try:
-        _compute(planner, request, result, t0)
+        _compute(context, request, result, t0)
     except errors.MaruError as exc:
         set_failure(result, exc)
         result.path = result.trajectory = None
@@ -166,8 +168,8 @@ def compute_cartesian_path(planner, request: CartesianRequest) -> CartesianResul
     return result
 
 
-def _compute(planner, request: CartesianRequest, result: CartesianResult, t0: float) -> None:
-    robot = planner.robot
+def _compute(context, request: CartesianRequest, result: CartesianResult, t0: float) -> None:
+    robot = context.robot
     deadline = t0 + _positive(request.time_budget, "time_budget")
     max_step = _positive(request.max_step, "max_step")
     jump = float(request.jump_threshold)
@@ -177,25 +179,25 @@ def _compute(planner, request: CartesianRequest, result: CartesianResult, t0: fl
     link = request.link or default_link(robot, request.group)
     check_link(robot, link)
     result.link, result.joint_names = link, [robot.joint_names[i] for i in indices]
-    start = planner.start_configuration(request.start, indices)
+    start = start_configuration(context.robot, request.start, indices)
     waypoints = [_pose(w, k) for k, w in enumerate(request.waypoints)]
     if not waypoints:
         raise errors.InvalidRequest("no waypoints: give at least one pose of the link")
     if request.avoid_collisions:
-        planner.check_free(start, errors.StartInCollision, "start")
+        check_free(context.checker, start, errors.StartInCollision, "start")
     poses = interpolate_poses(robot.frame_pose(start, link), waypoints, max_step)
     states, reason = _follow(robot, link, indices, start, poses, deadline)
     states, reason = _jump_cut(states, reason, jump)
-    margin = end_margin(planner, planner.config.safety_margin, start) if request.avoid_collisions else 0.0
+    margin = end_margin(context, context.config.safety_margin, start) if request.avoid_collisions else 0.0
     if request.avoid_collisions:
-        states, reason = _collision_cut(planner, states, reason, deadline, margin, result)
+        states, reason = _collision_cut(context, states, reason, deadline, margin, result)
     if len(states) < 2:
         error = errors.NoIKSolution if reason.startswith("no IK") else errors.PlanningFailed
         raise error(f"Cartesian path of {link}: nothing achieved, {reason}", source="cartesian")
     result.fraction = (len(states) - 1) / len(poses)
     result.stop_reason = reason
     result.path = states[:, indices]
-    result.trajectory = _timed(planner, request, states, indices, deadline, margin)
+    result.trajectory = _timed(context, request, states, indices, deadline, margin)
     result.status = PlanStatus.SUCCESS
     result.message = f"Cartesian path of {link}: {result.fraction:.1%} of {len(poses)} steps" + (
         f", stopped: {reason}" if reason else ""
@@ -245,23 +247,23 @@ def _jump_cut(states: np.ndarray, reason: str, threshold: float) -> tuple[np.nda
     return states[: k + 1], f"joint-space jump of {steps[k]:.3f} rad at step {k + 1} (mean step {steps.mean():.4f})"
 
 
-def end_margin(planner, margin: float, *ends: np.ndarray) -> float:
+def end_margin(context, margin: float, *ends: np.ndarray) -> float:
     """``margin`` (m), lowered to half the ``ends``' smallest clearance when that is closer; 0 without a
     certifier."""
-    if planner.certifier is None:
+    if context.certifier is None:
         return 0.0
-    clearance = min(planner.certifier.clearance(q) for q in ends)
+    clearance = min(context.certifier.clearance(q) for q in ends)
     return min(margin, 0.5 * max(clearance, 0.0))
 
 
-def _collision_cut(planner, states, reason: str, deadline: float, margin: float, result) -> tuple[np.ndarray, str]:
+def _collision_cut(context, states, reason: str, deadline: float, margin: float, result) -> tuple[np.ndarray, str]:
     """Cut before the first invalid state, then before the first segment the certifier cannot prove."""
-    bad = planner.checker.first_invalid(states)
+    bad = context.checker.first_invalid(states)
     if bad >= 0:
-        pairs = planner.checker.colliding_pairs(states[bad])
+        pairs = context.checker.colliding_pairs(states[bad])
         named = ", ".join(f"{a}–{b}" for a, b in pairs[:3])
         states, reason = states[:bad], f"collision at step {bad}: {named}"
-    certifier = planner.certifier
+    certifier = context.certifier
     if certifier is None or len(states) < 2:
         return states, reason
     certificate = certifier.certify_path(states, deadline, margin=margin)
@@ -274,12 +276,12 @@ def _collision_cut(planner, states, reason: str, deadline: float, margin: float,
     return states[: k + 1], f"segment {k + 1} not certified collision-free ({certificate.reason})"
 
 
-def _timed(planner, request: CartesianRequest, states, indices, deadline: float, margin: float) -> Trajectory:
-    scalings = (timing.check_scaling(request.velocity_scaling, "velocity_scaling"),
-                timing.check_scaling(request.acceleration_scaling, "acceleration_scaling"))  # fmt: skip
-    method = request.time_parameterization or planner.config.time_parameterization
-    certifier = planner.certifier if request.avoid_collisions else None
-    return time_dense_path(planner.robot, planner.config, certifier, states, indices, method, scalings, deadline,
+def _timed(context, request: CartesianRequest, states, indices, deadline: float, margin: float) -> Trajectory:
+    scalings = (check_scaling(request.velocity_scaling, "velocity_scaling"),
+                check_scaling(request.acceleration_scaling, "acceleration_scaling"))  # fmt: skip
+    method = request.time_parameterization or context.config.time_parameterization
+    certifier = context.certifier if request.avoid_collisions else None
+    return time_dense_path(context.robot, context.config, certifier, states, indices, method, scalings, deadline,
                            margin)  # fmt: skip
 
 
@@ -287,11 +289,11 @@ def time_dense_path(robot, config, certifier, states: np.ndarray, indices: np.nd
                     scalings: tuple[float, float], deadline: float, margin: float) -> Trajectory:  # fmt: skip
     """A trajectory through the full configurations ``states`` (only ``indices`` move) that stays within
     :data:`BLEND_DEVIATION` rad of their polyline; blends certified by ``certifier`` (None: unchecked)."""
-    limits = timing.Limits.scaled(robot.velocity_limits[indices], robot.acceleration_limits[indices], *scalings)
-    curve_free: timing.CurveFree = _unchecked
+    limits = Limits.scaled(robot.velocity_limits[indices], robot.acceleration_limits[indices], *scalings)
+    curve_free: CurveFree = _unchecked
     if certifier is not None:
-        curve_free = timing.certified_curve(certifier, states[0], indices, deadline, margin)
-    trajectory, _report = timing.parameterize(
+        curve_free = certified_curve(certifier, states[0], indices, deadline, margin)
+    trajectory, _report = parameterize(
         states[:, indices],
         [robot.joint_names[i] for i in indices],
         limits,

@@ -34,11 +34,11 @@ from maru_planner.planning.config import COLLISION_MODELS, TIME_PARAMETERIZATION
 from maru_planner.planning.links import check_link
 from maru_planner.planning.motion_planner import MotionPlanner
 from maru_planner.planning.problems import PROBLEMS
-from maru_planner.planning.registry import PLANNERS, get_spec, merged_params
-from maru_planner.planning.timing import MIN_SCALING
+from maru_planner.planning.planners.registry import PLANNERS, get_spec, merged_params
 from maru_planner.planning.types import MotionRequest, MotionResult, PlanStatus, status_of_error
 from maru_planner.robot import RobotModel, load_example_robot
 from maru_planner.scene import Scene
+from maru_planner.trajectory.limits import MIN_SCALING
 
 PROG = "maru-plan"
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERNAL, EXIT_INTERRUPTED = 0, 1, 2, 3, 130

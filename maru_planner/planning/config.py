@@ -9,9 +9,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from maru_planner.params import ParamSpec, dataclass_params, param
+from maru_planner.trajectory.limits import METHODS as TIME_PARAMETERIZATIONS
 
 COLLISION_MODELS = ("exact", "spheres")
-TIME_PARAMETERIZATIONS = ("toppra", "ruckig", "trapezoid")  # see maru_planner.planning.timing
 
 
 @dataclass

@@ -19,10 +19,9 @@ import pinocchio as pin
 
 from maru_planner import errors
 from maru_planner.params import ParamSpec
-from maru_planner.planning import constrained_planner
 from maru_planner.planning.constraints import PathConstraints
 from maru_planner.planning.links import check_link, link_names
-from maru_planner.planning.registry import PLANNERS, ArmPlannerSpec
+from maru_planner.planning.planners.registry import PLANNERS, ArmPlannerSpec
 
 
 def compute_fk(robot, q: np.ndarray, links: Sequence[str] = ()) -> dict[str, np.ndarray]:
@@ -118,21 +117,9 @@ class PlannerDescription:
 
 
 def query_planners(overrides: Mapping[str, Mapping[str, Any]] | None = None) -> list[PlannerDescription]:
-    """Every registered planner, then CBiRRT (path constraints), their parameters' current values from
-    ``overrides`` ({id: {name: value}})."""
+    """Every registered planner, its parameters' current values from ``overrides`` ({id: {name: value}})."""
     overrides = overrides or {}
-    listed = [_describe(spec, overrides.get(spec.id, {})) for spec in PLANNERS.values()]
-    return [*listed, _constrained(overrides.get(constrained_planner.PLANNER_ID, {}))]
-
-
-def _constrained(values: Mapping[str, Any]) -> PlannerDescription:
-    params = constrained_planner.PARAMS
-    return PlannerDescription(
-        constrained_planner.PLANNER_ID,
-        constrained_planner.DESCRIPTION,
-        ("path_constraints", "tree"),
-        tuple(PlannerParameter(p, values.get(name, p.default)) for name, p in params.items()),
-    )
+    return [_describe(spec, overrides.get(spec.id, {})) for spec in PLANNERS.values()]
 
 
 def _describe(spec: ArmPlannerSpec, values: Mapping[str, Any]) -> PlannerDescription:

@@ -1,213 +1,33 @@
-"""Arm planner registry: one :class:`ArmPlannerSpec` per planner id.
+"""Moved to :mod:`maru_planner.planning.planners.registry`; this path is kept for existing imports."""
 
-A spec says how to build the planner on a ``SpaceInformation`` (``factory``), which parameters it
-takes (:class:`~maru_planner.params.ParamSpec` s with defaults, ranges and descriptions) and what
-it can do (``capabilities``). The :class:`~maru_planner.planning.MotionPlanner` facade, ``maru-plan``
-(its ``--planner`` choices and ``--param``), the planning node (parameters ``planners.<ID>.<param>``)
-and the parametrised tests all read :data:`PLANNERS`, so adding a planner is one :func:`register`
-call (plus the planner's own file).
-
-Built in: ``RRT`` (OMPL RRT, goal bias 0), ``GoalBiasedRRT`` (OMPL RRT, goal bias 0.05 = OMPL's
-default), ``RRTConnect``, ``PRM`` (OMPL's, roadmap kept between queries, see
-:mod:`maru_planner.planning.roadmap`), ``RCRRT`` (ours, :mod:`maru_planner.planning.rc_rrt`) and
-``CompiledRRTConnect`` (ours, numba on the sphere model, :mod:`maru_planner.planning.compiled_rrtc`).
-Parameters are set through OMPL's parameter mechanism under OMPL's own names
-(:mod:`maru_planner.planning.planner_params`).
-"""
-
-from __future__ import annotations
-
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass
-from typing import Any, Protocol, runtime_checkable
-
-from ompl import base as ob
-from ompl import geometric as og
-
-from maru_planner.errors import InvalidPlanner, InvalidRequest
-from maru_planner.params import ParamSpec, check_params
-from maru_planner.planning.compiled_rrtc import COMPILED_RRTC_PARAMS, CompiledRRTConnect
-from maru_planner.planning.planner_params import ompl_params
-from maru_planner.planning.rc_rrt import RCRRT, RCRRT_PARAMS
-from maru_planner.planning.space import EdgeChecker
-
-#: What a planner can declare about itself (``ArmPlannerSpec.capabilities``).
-CAPABILITIES: dict[str, str] = {
-    "tree": "grows a search tree from the start for each query",
-    "roadmap": "keeps a roadmap between queries while the scene is unchanged (the factory returns a RoadmapPlanner)",
-    "anytime": "keeps improving its solution until the search time ends",
-    "resolution_complete": "proves that no path exists at its resolution (failure_proof)",
-}
-
-
-class ArmPlanner(Protocol):
-    """What the facade calls on a planner: OMPL's ``ompl.base.Planner`` surface."""
-
-    def getName(self) -> str: ...  # noqa: N802 (OMPL's names)
-
-    def setup(self) -> None: ...
-
-    def solve(self, ptc: ob.PlannerTerminationCondition) -> ob.PlannerStatus: ...
-
-    def clear(self) -> None: ...
-
-    def getPlannerData(self, data: ob.PlannerData) -> None: ...  # noqa: N802
-
-
-@runtime_checkable
-class ReportsGraphSize(Protocol):
-    """Optional hook: a planner that counts its own nodes and edges (no PlannerData copy needed)."""
-
-    def graph_size(self) -> tuple[int, int]: ...
-
-
-@runtime_checkable
-class ProvesFailure(Protocol):
-    """Optional hook: after a failed solve, the reason no path exists (None if it only ran out of time)."""
-
-    def failure_proof(self) -> str | None: ...
-
-
-class RoadmapPlanner(ArmPlanner, Protocol):
-    """A planner with the "roadmap" capability: grown and expanded explicitly, then queried (OMPL's PRM)."""
-
-    def milestoneCount(self) -> int: ...  # noqa: N802 (OMPL's names)
-
-    def edgeCount(self) -> int: ...  # noqa: N802
-
-    def growRoadmapPtc(self, ptc: ob.PlannerTerminationCondition) -> None: ...  # noqa: N802
-
-    def expandRoadmapPtc(self, ptc: ob.PlannerTerminationCondition) -> None: ...  # noqa: N802
-
-
-#: factory(si, params, edge_checker) -> planner; ``params`` are already checked against the spec.
-PlannerFactory = Callable[[ob.SpaceInformation, dict[str, Any], EdgeChecker | None], ArmPlanner]
-
-
-@dataclass(frozen=True)
-class ArmPlannerSpec:
-    """One registered arm planner (see module doc)."""
-
-    id: str
-    description: str
-    factory: PlannerFactory
-    params: Mapping[str, ParamSpec]
-    capabilities: frozenset[str]
-
-    def has(self, capability: str) -> bool:
-        return capability in self.capabilities
-
-
-PLANNERS: dict[str, ArmPlannerSpec] = {}
-
-
-def register(spec: ArmPlannerSpec) -> ArmPlannerSpec:
-    """Add ``spec`` to :data:`PLANNERS` (replacing an entry of the same id)."""
-    unknown = sorted(spec.capabilities - CAPABILITIES.keys())
-    if unknown:
-        known = ", ".join(CAPABILITIES)
-        raise ValueError(f"planner {spec.id}: unknown capabilities {', '.join(unknown)}; known: {known}")
-    for name, param in spec.params.items():
-        if param.name != name:
-            raise ValueError(f"planner {spec.id}: parameter {name!r} is declared as {param.name!r}")
-    PLANNERS[spec.id] = spec
-    return spec
-
-
-def planner_ids() -> list[str]:
-    """Registered ids, in registration order."""
-    return list(PLANNERS)
-
-
-def get_spec(planner_id: str) -> ArmPlannerSpec:
-    """The spec of ``planner_id``; InvalidPlanner (naming the known ids) if it is not registered."""
-    spec = PLANNERS.get(planner_id) if isinstance(planner_id, str) else None
-    if spec is None:
-        raise InvalidPlanner(f"unknown planner {planner_id!r:.60}; known: {', '.join(PLANNERS)}")
-    return spec
-
-
-def merged_params(planner_id: str, overrides: Mapping[str, Any] | None) -> dict[str, Any]:
-    """Default parameters of ``planner_id`` updated with ``overrides``, each checked (unknown names raise)."""
-    spec = get_spec(planner_id)
-    try:
-        return check_params(dict(spec.params), dict(overrides or {}), owner=f"planner {planner_id}")
-    except InvalidRequest as exc:
-        owner = f"planner {planner_id}"
-        message = exc.message if exc.message.startswith(owner) else f"{owner}: {exc.message}"
-        raise InvalidRequest(message, source="planner") from exc
-
-
-def make_planner(
-    planner_id: str, si: ob.SpaceInformation, params: Mapping[str, Any] | None = None, edge_checker=None
-) -> ArmPlanner:
-    """A configured planner instance of ``planner_id`` for ``si`` (``params`` override the defaults)."""
-    return get_spec(planner_id).factory(si, merged_params(planner_id, params), edge_checker)
-
-
-# --- the built-in planners ------------------------------------------------------------------
-_RANGE = ParamSpec("range", 0.0, "max edge length (rad); 0 = OMPL's automatic 20 % of the space extent", lower=0.0)
-
-
-def _goal_bias(default: float) -> ParamSpec:
-    return ParamSpec("goal_bias", default, "probability of sampling the goal", lower=0.0, upper=1.0)
-
-
-def _ompl_factory(cls: type, name: str, accessors: Mapping[str, tuple[str, str]], specs: Mapping[str, ParamSpec]):
-    """A factory building OMPL planner ``cls`` named ``name``, its parameters set by OMPL's declared names."""
-
-    def build(si: ob.SpaceInformation, params: dict[str, Any], _edge_checker: EdgeChecker | None) -> ArmPlanner:
-        planner = cls(si)
-        planner.setName(name)
-        ompl_params(planner, specs, accessors).set_params(params)
-        return planner
-
-    return build
-
-
-def _rcrrt(si: ob.SpaceInformation, params: dict[str, Any], edge_checker: EdgeChecker | None) -> ArmPlanner:
-    planner = RCRRT(si, edge_checker)
-    planner.params().set_params(params)
-    return planner
-
-
-def _register_ompl(planner_id: str, description: str, cls: type, specs: tuple[ParamSpec, ...],
-                   accessors: Mapping[str, tuple[str, str]], capabilities: frozenset[str]) -> None:  # fmt: skip
-    by_name = {spec.name: spec for spec in specs}
-    register(ArmPlannerSpec(planner_id, description, _ompl_factory(cls, planner_id, accessors, by_name), by_name,
-                            capabilities))  # fmt: skip
-
-
-_RRT_ACCESSORS = {"range": ("setRange", "getRange"), "goal_bias": ("setGoalBias", "getGoalBias")}
-_register_ompl("RRT", "OMPL RRT without goal bias", og.RRT, (_RANGE, _goal_bias(0.0)), _RRT_ACCESSORS,
-               frozenset({"tree"}))  # fmt: skip
-_register_ompl("RRTConnect", "OMPL RRTConnect: two trees grown toward each other", og.RRTConnect, (_RANGE,),
-               {"range": ("setRange", "getRange")}, frozenset({"tree"}))  # fmt: skip
-_register_ompl(
-    "PRM",
-    "OMPL PRM; the roadmap is kept between queries and re-validated after a scene change",
-    og.PRM,
-    (ParamSpec("max_nearest_neighbors", 3, "milestones each new milestone tries to connect to (OMPL: 10)", lower=1),),
-    {"max_nearest_neighbors": ("setMaxNearestNeighbors", "getMaxNearestNeighbors")},
-    frozenset({"roadmap"}),
+from maru_planner.planning.planners.registry import (
+    CAPABILITIES,
+    ArmPlanner,
+    ReportsGraphSize,
+    ProvesFailure,
+    RoadmapPlanner,
+    PlannerFactory,
+    ArmPlannerSpec,
+    PLANNERS,
+    register,
+    planner_ids,
+    get_spec,
+    merged_params,
+    make_planner,
 )
-_register_ompl("GoalBiasedRRT", "OMPL RRT sampling the goal with probability goal_bias", og.RRT,
-               (_RANGE, _goal_bias(0.05)), _RRT_ACCESSORS, frozenset({"tree"}))  # fmt: skip
-register(
-    ArmPlannerSpec(
-        "RCRRT",
-        "resolution-complete RRT (Cheng & LaValle 2002) on a joint lattice",
-        _rcrrt,
-        RCRRT_PARAMS,
-        frozenset({"tree", "resolution_complete"}),
-    )
-)
-register(
-    ArmPlannerSpec(
-        "CompiledRRTConnect",
-        "RRT-Connect compiled with numba on the sphere model (VAMP-style); OMPL RRTConnect on other checkers",
-        CompiledRRTConnect.create,
-        COMPILED_RRTC_PARAMS,
-        frozenset({"tree"}),
-    )
-)
+
+__all__ = [
+    "CAPABILITIES",
+    "ArmPlanner",
+    "ReportsGraphSize",
+    "ProvesFailure",
+    "RoadmapPlanner",
+    "PlannerFactory",
+    "ArmPlannerSpec",
+    "PLANNERS",
+    "register",
+    "planner_ids",
+    "get_spec",
+    "merged_params",
+    "make_planner",
+]

@@ -25,7 +25,7 @@ import numpy as np
 from ompl import base as ob
 from ompl import geometric as og
 
-from maru_planner.collision.checker import bisection_order
+from maru_planner.collision.kernels.bisection import bisection_order
 
 
 class GroupSpace:

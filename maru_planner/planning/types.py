@@ -11,10 +11,11 @@ import numpy as np
 
 from maru_planner import errors
 from maru_planner.planning.constraints import PathConstraints
+from maru_planner.trajectory.trajectory import Trajectory
 
 if TYPE_CHECKING:  # the sphere module loads numba; results only carry its PathVerification
     from maru_planner.collision.spheres import PathVerification
-    from maru_planner.planning.timing import TimingReport
+    from maru_planner.trajectory.report import TimingReport
 
 
 class PlanStatus(enum.Enum):
@@ -85,7 +86,7 @@ class MotionRequest:
     the group are held fixed at these values). The goal is either ``goal_joints`` (all
     joints of the group) or ``goal_poses`` ({frame: 4x4 homogeneous matrix}, solved by IK
     first). ``seed=None`` draws a random seed (reported in the stats). ``time_parameterization``
-    is "toppra", "ruckig" or "trapezoid" (:mod:`~maru_planner.planning.timing`); empty = the
+    is "toppra", "ruckig" or "trapezoid" (:mod:`~maru_planner.trajectory`); empty = the
     planner's ``PlannerConfig.time_parameterization``. ``jerk_scaling`` scales the jerk limits
     ("ruckig" only). ``safety_margin`` (m): the clearance the certified path keeps from every
     obstacle and link pair (``docs/certification.md``); None = ``PlannerConfig.safety_margin``.
@@ -110,30 +111,6 @@ class MotionRequest:
     safety_margin: float | None = None
     path_constraints: PathConstraints | None = None
     goal_region: PathConstraints | None = None
-
-
-@dataclass
-class Trajectory:
-    """Time-parameterised joint trajectory; rows are samples, columns follow ``joint_names``."""
-
-    joint_names: list[str]
-    times: np.ndarray
-    positions: np.ndarray
-    velocities: np.ndarray
-    accelerations: np.ndarray
-
-    @property
-    def duration(self) -> float:
-        return float(self.times[-1]) if len(self.times) else 0.0
-
-    def to_dict(self) -> dict:
-        return {
-            "joint_names": list(self.joint_names),
-            "times": self.times.tolist(),
-            "positions": self.positions.tolist(),
-            "velocities": self.velocities.tolist(),
-            "accelerations": self.accelerations.tolist(),
-        }
 
 
 @dataclass

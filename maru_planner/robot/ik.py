@@ -1,7 +1,7 @@
 """Inverse kinematics for any robot: the robot's own strategies first, then damped least squares.
 
 - ``solve_ik``: tries the robot profile's IK strategies (``robot.ik_strategies``, e.g. Maru-1's
-  closed-form arms and two-hand scheme in :mod:`maru_planner.robot.maru1_ik`), then ``solve_ik_numeric``.
+  closed-form arms and two-hand scheme in :mod:`maru_planner.robot.robots.maru1`), then ``solve_ik_numeric``.
 - ``solve_ik_numeric``: Levenberg-Marquardt-damped least squares on Pinocchio frame Jacobians, any
   number of frame targets, restricted to a group's joints, clamped to joint limits, with random restarts.
 
@@ -22,7 +22,7 @@ import pinocchio as pin
 
 from maru_planner.errors import InvalidRequest, NoIKSolution
 
-if TYPE_CHECKING:  # annotations only: model.py imports the profiles, whose strategies import this module
+if TYPE_CHECKING:  # annotations only: model.py imports this module (IKStrategy)
     from maru_planner.robot.model import RobotModel
 
 Validity = Callable[[np.ndarray], bool]
@@ -41,6 +41,8 @@ class IKStrategy(Protocol):
         deadline: float | None,
         is_valid: Validity | None,
     ) -> np.ndarray | None: ...
+
+
 LOCAL = pin.ReferenceFrame.LOCAL
 
 

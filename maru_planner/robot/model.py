@@ -1,7 +1,8 @@
 """RobotModel: URDF + SRDF -> Pinocchio model, collision geometry, planning groups, FK.
 
 Robots known by name (Maru-1, the example-robot-data arms) load through their profile
-(``RobotModel.from_profile``, ``maru_planner/robot/profiles.py``); any other URDF through ``from_urdf``.
+(``RobotModel.from_profile``; the table is ``maru_planner/robot/robot_profile.py``'s, which
+``maru_planner/robot/profiles.py`` fills from ``maru_planner/robot/robots/``); any other URDF through ``from_urdf``.
 
 Any URDF loads with a fixed base. Joints whose configuration is not one
 number (continuous wheels, spherical, planar...) and any joints named in
@@ -18,9 +19,9 @@ import numpy as np
 import pinocchio as pin
 
 from maru_planner.errors import InvalidGroup, InvalidRequest
-from maru_planner.robot import profiles
+from maru_planner.robot import robot_profile
 from maru_planner.robot.ik import IKStrategy
-from maru_planner.robot.profiles import DEFAULT_ACCELERATION_LIMIT, RobotProfile
+from maru_planner.robot.robot_profile import DEFAULT_ACCELERATION_LIMIT, RobotProfile
 from maru_planner.robot.srdf import SrdfInfo, parse_srdf
 
 WORLD = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
@@ -96,7 +97,7 @@ class RobotModel:
             srdf.groups = {g: [j for j in js if j in known] for g, js in srdf.groups.items()}
             srdf.groups = {g: js for g, js in srdf.groups.items() if js}
         if ik_strategies is None:
-            matching = profiles.profile_for_urdf(model.name)
+            matching = robot_profile.profile_for_urdf(model.name)
             ik_strategies = matching.ik_strategies if matching is not None else ()
         return cls(
             name or model.name,
@@ -111,7 +112,7 @@ class RobotModel:
     @classmethod
     def from_profile(cls, robot: str | RobotProfile) -> RobotModel:
         """A robot of the profile table (``maru_planner/robot/profiles.py``), by name or profile."""
-        profile = profiles.profile(robot) if isinstance(robot, str) else robot
+        profile = robot_profile.profile(robot) if isinstance(robot, str) else robot
         files = profile.files()
         loaded = cls.from_urdf(
             files.urdf,

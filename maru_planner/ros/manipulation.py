@@ -1,15 +1,16 @@
 """Messages <-> core for the manipulation services of ``planning_node`` (docs/manipulation.md).
 
 ``compute_fk``, ``check_state_validity``, ``query_planners`` and ``compute_cartesian_path``: each has a
-response filler here and, where it needs a worker's robot and checker, a ``*_in_context`` function the
-node runs on a planning worker. Attach/detach operations of ``ApplyScene`` are applied by
-:func:`apply_attachment`.
+response filler here; what runs on a planning worker is the runtime's (:mod:`maru_planner.runtime.requests`,
+its ``*_in_context`` functions re-exported here). Attach/detach operations of ``ApplyScene`` become the
+runtime's scene edits in :func:`attachment_edit`.
 """
 
 from __future__ import annotations
 
+import functools
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 
 import numpy as np
 from geometry_msgs.msg import PoseStamped
@@ -17,10 +18,11 @@ from geometry_msgs.msg import PoseStamped
 from maru_planner import errors
 from maru_planner.planning.cartesian import CartesianRequest, CartesianResult
 from maru_planner.planning.constraints import OrientationConstraint, PathConstraints, PositionConstraint
-from maru_planner.planning.queries import PlannerDescription, StateValidity, check_state_validity, compute_fk
+from maru_planner.planning.queries import PlannerDescription, StateValidity
 from maru_planner.ros import planning_conversions as conv
-from maru_planner.scene import Obstacle, Scene
-from maru_planner.scene_attached import check_attachments
+from maru_planner.runtime.requests import cartesian_in_context, fk_in_context, validity_in_context
+from maru_planner.runtime.scene_store import Attachments, AttachObject, DetachObject, LinkPose, apply_edit
+from maru_planner.scene import Scene
 from maru_planner_interfaces.msg import PathConstraints as PathConstraintsMsg
 from maru_planner_interfaces.msg import PlannerDescription as PlannerDescriptionMsg
 from maru_planner_interfaces.msg import PlannerParameter, SceneObstacle
@@ -28,10 +30,17 @@ from maru_planner_interfaces.srv import CheckStateValidity, ComputeCartesianPath
 
 DEFAULT_MAX_STEP = 0.01  # m, when a Cartesian request gives 0
 
-LinkPose = Callable[[str, dict[str, float]], np.ndarray]  # (link, joint values) -> 4x4 pose in the planning frame
+__all__ = [  # what runs on a worker and the attachments moved to maru_planner.runtime; re-exported
+    "Attachments",
+    "LinkPose",
+    "cartesian_in_context",
+    "fk_in_context",
+    "validity_in_context",
+]
 
 
 # ---------------------------------------------------------------- path constraints
+
 
 def path_constraints(msg: PathConstraintsMsg, frame: str) -> PathConstraints:
     """Core constraints of a ``PathConstraints`` message (empty link names: no such constraint)."""
@@ -53,10 +62,6 @@ def path_constraints(msg: PathConstraintsMsg, frame: str) -> PathConstraints:
 
 # ---------------------------------------------------------------- compute_fk
 
-def fk_in_context(context, values: dict[str, float], links: list[str]) -> dict[str, np.ndarray]:
-    robot = context.planner.robot
-    return compute_fk(robot, conv.configuration(robot, values, strict=True), links)
-
 
 def fill_fk(response: ComputeFK.Response, poses: Mapping[str, np.ndarray], frame: str, stamp) -> None:
     response.links = list(poses)
@@ -72,12 +77,6 @@ def _stamped(pose: np.ndarray, frame: str, stamp) -> PoseStamped:
 
 # ---------------------------------------------------------------- check_state_validity
 
-def validity_in_context(context, values: dict[str, float], constraints: PathConstraints) -> StateValidity:
-    planner = context.planner
-    constraints.check_links(planner.robot)
-    q = conv.configuration(planner.robot, values, strict=True)
-    return check_state_validity(planner.robot, planner.exact_checker or planner.checker, q, constraints)
-
 
 def fill_validity(response: CheckStateValidity.Response, answer: StateValidity) -> None:
     response.valid = answer.valid
@@ -90,6 +89,7 @@ def fill_validity(response: CheckStateValidity.Response, answer: StateValidity) 
 
 
 # ---------------------------------------------------------------- query_planners
+
 
 def fill_planners(response: QueryPlanners.Response, planners: list[PlannerDescription], default: str) -> None:
     response.default_planner = default
@@ -114,6 +114,7 @@ def _scalar(value) -> str:
 
 # ---------------------------------------------------------------- compute_cartesian_path
 
+
 def cartesian_request(msg: ComputeCartesianPath.Request, start: dict[str, float], group: str, frame: str,
                       budget: float) -> CartesianRequest:  # fmt: skip
     """Core request of a ``ComputeCartesianPath`` request (waypoints are poses in the planning frame)."""
@@ -127,10 +128,6 @@ def cartesian_request(msg: ComputeCartesianPath.Request, start: dict[str, float]
     )  # fmt: skip
 
 
-def cartesian_in_context(context, request: CartesianRequest) -> CartesianResult:
-    return context.planner.cartesian_path(request)
-
-
 def fill_cartesian(response: ComputeCartesianPath.Response, result: CartesianResult, frame: str, stamp) -> None:
     response.error = conv.result_error_msg(result)
     response.fraction = float(result.fraction)
@@ -141,47 +138,25 @@ def fill_cartesian(response: ComputeCartesianPath.Response, result: CartesianRes
 
 # ---------------------------------------------------------------- attach / detach
 
-class Attachments:
-    """What ATTACH/DETACH need from the node: link poses of its robot, and a check of the attached links.
 
-    ``latest`` returns the latest /joint_states values (used when an operation's robot_state is empty).
-    Thread-safe: every pose comes from its own Pinocchio data.
-    """
+def attachment_edit(msg: SceneObstacle) -> AttachObject | DetachObject:
+    """ATTACH (a scene obstacle where it is, or a new shape at ``msg.pose``) or DETACH ``msg.name``, as an edit.
 
-    def __init__(self, robot, latest: Callable[[], dict[str, float]]):
-        self.robot, self.latest = robot, latest
-
-    def link_pose(self, link: str, values: dict[str, float]) -> np.ndarray:
-        if not values:
-            values = self.latest()
-            if not values:
-                raise errors.NoStartState("robot_state is empty and no /joint_states message has been received")
-        return compute_fk(self.robot, conv.configuration(self.robot, values), [link])[link]
-
-    def check(self, scene: Scene) -> None:
-        """InvalidLink / ObjectAlreadyAttached for attached objects the robot cannot carry."""
-        check_attachments(self.robot, scene)
-
-
-def apply_attachment(scene: Scene, msg: SceneObstacle, frame: str, link_pose: LinkPose) -> None:
-    """ATTACH (a scene obstacle where it is, or a new shape at ``msg.pose``) or DETACH ``msg.name``.
-
-    ``link_pose(link, joint values)`` places the link: the values are ``msg.robot_state``'s (empty: the
-    caller's latest state). A new shape's pose is in the planning frame, like an ADD's.
+    The link is placed at ``msg.robot_state`` (empty: the latest /joint_states). A new shape's pose is in the
+    planning frame, like an ADD's; it is converted once the link is placed.
     """
     values = conv.joint_state_values(msg.robot_state, f"object '{msg.name}' robot_state")
     if msg.operation == SceneObstacle.DETACH:
-        if msg.name not in scene.attached:
-            raise errors.InvalidObject(f"object '{msg.name}': not attached (attached: {list(scene.attached)})")
-        scene.detach(msg.name, link_pose(scene.attached[msg.name].link, values))
-        return
+        return DetachObject(msg.name, values)
     if not msg.link_name:
         raise errors.InvalidLink(f"object '{msg.name}': ATTACH needs a link_name")
-    here = link_pose(msg.link_name, values)
-    if msg.shape.type == 0:  # no shape: the scene obstacle of that name
-        scene.attach(msg.name, msg.link_name, here, touch_links=list(msg.touch_links))
-        return
-    shape = conv.primitive_to_obstacle(msg.name, msg.shape, msg.pose)
-    local = np.linalg.inv(here) @ np.asarray(shape.pop("pose"))
-    obstacle = Obstacle.from_dict({**shape, "pose": local})
-    scene.attach(msg.name, msg.link_name, touch_links=list(msg.touch_links), obstacle=obstacle)
+    shape = None  # no shape: the scene obstacle of that name
+    if msg.shape.type != 0:
+        shape = functools.partial(conv.primitive_to_obstacle, msg.name, msg.shape, msg.pose)
+    return AttachObject(msg.name, msg.link_name, values, tuple(msg.touch_links), shape)
+
+
+def apply_attachment(scene: Scene, msg: SceneObstacle, frame: str, link_pose: LinkPose) -> None:
+    """Apply :func:`attachment_edit` of ``msg`` to ``scene``, ``link_pose(link, joint values)`` placing the link
+    (``frame``, the planning frame, is checked by the caller)."""
+    apply_edit(scene, attachment_edit(msg), link_pose)

@@ -18,9 +18,10 @@ from sensor_msgs.msg import JointState
 from shape_msgs.msg import SolidPrimitive
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
-from maru_planner import errors, shapes
+from maru_planner import errors
 from maru_planner.planning.types import known_status_of_error
-from maru_planner.scene import pose_matrix
+from maru_planner.runtime.robot_state import configuration  # noqa: F401  (moved to the runtime; re-exported)
+from maru_planner.scene import pose_matrix, shapes
 from maru_planner_interfaces.msg import PlannerStats, PlanningError, SceneObstacle
 
 # PlanStatus member name -> code: the one table from the core's statuses to PlanningError codes
@@ -109,23 +110,6 @@ def named_values(names, values, what: str) -> dict[str, float]:
 def joint_state_values(msg, what: str = "start_state") -> dict[str, float]:
     """Positions of a ``sensor_msgs/JointState`` by joint name."""
     return named_values(msg.name, msg.position, what)
-
-
-def configuration(robot, values: dict[str, float], *, strict: bool = False) -> np.ndarray:
-    """Full robot configuration: ``robot.neutral()`` with ``values`` set by joint name.
-
-    Names the robot does not have are ignored (``/joint_states`` may carry other joints),
-    or raise ``InvalidJointNames`` when ``strict``.
-    """
-    q = np.asarray(robot.neutral(), dtype=float).copy()
-    joints = set(robot.joint_names)
-    unknown = [name for name in values if name not in joints]
-    if strict and unknown:
-        raise errors.InvalidJointNames(f"unknown joint(s) {', '.join(unknown)}")
-    known = [name for name in values if name in joints]
-    if known:
-        q[robot.joint_indices(known)] = [values[name] for name in known]
-    return q
 
 
 def joint_state_msg(names, positions, stamp=None):
@@ -219,6 +203,7 @@ def pose_goals(poses, links, planning_frame: str) -> dict[str, np.ndarray]:
 
 # ---------------------------------------------------------------- scene obstacles
 
+
 def obstacle_pose(pose: Pose, name: str) -> np.ndarray:
     """4x4 pose of obstacle ``name``; a NaN or zero-quaternion pose raises ``InvalidScene``."""
     try:
@@ -229,8 +214,9 @@ def obstacle_pose(pose: Pose, name: str) -> np.ndarray:
 
 def primitive_shape(type_code: int, where: str) -> shapes.ShapeSpec:
     """The shape table entry sent as ``SolidPrimitive`` type ``type_code``."""
-    names = {getattr(SolidPrimitive, spec.primitive_type): spec for spec in shapes.SHAPES.values()
-             if spec.primitive_type}
+    names = {
+        getattr(SolidPrimitive, spec.primitive_type): spec for spec in shapes.SHAPES.values() if spec.primitive_type
+    }
     if type_code not in names:
         known = ", ".join(f"{spec.primitive_type} ({code})" for code, spec in names.items())
         raise errors.InvalidScene(f"{where}: shape type {type_code} is not one of {known}")

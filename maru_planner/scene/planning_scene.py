@@ -1,4 +1,4 @@
-"""Scene: named obstacles (any shape of :data:`maru_planner.shapes.SHAPES`) in the robot's root frame.
+"""Scene: named obstacles (any shape of :data:`maru_planner.scene.shapes.SHAPES`) in the robot's root frame.
 
 YAML schema (what benchmarks and external checks write)::
 
@@ -10,7 +10,7 @@ YAML schema (what benchmarks and external checks write)::
       - {name: part, type: mesh, path: part.stl, scale: [1, 1, 1], pose: {...}}
 
 Box sizes are full side lengths; cylinders are along their local z, centred. Each obstacle's
-fields are its shape's dimensions (``maru_planner/shapes.py``); a relative file path (a mesh) is
+fields are its shape's dimensions (``maru_planner/scene/shapes.py``); a relative file path (a mesh) is
 resolved against the YAML file's directory.
 Objects attached to the robot (``attached``) move with their link: each is a shape with its pose in
 the link's frame, the link, and the links it may touch (the link itself always may)::
@@ -21,181 +21,24 @@ the link's frame, the link, and the links it may touch (the link itself always m
 
 :meth:`Scene.attach` takes a scene obstacle (or a new shape) onto a link, :meth:`Scene.detach` puts it
 back into the scene where it is; the collision model that carries them is
-:func:`maru_planner.scene_attached.robot_with_attached`.
+:func:`maru_planner.robot.attached.robot_with_attached`.
 Every change bumps ``scene.version`` so planners can cache on it.
 """
 
 from __future__ import annotations
 
 import itertools
-import math
 import time
 from collections import Counter, OrderedDict
 from pathlib import Path
 from typing import Any
 
-import coal
 import numpy as np
 import yaml
 
 from maru_planner.errors import InvalidObject, InvalidScene, ObjectAlreadyAttached, one_line
-from maru_planner.shapes import KernelPrimitive, ShapeSpec, numbers, posed, shape, validate
-
-
-def rpy_matrix(roll: float, pitch: float, yaw: float) -> np.ndarray:
-    """R = Rz(yaw) Ry(pitch) Rx(roll) (URDF / REP 103 convention)."""
-    cr, sr, cp, sp, cy, sy = (f(a) for a in (roll, pitch, yaw) for f in (math.cos, math.sin))
-    return np.array(
-        [
-            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-            [-sp, cp * sr, cp * cr],
-        ]
-    )
-
-
-def matrix_rpy(R: np.ndarray) -> tuple[float, float, float]:
-    """(roll, pitch, yaw) of a rotation matrix, the inverse of :func:`rpy_matrix` (gimbal lock: all in yaw)."""
-    pitch = math.atan2(-R[2, 0], math.hypot(R[0, 0], R[1, 0]))
-    if abs(math.cos(pitch)) < 1e-9:
-        return 0.0, pitch, math.atan2(-R[0, 1], R[1, 1])
-    return math.atan2(R[2, 1], R[2, 2]), pitch, math.atan2(R[1, 0], R[0, 0])
-
-
-def pose_matrix(pose: Any, where: str = "pose") -> np.ndarray:
-    """A 4x4 from a 4x4, {xyz, rpy}, (x, y, z) or (x, y, z, roll, pitch, yaw)."""
-    if pose is None:
-        return np.eye(4)
-    if isinstance(pose, dict):
-        unknown = set(pose) - {"xyz", "rpy"}
-        if unknown:
-            raise InvalidScene(f"{where}: unknown pose field(s) {sorted(unknown)} (use xyz, rpy)")
-        T = np.eye(4)
-        T[:3, 3] = numbers(where, "pose.xyz", pose.get("xyz", [0, 0, 0]), 3)
-        T[:3, :3] = rpy_matrix(*numbers(where, "pose.rpy", pose.get("rpy", [0, 0, 0]), 3))
-        return T
-    arr = np.asarray(pose, dtype=float)
-    if arr.shape == (4, 4):
-        if not np.all(np.isfinite(arr)):
-            raise InvalidScene(f"{where}: pose contains NaN or inf")
-        R = arr[:3, :3]
-        if not np.allclose(R @ R.T, np.eye(3), atol=1e-6) or np.linalg.det(R) < 0:
-            raise InvalidScene(f"{where}: pose rotation is not a rotation matrix")
-        return arr.copy()
-    flat = arr.reshape(-1)
-    if flat.size == 3:
-        T = np.eye(4)
-        T[:3, 3] = numbers(where, "pose", flat, 3)
-        return T
-    if flat.size == 6:
-        vals = numbers(where, "pose", flat, 6)
-        T = np.eye(4)
-        T[:3, 3], T[:3, :3] = vals[:3], rpy_matrix(*vals[3:])
-        return T
-    raise InvalidScene(f"{where}: pose must be a 4x4, {{xyz, rpy}}, xyz or xyz+rpy, got shape {arr.shape}")
-
-
-MAX_NAME_LENGTH = 256  # characters of an obstacle name
-
-
-class Obstacle:
-    """One named obstacle of a registered shape (:mod:`maru_planner.shapes`); validated on creation.
-
-    ``Obstacle("desk", "box", size=(1, 2, 0.1), pose=[0.5, 0, 0])``: the keyword fields are the shape's
-    dimensions and are readable as attributes (``desk.size``); bad values raise InvalidScene.
-    """
-
-    def __init__(self, name: str, type: str, pose: Any = None, **dimensions: Any):
-        if not isinstance(name, str) or not name:
-            raise InvalidScene(f"obstacle {name!r:.60}: field 'name' must be a non-empty string")
-        if len(name) > MAX_NAME_LENGTH:
-            raise InvalidScene(f"obstacle name {name!r:.60} has {len(name)} characters, more than {MAX_NAME_LENGTH}")
-        where = f"obstacle {name[:60]!r}"  # repr of an excerpt: one line, a bounded message
-        self.name = name
-        self.type: str = type
-        self.pose = pose_matrix(pose, where)
-        self.dimensions = validate(shape(type, where), where, dimensions)
-
-    @property
-    def spec(self) -> ShapeSpec:
-        """The shape's table entry (looked up, not stored: obstacles pickle as plain data)."""
-        return shape(self.type, f"obstacle '{self.name}'")
-
-    def __getattr__(self, field_name: str) -> Any:
-        dimensions = self.__dict__.get("dimensions", {})
-        if field_name in dimensions:
-            return dimensions[field_name]
-        raise AttributeError(f"{type(self).__name__} '{self.__dict__.get('name')}' has no field {field_name!r}")
-
-    def geometry(self) -> coal.CollisionGeometry:
-        """The exact coal shape, in the obstacle's frame."""
-        return self.spec.geometry(self.dimensions)
-
-    def kernel_primitive(self) -> KernelPrimitive:
-        """The sphere checker's primitive (the shape itself, or a box that bounds it), in the scene frame."""
-        return self.spec.kernel_primitive(self.dimensions, self.pose)
-
-    def faces(self) -> list[np.ndarray]:
-        """Polygons of the obstacle's surface in the scene frame (for pictures)."""
-        return posed(self.spec.faces(self.dimensions), self.pose)
-
-    @classmethod
-    def from_dict(cls, d: dict, base_dir: Path | None = None) -> Obstacle:
-        if not isinstance(d, dict):
-            raise InvalidScene(f"obstacle entry must be a mapping, got {d!r:.60}")
-        name: Any = d.get("name")  # Obstacle checks it
-        if "type" not in d:
-            raise InvalidScene(f"obstacle {name!r:.60}: missing field 'type'")
-        spec = shape(d["type"], f"obstacle {name!r:.60}")
-        dimensions = {k: v for k, v in d.items() if k not in ("name", "type", "pose")}
-        for dim in spec.dimensions:
-            value = dimensions.get(dim.name)
-            if dim.is_path and isinstance(value, str) and base_dir is not None and not Path(value).is_absolute():
-                dimensions[dim.name] = str(base_dir / value)
-        return cls(name, d["type"], pose=d.get("pose"), **dimensions)
-
-    def to_dict(self) -> dict:
-        d: dict[str, Any] = {"name": self.name, "type": self.type}
-        for key, value in self.dimensions.items():
-            d[key] = list(value) if isinstance(value, tuple) else value
-        d["pose"] = {"xyz": self.pose[:3, 3].tolist(), "rpy": list(matrix_rpy(self.pose[:3, :3]))}
-        return d
-
-    def __repr__(self) -> str:
-        fields = ", ".join(f"{k}={v!r}" for k, v in self.dimensions.items())
-        return f"Obstacle({self.name!r}, {self.type!r}, {fields}, xyz={self.pose[:3, 3].tolist()})"
-
-
-class AttachedObject:
-    """An obstacle fixed to a robot link: ``obstacle.pose`` is in the link's frame."""
-
-    def __init__(self, obstacle: Obstacle, link: Any, touch_links: Any = ()):
-        where = f"attached object '{obstacle.name}'"
-        if not isinstance(link, str) or not link:
-            raise InvalidScene(f"{where}: field 'link' must be a link name, got {link!r}")
-        if isinstance(touch_links, str) or not all(isinstance(t, str) and t for t in touch_links):
-            raise InvalidScene(f"{where}: field 'touch_links' must be a list of link names, got {touch_links!r}")
-        self.obstacle, self.link, self.touch_links = obstacle, link, tuple(dict.fromkeys(touch_links))
-
-    @property
-    def name(self) -> str:
-        return self.obstacle.name
-
-    def key(self) -> tuple:
-        """Everything that shapes the robot's collision model (equal keys: the same attached geometry)."""
-        dims = tuple(sorted((k, str(v)) for k, v in self.obstacle.dimensions.items()))
-        pose = tuple(np.round(self.obstacle.pose, 12).ravel())
-        return (self.name, self.obstacle.type, dims, pose, self.link, self.touch_links)
-
-    @classmethod
-    def from_dict(cls, d: dict, base_dir: Path | None = None) -> AttachedObject:
-        if not isinstance(d, dict):
-            raise InvalidScene(f"attached entry must be a mapping, got {d!r}")
-        fields = {k: v for k, v in d.items() if k not in ("link", "touch_links")}
-        return cls(Obstacle.from_dict(fields, base_dir), d.get("link"), d.get("touch_links") or ())
-
-    def to_dict(self) -> dict:
-        return {**self.obstacle.to_dict(), "link": self.link, "touch_links": list(self.touch_links)}
+from maru_planner.scene.obstacle import AttachedObject, Obstacle
+from maru_planner.scene.poses import pose_matrix
 
 
 def _is_file(text: str) -> bool:
@@ -333,7 +176,11 @@ class Scene:
     # ---------------------------------------------------------------- I/O --
     @classmethod
     def from_dict(
-        cls, d: dict | None, base_dir: Path | None = None, *, max_obstacles: int = MAX_OBSTACLES,
+        cls,
+        d: dict | None,
+        base_dir: Path | None = None,
+        *,
+        max_obstacles: int = MAX_OBSTACLES,
         budget: float | None = None,
     ) -> Scene:
         """A scene from its dict form (at most ``max_obstacles``, read within ``budget`` seconds if given)."""

@@ -1,15 +1,19 @@
-"""ament_python package maru_planner (also pip-installable into a venv)."""
+"""ament_python package maru_planner (also pip-installable into a venv: `pip install -e .`).
 
-from glob import glob
+Run from the repository root (colcon and pip do): the data file paths below are relative to it. Only the
+maru_planner package tree is installed, never test/, bench/ or interfaces/.
+"""
+
 import os
+from glob import glob
 
 from setuptools import find_packages, setup
 
 PACKAGE = "maru_planner"
 
 
-def tree(directory):
-    """data_files entries installing ``directory`` under share/maru_planner."""
+def tree(directory: str) -> list[tuple[str, list[str]]]:
+    """data_files entries installing ``directory`` (config/ with rviz/ and maps/, urdf/) under share/maru_planner."""
     entries = []
     for root, _dirs, files in os.walk(directory):
         if files:

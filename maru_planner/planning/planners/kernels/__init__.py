@@ -1,0 +1,1 @@
+"""numba search loops only (RRT-Connect, RC-RRT, shortcut); their collision code is maru_planner.collision.kernels."""
