@@ -39,11 +39,11 @@ from peers_arm import mbm_cases  # noqa: E402
 
 from maru_planner.collision import CollisionChecker  # noqa: E402
 from maru_planner.collision.spheres import densify  # noqa: E402
-from maru_planner.robot.robots.panda import mbm_panda  # noqa: E402
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig  # noqa: E402
-from maru_planner.planning.problems import PROBLEMS  # noqa: E402
 from maru_planner.planning.planners.registry import planner_ids  # noqa: E402
+from maru_planner.planning.problems import PROBLEMS  # noqa: E402
 from maru_planner.robot import RobotModel  # noqa: E402
+from maru_planner.robot.robots.panda import mbm_panda  # noqa: E402
 from maru_planner.scene import Scene  # noqa: E402
 
 MODES = ("certified", "baseline")

@@ -37,9 +37,9 @@ from peers_arm import TARBALL, VAMP_PUBLISHED, Case, Ours, full_q, maru13_case, 
 from maru_planner.collision.kernels.fk import joint_poses_nb  # noqa: E402
 from maru_planner.collision.kernels.packing import unpack_robot, unpack_scene  # noqa: E402
 from maru_planner.collision.kernels.state_validity import classify, work_arrays  # noqa: E402
-from maru_planner.robot.robots.panda import mbm_panda  # noqa: E402
 from maru_planner.planning.space import edge_states, full_configurations  # noqa: E402
 from maru_planner.robot import RobotModel  # noqa: E402
+from maru_planner.robot.robots.panda import mbm_panda  # noqa: E402
 
 STEP = 0.05  # rad, L-inf: the motion resolution of ours in bench/peers_arm.py
 RANDOM_STATES = 400

@@ -34,13 +34,13 @@ import numpy as np
 import pinocchio as pin
 
 from maru_planner.collision import self_collision_pairs
-from maru_planner.robot.robots.panda import PANDA_FINGERS_OPEN, mbm_panda
-from maru_planner.scene.motion_bench_maker import iter_mbm_problems
 from maru_planner.paths import benchmarks_dir
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig
 from maru_planner.planning.problems import PROBLEMS
 from maru_planner.robot import RobotModel
+from maru_planner.robot.robots.panda import PANDA_FINGERS_OPEN, mbm_panda
 from maru_planner.scene import Scene
+from maru_planner.scene.motion_bench_maker import iter_mbm_problems
 
 ROOT = Path(__file__).resolve().parent
 RESULTS = ROOT / "results"

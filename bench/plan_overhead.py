@@ -40,10 +40,10 @@ import numpy as np  # noqa: E402
 from _common import RESULTS, Progress, log, write_results  # noqa: E402
 from peers_arm import TARBALL, Case, Ours, mbm_cases  # noqa: E402
 
-from maru_planner.robot.robots.panda import mbm_panda  # noqa: E402
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig  # noqa: E402
 from maru_planner.planning.problems import PROBLEMS  # noqa: E402
 from maru_planner.robot import RobotModel  # noqa: E402
+from maru_planner.robot.robots.panda import mbm_panda  # noqa: E402
 from maru_planner.scene import Scene  # noqa: E402
 
 STAGES = ("request + setup", "validation", "search", "simplification", "time parameterisation", "certification")

@@ -21,13 +21,13 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from maru_planner.robot.robots.panda import PANDA_FINGERS_OPEN
-from maru_planner.scene.motion_bench_maker import iter_mbm_problems
 from maru_planner.paths import benchmarks_dir, config_path
 from maru_planner.planning.problems import PROBLEMS
 from maru_planner.robot import RobotModel, load_example_robot
+from maru_planner.robot.robots.panda import PANDA_FINGERS_OPEN
 from maru_planner.ros.env import configure_loopback_dds
 from maru_planner.scene import Obstacle, Scene
+from maru_planner.scene.motion_bench_maker import iter_mbm_problems
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
 # planning_node's default group (upper_body) and paper 000's 13-DOF problem over it

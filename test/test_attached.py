@@ -13,8 +13,8 @@ from maru_planner.collision.spheres import SphereCollisionChecker
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig, PlanStatus
 from maru_planner.planning.config import COLLISION_MODELS
 from maru_planner.robot import RobotModel
-from maru_planner.scene import Obstacle, Scene
 from maru_planner.robot.attached import robot_with_attached
+from maru_planner.scene import Obstacle, Scene
 
 Q = np.array((-0.9, 0.25, 1.75, 1.66, 1.9, 0.0, -2.55, -0.8, 1.57, 2.0, 0.7, -1.9, -1.25))  # collision-free
 

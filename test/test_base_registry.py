@@ -91,7 +91,7 @@ def test_footprint_only_for_planners_that_use_it():
     registry.SPECS[entry.id] = entry
     try:
         planner = registry.make_planner("no_fp", np.array([[5.0, 5.0], [-5.0, 5.0], [0.0, -5.0]]))
-        assert planner.inflation_radius == 0.0  # the footprint was not handed over
+        assert planner.robot_radius == 0.0  # the footprint was not handed over
     finally:
         del registry.SPECS[entry.id]
 
@@ -105,4 +105,5 @@ def test_warm_up_runs_every_grid_kernel_including_weighted_a_star(monkeypatch):
     real = astar._astar_kernel
     monkeypatch.setattr(astar, "_astar_kernel", lambda *args: calls.append(args[6]) or real(*args))
     registry.warm_up()
-    assert calls == [True]  # use_cost: the cost-weighted variant MSPP's guide path takes
+    assert 1 in calls  # cost mode 1 (added cost): the variant MSPP's guide path takes
+    assert 2 in calls  # cost mode 2 (weighted length): cost-aware A*

@@ -15,21 +15,23 @@ from maru_planner.collision.certify import (
     MIN_ANCHOR_CLEARANCE,
     Certificate,
     PathCertifier,
-    _kernel_primitives,
-    _without_corners,
+    SphereCover,
     certify_and_repair,
     chord_deviation,
     joint_levers,
+    kernel_primitives,
+    without_corners,
 )
 from maru_planner.collision.checker import convex_hull
+from maru_planner.collision.kernels.support_bounds import NO_SHAPE
+from maru_planner.collision.shape_records import robot_shape_records
 from maru_planner.collision.spheres import densify, verify_path
-from maru_planner.collision.support_bounds import NO_SHAPE, robot_shape_records
-from maru_planner.robot.robots.panda import mbm_panda
 from maru_planner.paths import config_path
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig, PlanStatus
 from maru_planner.planning.config import COLLISION_MODELS
 from maru_planner.planning.types import PlanStats
 from maru_planner.robot import RobotModel, load_example_robot
+from maru_planner.robot.robots.panda import mbm_panda
 from maru_planner.scene import Obstacle, Scene
 
 OLD_STEP = 0.02  # rad: the discrete validator's default motion resolution
@@ -459,7 +461,7 @@ def _no_shapes(geometries, hulls) -> tuple:
 def test_rows_get_the_poses_and_centres_of_their_chains_as_full_forward_kinematics_gives_them(world):
     """A later round's few rows per configuration pose only the chains to their pairs' geometries, each as the
     whole configuration's forward kinematics poses it; a first round's many rows pose every joint."""
-    from maru_planner.collision import certify
+    from maru_planner.collision.certify import bounds
 
     robot, checker = world()
     certifier = PathCertifier(robot, checker)
@@ -469,20 +471,20 @@ def test_rows_get_the_poses_and_centres_of_their_chains_as_full_forward_kinemati
     tree, joint, local = certifier._tree, certifier._joint, certifier._local
     nj, ng = robot.model.njoints, len(joint)
     want = np.empty((6, nj, 3, 3)), np.empty((6, nj, 3)), np.empty((6, ng, 3))
-    certify._poses_nb(configs, *tree, joint, local, *want)
+    bounds.poses_nb(configs, *tree, joint, local, *want)
     for n_rows in (5, 8 * 6):
         pair = rng.integers(len(pairs.first), size=n_rows)
         config_of = rng.integers(6, size=n_rows)
         got = np.full((6, nj, 3, 3), np.nan), np.full((6, nj, 3), np.nan), np.full((6, ng, 3), np.nan)
         posed = np.zeros((6, nj), dtype=bool)
-        certify._place_rows_nb(configs, config_of, pair, pairs.first, pairs.other, *tree, joint, local, *got, posed)
+        bounds.place_rows_nb(configs, config_of, pair, pairs.first, pairs.other, *tree, joint, local, *got, posed)
         for c, p in zip(config_of, pair, strict=True):
             for g in (pairs.first[p], pairs.other[p]):
                 assert np.allclose(got[2][c, g], want[2][c, g], atol=1e-12)
                 chain = certifier._levers[g] > 0.0  # the joints that move it
                 assert posed[c, certifier._q_joint[chain]].all()
         assert np.allclose(got[0][posed], want[0][posed], atol=1e-12) and np.allclose(got[1][posed], want[1][posed])
-        assert posed.all() == (n_rows >= certify.ROWS_FOR_ALL * 6)
+        assert posed.all() == (n_rows >= bounds.ROWS_FOR_ALL * 6)
 
 
 def test_each_obstacle_finds_its_own_primitive_in_the_kernels_order():
@@ -491,7 +493,7 @@ def test_each_obstacle_finds_its_own_primitive_in_the_kernels_order():
     kinds = {"box": {"size": (0.1, 0.2, 0.3)}, "sphere": {"radius": 0.05}, "cylinder": {"radius": 0.04, "length": 0.2}}
     order = ["cylinder", "box", "sphere", "box", "cylinder", "sphere", "box"]
     obstacles = [Obstacle(f"o{i}", kind, pose=[0.1 * i, 0.0, 0.5], **kinds[kind]) for i, kind in enumerate(order)]
-    (position, box_c, _, _, sph_c, _, cyl_c, *_), exact = _kernel_primitives(obstacles)
+    (position, box_c, _, _, sph_c, _, cyl_c, *_), exact = kernel_primitives(obstacles)
     centres = np.concatenate([box_c, sph_c, cyl_c])
     assert np.allclose(centres[position], [[0.1 * i, 0.0, 0.5] for i in range(len(order))])
     assert sorted(position.tolist()) == list(range(len(order))) and exact.all()
@@ -520,13 +522,13 @@ def _coal_queries_of_two(robot, checker, want: PathCertifier, got: PathCertifier
 def test_the_kernels_gjk_certifies_like_coal_with_fewer_coal_queries(world, monkeypatch):
     """Pairs of primitives (Maru-1) are measured by GJK in the row kernel, a robot mesh's hull (Panda) bounded
     there: the same verdicts as measuring every such row with coal, with far fewer coal queries."""
-    from maru_planner.collision import certify
+    from maru_planner.collision.certify import certifier as certifier_module
 
     robot, checker = world()
     spheres = load_or_fit_of(robot)
     kernel = PathCertifier(robot, checker, safety_margin=0.005, spheres=spheres)
     with monkeypatch.context() as patch:
-        patch.setattr(certify, "robot_shape_records", _no_shapes)
+        patch.setattr(certifier_module, "robot_shape_records", _no_shapes)
         coal_only = PathCertifier(robot, checker, safety_margin=0.005, spheres=spheres)
     by_coal, by_kernel = _coal_queries_of_two(robot, checker, coal_only, kernel, 17)
     assert by_kernel < 0.5 * by_coal, (by_coal, by_kernel)
@@ -534,12 +536,13 @@ def test_the_kernels_gjk_certifies_like_coal_with_fewer_coal_queries(world, monk
 
 @pytest.mark.parametrize("world", [panda_shelf, maru13])
 def test_the_sphere_cover_certifies_like_the_bounding_spheres_with_fewer_coal_queries(world, monkeypatch):
-    from maru_planner.collision import certify
+    from maru_planner.collision.certify import certifier as certifier_module
 
     robot, checker = world()
-    monkeypatch.setattr(certify, "robot_shape_records", _no_shapes)  # coal measures what the bounds leave (not GJK)
+    # coal measures what the bounds leave (not GJK)
+    monkeypatch.setattr(certifier_module, "robot_shape_records", _no_shapes)
     with monkeypatch.context() as patch:
-        patch.setattr(certify.SphereCover, "of", lambda *_: None)
+        patch.setattr(SphereCover, "of", lambda *_: None)
         plain = PathCertifier(robot, checker, safety_margin=0.005)
     covered = PathCertifier(robot, checker, safety_margin=0.005, spheres=load_or_fit_of(robot))
     assert covered._cover.covered.all()  # Panda: the model's spheres; Maru-1's cylinders and boxes: solid_balls
@@ -657,7 +660,7 @@ def test_a_curve_certified_with_its_blends_is_not_certified_again(arm, monkeypat
 
 def test_without_corners_clips_each_end_to_its_segment():
     path = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 0.5], [3.0, 0.5]])
-    ends = _without_corners(path, np.array([0.0, 0.3, 2.0, 0.0]))
+    ends = without_corners(path, np.array([0.0, 0.3, 2.0, 0.0]))
     np.testing.assert_allclose(ends, [[0.0, 0.0], [0.7, 0.0], [1.0, 0.3], [1.0, 0.3], [3.0, 0.5], [3.0, 0.5]])
 
 

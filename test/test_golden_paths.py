@@ -7,7 +7,6 @@ import json
 
 import numpy as np
 import pytest
-
 from golden_paths import GOLDEN, MBM_TARBALL, maru13_outcomes, mbm_outcomes
 
 

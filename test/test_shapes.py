@@ -10,14 +10,13 @@ from geometry_msgs.msg import Pose
 from shape_msgs.msg import SolidPrimitive
 from visualization_msgs.msg import Marker
 
-from maru_planner.scene import shapes
 from maru_planner.collision import CollisionChecker, SphereCollisionChecker
 from maru_planner.errors import InvalidScene
-from maru_planner.scene.moveit import primitive_obstacle
 from maru_planner.robot import RobotModel
 from maru_planner.ros import markers
 from maru_planner.ros import planning_conversions as conv
-from maru_planner.scene import Obstacle, Scene
+from maru_planner.scene import Obstacle, Scene, shapes
+from maru_planner.scene.moveit import primitive_obstacle
 
 CONE = shapes.ShapeSpec(  # a toy entry: not in the package's table
     name="cone",

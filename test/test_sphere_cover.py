@@ -7,15 +7,15 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from maru_planner.collision.batch_fk import KinematicTree, batch_joint_poses
-from maru_planner.collision.certify import _kernel_primitives
-from maru_planner.collision.sphere_cover import (
+from maru_planner.collision.certify.cover import (
     DISTANCE_TOLERANCE,
     SphereCover,
     cover_bounds_nb,
     solid_balls,
     solid_inside_spheres,
 )
+from maru_planner.collision.certify.pairs import kernel_primitives
+from maru_planner.collision.kinematic_tree import KinematicTree, batch_joint_poses
 from maru_planner.collision.sphere_model import load_or_fit
 from maru_planner.robot import RobotModel, load_example_robot
 from maru_planner.scene import Obstacle
@@ -90,14 +90,14 @@ def test_a_solid_proven_inside_the_balls_has_every_sampled_point_in_one():
 
 
 def test_the_cover_of_a_robot_is_proven_once_and_remembered(monkeypatch):
-    from maru_planner.collision import sphere_cover
+    from maru_planner.collision.certify import cover
 
     maru = RobotModel.maru1()
     spheres = sphere_model(maru)
-    monkeypatch.setattr(sphere_cover, "_SOLID_COVERS", {})
+    monkeypatch.setattr(cover, "SOLID_COVERS", {})
     first = SphereCover.of(maru, spheres)
     calls = []
-    monkeypatch.setattr(sphere_cover, "solid_inside_spheres", lambda *args: calls.append(args) or True)
+    monkeypatch.setattr(cover, "solid_inside_spheres", lambda *args: calls.append(args) or True)
     again = SphereCover.of(maru, spheres)
     assert not calls and np.array_equal(first.covered, again.covered)
     assert all(np.array_equal(a, b) for a, b in zip(first.arrays, again.arrays, strict=True))
@@ -151,7 +151,7 @@ def test_cover_bounds_are_the_balls_least_distance_below_enough_and_at_least_eno
     s_joint, s_center, s_radius, c_start, _, _, _, g_clusters = cover.arrays
     obstacles = [Obstacle("box", "box", size=(0.3, 0.2, 0.4), pose=[0.45, 0.1, 0.4]),
                  Obstacle("ball", "sphere", radius=0.08, pose=[0.3, -0.3, 0.6])]  # fmt: skip
-    primitives, _ = _kernel_primitives(obstacles)
+    primitives, _ = kernel_primitives(obstacles)
     rng = np.random.default_rng(3)
     configs = rng.uniform(robot.lower_limits, robot.upper_limits, (40, robot.nq))
     rots, poss = batch_joint_poses(KinematicTree.from_pinocchio(robot.model), configs)

@@ -7,7 +7,8 @@ import pinocchio as pin
 import pytest
 
 from maru_planner.collision import CollisionChecker
-from maru_planner.collision.batch_fk import KinematicTree, batch_joint_poses, frame_placements_nb, joint_poses_nb
+from maru_planner.collision.kernels.fk import frame_placements_nb, joint_poses_nb
+from maru_planner.collision.kinematic_tree import KinematicTree, batch_joint_poses
 from maru_planner.collision.sphere_model import SphereFitOptions, subdivide, surface_of
 from maru_planner.collision.spheres import SphereCollisionChecker, densify, verify_path
 from maru_planner.scene import Obstacle, Scene

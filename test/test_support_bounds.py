@@ -8,8 +8,7 @@ import pinocchio as pin
 import pytest
 
 from maru_planner.collision.checker import robot_hull
-from maru_planner.collision.spheres import ScenePrimitives
-from maru_planner.collision.support_bounds import (
+from maru_planner.collision.kernels.support_bounds import (
     BOX,
     CYLINDER,
     HULL,
@@ -19,6 +18,7 @@ from maru_planner.collision.support_bounds import (
     new_records,
     place_shape,
 )
+from maru_planner.collision.spheres import ScenePrimitives
 from maru_planner.robot import load_example_robot
 from maru_planner.scene import Obstacle
 

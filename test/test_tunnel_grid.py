@@ -11,7 +11,7 @@ import pytest
 from maru_planner.base.astar import GridAStarPlanner, astar_2d
 from maru_planner.base.grid import OccupancyGrid
 from maru_planner.base.result import PlanStatus as res
-from maru_planner.base.tunnel import TunnelGridPlanner
+from maru_planner.base.tunnel_grid import TunnelGridPlanner
 from maru_planner.errors import InvalidRequest
 from maru_planner.paths import config_path
 
@@ -46,7 +46,7 @@ def test_house_query_solved_on_the_grown_map(house):
     np.testing.assert_allclose(plan.path[-1], HOUSE_GOAL)
     grown = house.inflate(0.25).occupied
     assert path_is_free(house, grown, plan.path)
-    optimal = GridAStarPlanner(inflation_radius=0.25).plan(house, HOUSE_START, HOUSE_GOAL)
+    optimal = GridAStarPlanner(robot_radius=0.25, cost_travel_multiplier=0.0).plan(house, HOUSE_START, HOUSE_GOAL)
     assert plan.path_length() <= 1.3 * optimal.path_length()
     plain = astar_2d(grown, house.world_to_cell(*HOUSE_START[:2]), house.world_to_cell(*HOUSE_GOAL[:2]),
                      method="astar")

@@ -11,6 +11,9 @@ API (used by ``mspp.py``, ``tunnel.py`` and the benchmarks)::
   ``path`` int array ``(n, 2)`` of (row, col) from start to goal (empty
   ``(0, 2)`` when there is no path or start/goal is occupied), ``cost`` in
   cells (straight 1, diagonal sqrt 2; ``inf`` without a path), ``expansions``.
+- ``cell_weight`` (optional, >= 0 per cell): a step into a cell costs its
+  length times ``1 + weight`` (Smac 2D's travel cost; the cost layer gives
+  the weights), so the search minimises length plus the cost along the path.
 
 A diagonal move needs both side cells free (the MovingAI convention), so the
 octile heuristic is consistent and the first pop of the goal is optimal. Ties
@@ -20,6 +23,7 @@ on f are broken towards larger g. The kernels are compiled with numba
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import threading
 from typing import NamedTuple
@@ -28,7 +32,8 @@ import numba
 import numpy as np
 
 from maru_planner.base.budget import Deadline, unlimited
-from maru_planner.base.common import cells_to_path
+from maru_planner.base.common import cells_to_path, interpolate_headings
+from maru_planner.base.cost_model import CostSettings
 from maru_planner.base.grid import OccupancyGrid
 from maru_planner.base.kernels import heap_grow, heap_pop, heap_push, now
 from maru_planner.base.planner import DiscPlanner, Endpoint, PlanRun
@@ -36,6 +41,7 @@ from maru_planner.base.result import PlanStats
 from maru_planner.errors import NoPath
 
 SQRT2 = math.sqrt(2.0)
+DEFAULT_COST_TRAVEL_MULTIPLIER = 2.0  # Smac 2D's default
 _EXHAUSTED, _TIMED_OUT = -1.0, -2.0  # kernel "costs" that are outcomes
 
 
@@ -50,15 +56,16 @@ def _njit(func):
 
 
 @_njit
-def _astar_kernel(blocked, sr, sc, gr, gc, cell_cost, use_cost, g_best, parent, seen, closed, keys, gs, ids, gen,
+def _astar_kernel(blocked, sr, sc, gr, gc, cell_cost, cost_mode, g_best, parent, seen, closed, keys, gs, ids, gen,
                   deadline_at):
     """A* on a grid padded with one blocked cell on every side.
 
     ``blocked`` is the padded (height + 2, width + 2) array; cells are given in
     padded coordinates. Returns (parent array over padded cells, goal cost or
-    -1 exhausted / -2 timed out, expansions, heap arrays). With ``use_cost``,
-    entering a cell adds ``cell_cost`` (padded, >= 0) to the move cost: the
-    heuristic stays admissible.
+    -1 exhausted / -2 timed out, expansions, heap arrays). ``cost_mode`` 1:
+    entering a cell adds ``cell_cost`` (padded, >= 0) to the move cost; 2: it
+    multiplies the move's length by ``1 + cell_cost``. Either way the octile
+    heuristic stays admissible and consistent.
     """
     height, width = blocked.shape
     flat = blocked.ravel()
@@ -100,8 +107,10 @@ def _astar_kernel(blocked, sr, sc, gr, gc, cell_cost, use_cost, g_best, parent, 
                 ng = g + sqrt2
             else:
                 ng = g + 1.0
-            if use_cost:
+            if cost_mode == 1:
                 ng += cell_cost.ravel()[nb]
+            elif cost_mode == 2:
+                ng = g + (sqrt2 if m >= 4 else 1.0) * (1.0 + cell_cost.ravel()[nb])
             if seen[nb] != gen or ng < g_best[nb]:
                 g_best[nb] = ng
                 seen[nb] = gen
@@ -329,16 +338,19 @@ class _Workspace:
 
 
 def astar_2d(
-    occupied, start_cell, goal_cell, *, cell_cost=None, method: str = "jps", deadline: Deadline | None = None
+    occupied, start_cell, goal_cell, *, cell_cost=None, cell_weight=None, method: str = "jps",
+    deadline: Deadline | None = None,
 ) -> AStarResult:
     """Optimal 8-connected A* without corner cutting on a boolean occupancy array.
 
     ``method``: "jps" (default; jump point search: the same optimal cost with
     far fewer heap operations, ``expansions`` counts jump points) or "astar"
-    (plain A*, every cell). ``cell_cost`` always uses plain A*.
+    (plain A*, every cell). ``cell_cost`` or ``cell_weight`` always use plain A*.
 
     ``cell_cost`` (optional, float >= 0, same shape) is added when entering a
-    cell, e.g. to keep a guide path away from narrow parts. Raises
+    cell, e.g. to keep a guide path away from narrow parts. ``cell_weight``
+    (optional, float >= 0, same shape): entering a cell costs the step's length
+    times ``1 + weight`` (the cost returned is then that sum, in cells). Raises
     PlanningTimedOut when ``deadline`` passes during the search.
     """
     blocked = np.ascontiguousarray(occupied, dtype=np.bool_)
@@ -359,14 +371,17 @@ def astar_2d(
     padded[1:-1, 1:-1] = blocked
     args = (padded, sr + 1, sc + 1, gr + 1, gc + 1)
     ws = _Workspace.get(padded.size)
-    jps = cell_cost is None and method == "jps"
-    if cell_cost is not None:
-        extra = np.pad(np.asarray(cell_cost, dtype=float), 1)
+    if cell_cost is not None and cell_weight is not None:
+        raise ValueError("give cell_cost or cell_weight, not both")
+    weighted = cell_cost if cell_cost is not None else cell_weight
+    jps = weighted is None and method == "jps"
+    if weighted is not None:
+        extra = np.pad(np.asarray(weighted, dtype=float), 1)
         if extra.shape != padded.shape:
-            raise ValueError(f"cell_cost has shape {np.shape(cell_cost)}, occupied has {blocked.shape}")
-        out = _astar_kernel(*args, extra, True, *ws.arrays(), deadline.kernel_at)
+            raise ValueError(f"cell costs have shape {np.shape(weighted)}, occupied has {blocked.shape}")
+        out = _astar_kernel(*args, extra, 1 if cell_cost is not None else 2, *ws.arrays(), deadline.kernel_at)
     elif method == "astar":
-        out = _astar_kernel(*args, np.zeros((1, 1)), False, *ws.arrays(), deadline.kernel_at)
+        out = _astar_kernel(*args, np.zeros((1, 1)), 0, *ws.arrays(), deadline.kernel_at)
     else:
         out = _jps_kernel(*args, *ws.arrays(), deadline.kernel_at)
     parent, cost, expansions = out[:3]
@@ -390,18 +405,22 @@ def path_cost(cells: np.ndarray) -> float:
 
 
 class GridAStarPlanner(DiscPlanner):
-    """2-D A* for a disc (or point) robot: obstacles grown by ``inflation_radius`` metres.
+    """2-D A* for a disc (or point) robot: obstacles grown by ``robot_radius`` metres, Nav2's costs by default.
 
     With a polygonal footprint and no radius given, the radius is the
     footprint's circumradius, so the path is valid at any heading (headings are
-    interpolated from the start's to the goal's along the path).
+    interpolated from the start's to the goal's along the path). The cost
+    keywords are :class:`~maru_planner.base.cost_model.CostSettings` fields;
+    ``cost_travel_multiplier=0`` plans the plain shortest path (JPS).
     """
 
-    def __init__(self, footprint=None, inflation_radius: float | None = None):
-        super().__init__(inflation_radius, footprint)
+    default_costs = CostSettings(cost_travel_multiplier=DEFAULT_COST_TRAVEL_MULTIPLIER)
+
+    def __init__(self, footprint=None, robot_radius: float | None = None, **costs):
+        super().__init__(robot_radius, footprint, dataclasses.replace(self.default_costs, **costs))
 
     @property
-    def inflation_radius(self) -> float:
+    def robot_radius(self) -> float:
         return self.radius
 
     def new_stats(self) -> PlanStats:
@@ -409,10 +428,14 @@ class GridAStarPlanner(DiscPlanner):
 
     def search(self, space: OccupancyGrid, start: Endpoint, goal: Endpoint, run: PlanRun) -> np.ndarray:
         stats = run.stats
-        path, cost, expansions = astar_2d(space.occupied, start.cell, goal.cell, deadline=run.deadline)
+        weights = self.cost_weights(run)
+        path, cost, expansions = astar_2d(space.occupied, start.cell, goal.cell, cell_weight=weights,
+                                          deadline=run.deadline)
         stats.expansions, stats.collision_checks = expansions, 8 * expansions
         if len(path) == 0:
             raise NoPath("no path: A* exhausted the free cells of the grown map")
         stats.cost = cost * space.resolution
-        run.message = "solved by 2-D A*"
-        return cells_to_path(space, path, start.pose[2], goal.pose[2])
+        run.message = "solved by 2-D A*" + (" (cost-aware)" if weights is not None else "")
+        poses = cells_to_path(space, path, start.pose[2], goal.pose[2])
+        return self.smooth_path(space, poses, run,
+                                lambda xy: interpolate_headings(xy, start.pose[2], goal.pose[2]))

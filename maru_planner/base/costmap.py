@@ -75,7 +75,7 @@ class CostLayer:
     """A map's Nav2 costs (uint8, the grid's shape) and the numbers that made them.
 
     ``distance`` holds the exact centre-to-centre distance to the nearest obstacle (metres, float64) where
-    it is at most ``inflation_radius``, ``inf`` elsewhere.
+    it is at most ``inflation_radius`` (plus the margin :func:`cost_layer` was given), ``inf`` elsewhere.
     """
 
     cost: np.ndarray
@@ -103,10 +103,14 @@ def cost_layer(
     inflation_radius: float,
     cost_scaling_factor: float,
     deadline: Deadline | None = None,
+    distance_margin: float = 0.0,
 ) -> CostLayer:
-    """The inflation layer of ``grid`` (its ``occupied`` cells are the obstacles); checks the parameters first."""
+    """The inflation layer of ``grid`` (its ``occupied`` cells are the obstacles); checks the parameters first.
+
+    ``distance_margin`` (m): the layer's ``distance`` stays exact that far past ``inflation_radius``.
+    """
     check_inflation(inflation_radius, cost_scaling_factor, inscribed_radius)
-    distance = grid.distance_field(inflation_radius, deadline)
+    distance = grid.distance_field(inflation_radius + max(distance_margin, 0.0), deadline)
     guard = 1e-9 * grid.resolution
     cost = cost_of_distance(distance, inscribed_radius, inflation_radius, cost_scaling_factor, guard)
     return CostLayer(cost, distance, grid.resolution, float(inscribed_radius), float(circumscribed_radius),

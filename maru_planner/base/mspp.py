@@ -19,6 +19,11 @@ window around them (any heading at their BAA-free ends). If a window search
 fails, its window grows; when that also fails the full search runs over the
 whole map, so the planner stays complete.
 
+The cost layer is an option here (``cost_travel_multiplier`` > 0; the paper's plain searches by default):
+BAA's 2-D A*, the full SE(2) A* and the local windows then minimise length plus the cost along the path;
+ECA and the guide path of ``mspp_local`` stay as they are. With ``smooth``, a BAA path is smoothed on the
+BAA map, an SE(2) path per run at one heading on its C-space layer.
+
 Every stage is timed and counted in ``stats.stages`` (:class:`StageStats`);
 ``result.layers`` holds the grown maps (``eca``, ``baa``) and, for ``local``,
 the guide and the windows.
@@ -34,11 +39,13 @@ import numpy as np
 from scipy import ndimage
 
 from maru_planner.base.astar import astar_2d
-from maru_planner.base.common import cells_to_path, states_to_path
+from maru_planner.base.common import cells_to_path, interpolate_headings, states_to_path
+from maru_planner.base.cost_model import CostSettings
 from maru_planner.base.grid import OccupancyGrid
 from maru_planner.base.planner import Endpoint, PlanRun
 from maru_planner.base.result import PlanStats
 from maru_planner.base.se2 import SE2AStarPlanner, cspace_layers, search_layers
+from maru_planner.base.smoother import Stretch
 from maru_planner.errors import InvalidRequest, NoPath, NoPathProven
 
 # Keeps ECA strictly inside and BAA strictly outside the robot despite rounding.
@@ -97,6 +104,8 @@ class MultiStageStats(PlanStats):
 class MultiStagePlanner(SE2AStarPlanner):
     """ECA -> BAA -> full SE(2) A*."""
 
+    default_costs = CostSettings()
+
     def new_stats(self) -> PlanStats:
         return MultiStageStats(headings=self.headings, r_min=self.r_in, r_max=self.r_out)
 
@@ -104,9 +113,22 @@ class MultiStagePlanner(SE2AStarPlanner):
         try:
             self._eca(space, start, goal, run)
             path = self._baa(space, start, goal, run)
-            return path if path is not None else self._last_stage(space, start, goal, run)
+            if path is not None:
+                return self._smooth_baa(space, path, start, goal, run)
+            return self.smooth_states(space, self._last_stage(space, start, goal, run), run)
         finally:
             run.stats_as(MultiStageStats).total()
+
+    def _smooth_baa(self, grid: OccupancyGrid, path: np.ndarray, start: Endpoint, goal: Endpoint,
+                    run: PlanRun) -> np.ndarray:
+        """A BAA path smoothed on the BAA map (any heading is free there), headings interpolated again."""
+        layer = run.layers.get("costmap")
+        if not self.costs.settings.smooth or layer is None or len(path) < 3:
+            return path
+        xy, info = self.costs.smooth(grid, path[:, :2], layer, [Stretch(0, len(path) - 1, run.layers["baa"])],
+                                     run.deadline)
+        run.stats.smoothing = info
+        return np.column_stack([xy, interpolate_headings(xy, start.pose[2], goal.pose[2])])
 
     def _last_stage(self, grid: OccupancyGrid, start: Endpoint, goal: Endpoint, run: PlanRun) -> np.ndarray:
         return self._full(grid, start, goal, run)
@@ -137,7 +159,8 @@ class MultiStagePlanner(SE2AStarPlanner):
         run.layers["baa"] = baa
         path = None
         if not baa[start.cell] and not baa[goal.cell]:
-            cells, _, expansions = astar_2d(baa, start.cell, goal.cell, deadline=run.deadline)
+            cells, _, expansions = astar_2d(baa, start.cell, goal.cell, cell_weight=self.cost_weights(run),
+                                            deadline=run.deadline)
             stage.expansions, stage.collision_checks = expansions, 8 * expansions
             if len(cells):
                 run.stats.deciding_stage, run.message = "BAA", "solved by BAA"
@@ -153,7 +176,7 @@ class MultiStagePlanner(SE2AStarPlanner):
         run.monitor.report(stage.name)
         run.stats.deciding_stage = "full"
         try:
-            full = self.full_search(grid, start, goal, run.deadline)
+            full = self.full_search(grid, start, goal, run.deadline, self.cost_weights(run))
         finally:
             stage.time = time.perf_counter() - t
         found = full.search
@@ -176,8 +199,9 @@ class LocalMultiStagePlanner(MultiStagePlanner):
         rotation_weight: float | None = None,
         local_margin: float | None = None,
         narrow_penalty: float = 4.0,
+        **costs,
     ):
-        super().__init__(footprint, headings, rotation_weight)
+        super().__init__(footprint, headings, rotation_weight, **costs)
         self.local_margin = 2.0 * self.r_out if local_margin is None else float(local_margin)
         if not (math.isfinite(self.local_margin) and self.local_margin >= 0):
             raise InvalidRequest(f"local_margin must be finite and >= 0, got {local_margin}")
@@ -280,8 +304,10 @@ class LocalMultiStagePlanner(MultiStagePlanner):
             starts = [(k, entry[0] - r0, entry[1] - c0) for k in range(self.headings)]
         if gk >= 0 and not baa[tuple(exit_)]:
             gk = -1
+        weights = self.cost_weights(run)
         out = search_layers(window_layers, starts, (exit_[0] - r0, exit_[1] - c0), gk,
-                            self.rot_cost_cells(grid.resolution), deadline=run.deadline)
+                            self.rot_cost_cells(grid.resolution), deadline=run.deadline,
+                            cell_weight=None if weights is None else weights[r0:r1, c0:c1])
         stage.expansions += out.expansions
         stage.collision_checks += out.collision_checks
         assert stage.windows is not None  # the local stage is made with windows=[]

@@ -24,9 +24,11 @@ from typing import Any, Generic, Protocol, TypeVar
 import numpy as np
 
 from maru_planner.base.budget import DEFAULT_TIME_LIMIT, Deadline
+from maru_planner.base.cost_model import CostModel, CostSettings
 from maru_planner.base.footprint import footprint_radii
 from maru_planner.base.grid import OccupancyGrid
 from maru_planner.base.result import BasePlanResult, PlanStats, PlanStatus, empty_path, status_of
+from maru_planner.base.smoother import Stretch
 from maru_planner.errors import (
     GoalOccupied,
     GoalOutsideMap,
@@ -203,21 +205,49 @@ class DiscPlanner(GridPlanner[OccupancyGrid]):
     """A disc robot of ``radius`` metres on the grid grown by that radius (astar, tunnel).
 
     Without a radius the disc is the ``footprint``'s circumcircle, or ``default_radius`` without either.
+    ``costs`` (:class:`~maru_planner.base.cost_model.CostSettings`; default ``default_costs``) adds Nav2's
+    inflation costs (inscribed and circumscribed radii: the footprint's, or both the disc's radius when one
+    is given) and the smoother; the cost layer is computed with the grown map from one distance transform.
     """
 
     default_radius = 0.0
+    default_costs = CostSettings()
 
-    def __init__(self, radius: float | None, footprint: Any = None):
-        if radius is None:
-            radius = footprint_radii(footprint)[1] if footprint is not None else self.default_radius
-        if not (math.isfinite(radius) and radius >= 0):
+    def __init__(self, radius: float | None, footprint: Any = None, costs: CostSettings | None = None):
+        if radius is None and footprint is not None:
+            inscribed, radius = footprint_radii(footprint)
+        else:
+            radius = self.default_radius if radius is None else radius
+            inscribed = radius
+        if not (isinstance(radius, int | float) and math.isfinite(radius) and radius >= 0):
             raise InvalidRequest(f"robot radius must be finite and >= 0 m, got {radius}")
         self.radius = float(radius)
+        self.costs = CostModel(costs or self.default_costs, min(inscribed, self.radius), self.radius)
 
     def prepare(self, grid: OccupancyGrid | None, run: PlanRun) -> OccupancyGrid:
-        grown = require_grid(grid).inflate(self.radius, run.deadline)
+        grid = require_grid(grid)
+        if self.costs.needs_layer:
+            layer = self.costs.layer(grid, run.deadline, reach=self.radius)
+            grown = grid.with_occupied(layer.distance <= self.radius + 1e-9 * grid.resolution)
+            run.layers["costmap"] = layer
+        else:
+            grown = grid.inflate(self.radius, run.deadline)
         run.layers["grown"] = grown.occupied
         return grown
 
     def collision(self, space: OccupancyGrid, pose: Pose, cell: Cell) -> str | None:
         return f"within {self.radius:.3f} m of an obstacle" if space.occupied[cell] else None
+
+    def cost_weights(self, run: PlanRun) -> np.ndarray | None:
+        """The search's per-cell weights (None: the plain shortest path)."""
+        return self.costs.weights(run.layers.get("costmap"))
+
+    def smooth_path(self, space: OccupancyGrid, path: np.ndarray, run: PlanRun, headings) -> np.ndarray:
+        """``path`` smoothed as one stretch on the grown map when ``smooth`` is set; ``headings(xy)`` re-heads it."""
+        layer = run.layers.get("costmap")
+        if not self.costs.settings.smooth or layer is None or len(path) < 3:
+            return path
+        xy, info = self.costs.smooth(space, path[:, :2], layer, [Stretch(0, len(path) - 1, space.occupied)],
+                                     run.deadline)
+        run.stats.smoothing = info
+        return np.column_stack([xy, headings(xy)])

@@ -19,17 +19,20 @@ from typing import Any
 
 import numpy as np
 
-from maru_planner.base.astar import GridAStarPlanner, astar_2d
+from maru_planner.base.astar import DEFAULT_COST_TRAVEL_MULTIPLIER, GridAStarPlanner, astar_2d
 from maru_planner.base.biped.planners import biped_track, biped_wall
 from maru_planner.base.biped.track import TrackParams
 from maru_planner.base.biped.wall import WallParams
 from maru_planner.base.budget import DEFAULT_TIME_LIMIT
+from maru_planner.base.clearance import path_clearance
+from maru_planner.base.cost_model import cost_params
 from maru_planner.base.grid import OccupancyGrid
 from maru_planner.base.mspp import LocalMultiStagePlanner, MultiStagePlanner
 from maru_planner.base.planner import BasePlanner
 from maru_planner.base.result import BasePlanResult
 from maru_planner.base.se2 import SE2AStarPlanner
-from maru_planner.base.tunnel import TunnelGridPlanner, TunnelParams
+from maru_planner.base.tunnel import TunnelParams
+from maru_planner.base.tunnel_grid import TunnelGridPlanner
 from maru_planner.errors import InvalidPlanner
 from maru_planner.params import ParamSpec, check_params, dataclass_params
 
@@ -102,8 +105,12 @@ def warm_up() -> None:
     footprint = np.array([[0.1, 0.05], [-0.1, 0.05], [-0.1, -0.05], [0.1, -0.05]])
     for planner_id in planner_ids():
         plan(planner_id, grid, (0.25, 0.25, 0.0), (0.75, 0.75, 1.0), footprint)
+    for planner_id in ("astar", "se2"):  # the smoother and the plain (JPS) search
+        plan(planner_id, grid, (0.25, 0.25, 0.0), (0.75, 0.75, 0.0), footprint, smooth=True)
+        plan(planner_id, grid, (0.25, 0.25, 0.0), (0.75, 0.75, 0.0), footprint, cost_travel_multiplier=0.0)
     # the weighted A* kernel: MSPP's guide path past narrow passages, which this open grid never needs
     astar_2d(grid.occupied, (1, 1), (8, 8), cell_cost=np.ones(grid.occupied.shape))
+    path_clearance(grid, np.array([[0.25, 0.25], [0.75, 0.75]]))
 
 
 def plan(
@@ -132,21 +139,28 @@ def _params(*specs: ParamSpec) -> dict[str, ParamSpec]:
     return {s.name: s for s in specs}
 
 
+def _robot_radius(default: str) -> ParamSpec:
+    return ParamSpec("robot_radius", None, f"disc radius (m): the obstacle growth; default {default}",
+                     lower=0.0, optional=True, type=float)
+
+
+COST_AWARE = cost_params(DEFAULT_COST_TRAVEL_MULTIPLIER).values()  # astar, se2: Nav2's cost-aware planning
+PAPER_COSTS = cost_params(0.0).values()  # the papers' planners: the cost layer as an option
+
 register(BasePlannerSpec(
-    "astar", "2-D A* (JPS) on the map grown by the footprint's circumradius: fast, valid at any heading",
-    GridAStarPlanner,
-    _params(ParamSpec("inflation_radius", None, "obstacle growth (m); default the footprint's circumradius",
-                      lower=0.0, optional=True, type=float)),
+    "astar", "2-D A* on the map grown by robot_radius (the footprint's circumradius), Nav2's inflation costs "
+    "(cost_travel_multiplier=0: the shortest path, JPS)",
+    GridAStarPlanner, _params(_robot_radius("the footprint's circumradius"), *COST_AWARE),
     frozenset({USES_FOOTPRINT}),
 ))
 register(BasePlannerSpec(
-    "se2", "complete SE(2) A* for the footprint polygon over all headings (paper 002's full search)",
-    SE2AStarPlanner, _params(HEADINGS, ROTATION_WEIGHT),
+    "se2", "complete SE(2) A* for the footprint polygon over all headings (paper 002's full search), cost-aware",
+    SE2AStarPlanner, _params(HEADINGS, ROTATION_WEIGHT, *COST_AWARE),
     frozenset({USES_FOOTPRINT, NEEDS_HEADINGS}),
 ))
 register(BasePlannerSpec(
     "mspp", "paper 002's multi-stage planner: ECA (proves no path) -> BAA (2-D A*) -> full SE(2) A*",
-    MultiStagePlanner, _params(HEADINGS, ROTATION_WEIGHT),
+    MultiStagePlanner, _params(HEADINGS, ROTATION_WEIGHT, *PAPER_COSTS),
     frozenset({USES_FOOTPRINT, NEEDS_HEADINGS, PROVES_NO_PATH}),
 ))
 register(BasePlannerSpec(
@@ -156,15 +170,15 @@ register(BasePlannerSpec(
             ParamSpec("local_margin", None, "window margin around a narrow run (m); default 2 R_max",
                       lower=0.0, optional=True, type=float),
             ParamSpec("narrow_penalty", 4.0, "guide-path cost per cell within R_max of an obstacle",
-                      lower=0.0, upper=1e6)),
+                      lower=0.0, upper=1e6),
+            *PAPER_COSTS),
     frozenset({USES_FOOTPRINT, NEEDS_HEADINGS, PROVES_NO_PATH}),
 ))
 register(BasePlannerSpec(
     "tunnel", "paper 003's heuristic tunnel planner (TFP -> LCRP -> PFP) for a disc robot",
     TunnelGridPlanner,
-    _params(ParamSpec("robot_radius", None, "disc radius (m); default the footprint's circumradius, 0.25 without",
-                      lower=0.0, optional=True, type=float),
-            *dataclass_params(TunnelParams).values()),
+    _params(_robot_radius("the footprint's circumradius, 0.25 without"),
+            *dataclass_params(TunnelParams).values(), *PAPER_COSTS),
     frozenset({USES_FOOTPRINT}),
 ))
 register(BasePlannerSpec(

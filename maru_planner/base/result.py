@@ -65,7 +65,9 @@ def status_of(error: MaruError) -> PlanStatus:
 class PlanStats:
     """Counters every base planner fills; planners subclass it for their own (JSON keys = field names).
 
-    ``cost`` is the path cost in metres when the planner has one (None otherwise).
+    ``cost`` is the path cost in metres when the planner has one (None otherwise): the length, plus
+    ``cost_travel_multiplier`` times the cost along it for a cost-aware plan (before smoothing).
+    ``smoothing`` (when the path was smoothed): stretches, sweeps, vertices moved, accepted.
     """
 
     expansions: int = 0
@@ -73,6 +75,7 @@ class PlanStats:
     planning_time: float = 0.0
     deciding_stage: str = ""
     cost: float | None = None
+    smoothing: dict[str, Any] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """Plain JSON-ready dict; fields that are None are left out."""

@@ -16,7 +16,11 @@ Model (complete at its resolution):
   farthest point);
 - heuristic: octile distance + rotation_weight * angular distance to the goal
   heading. Translations never turn and turns never translate, so the sum is
-  admissible and consistent; the first goal pop is optimal.
+  admissible and consistent; the first goal pop is optimal;
+- cost-aware (``cost_travel_multiplier`` > 0, the default of ``se2``): a
+  translation into a cell costs its length times ``1 + multiplier * cost / 252``
+  with Nav2's inflation cost at the reference point (Smac's travel cost); turns
+  in place keep their cost. The heuristic stays admissible: still optimal.
 
 Stats (:class:`SE2Stats`): ``expansions`` (states popped), ``collision_checks``
 (state look-ups in the C-space layers during the search), ``cspace_cells``
@@ -28,6 +32,7 @@ Budget: the search's memory is estimated before allocating (TooLarge over
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from dataclasses import dataclass
@@ -37,8 +42,10 @@ import numpy as np
 
 from maru_planner.base.budget import Deadline, check_bytes, unlimited
 from maru_planner.base.common import states_to_path
+from maru_planner.base.cost_model import CostModel, CostSettings
 from maru_planner.base.footprint import (
     as_polygon,
+    dilate,
     footprint_radii,
     heading_index,
     heading_offsets,
@@ -48,11 +55,14 @@ from maru_planner.base.grid import OccupancyGrid
 from maru_planner.base.kernels import heap_grow, heap_pop, heap_push, now
 from maru_planner.base.planner import Cell, Endpoint, GridPlanner, PlanRun, Pose, require_grid
 from maru_planner.base.result import PlanStats
+from maru_planner.base.smoother import Stretch, stretches_at_headings
 from maru_planner.errors import InvalidRequest, NoPath
 
 # Bytes per SE(2) state during a search: padded layer (1), g (8), parent (8), closed (1), C-space layer (1).
 _BYTES_PER_STATE = 19
 _TIMED_OUT = 2  # kernel outcome: 0 found, 1 exhausted, 2 timed out
+DEFAULT_COST_TRAVEL_MULTIPLIER = 2.0  # Smac's default
+_SMOOTH_MARGIN = 3  # cells around a stretch its smoothed vertices may use
 
 
 def cspace_layers(
@@ -99,15 +109,18 @@ def _stamp_kernel(cells, offsets, starts, out, deadline_at):
 
 
 @numba.njit(cache=True, nogil=True)
-def _se2_kernel(blocked, starts, gr, gc, gk, rot_cost, deadline_at, initial_capacity):
+def _se2_kernel(blocked, starts, gr, gc, gk, rot_cost, deadline_at, initial_capacity, weights, use_weights):
     """A* over (k, r, c) on padded layers ``blocked`` (K, H, W; border blocked).
 
     ``starts``: (m, 3) start states (k, r, c) at cost 0; ``gk < 0`` accepts any
-    goal heading. Returns (parent, goal state id or -1, cost, expansions,
-    collision checks, status 0 found / 1 exhausted / 2 timed out).
+    goal heading. With ``use_weights`` a translation into cell (r, c) costs its
+    length times ``1 + weights[r, c]`` (padded (H, W)). Returns (parent, goal
+    state id or -1, cost, expansions, collision checks, status 0 found /
+    1 exhausted / 2 timed out).
     """
     num_k, height, width = blocked.shape
     flat = blocked.ravel()
+    wflat = weights.ravel()
     layer = height * width
     n = num_k * layer
     g_best = np.full(n, np.inf)
@@ -169,6 +182,8 @@ def _se2_kernel(blocked, starts, gr, gc, gk, rot_cost, deadline_at, initial_capa
                     ng = g + sqrt2
                 else:
                     ng = g + 1.0
+                if use_weights:
+                    ng = g + (sqrt2 if m >= 4 else 1.0) * (1.0 + wflat[nr * width + nc])
             else:
                 nr = r
                 nc = c
@@ -223,11 +238,13 @@ def search_layers(
     *,
     deadline: Deadline | None = None,
     initial_capacity: int | None = None,
+    cell_weight: np.ndarray | None = None,
 ) -> LayerSearch:
     """Run the SE(2) A* on (K, H, W) C-space layers (unpadded; outside = blocked).
 
-    ``starts``: iterable of (k, row, col); ``goal_k`` -1 = any heading. Raises
-    PlanningTimedOut when ``deadline`` passes, TooLarge when the search would not fit in memory.
+    ``starts``: iterable of (k, row, col); ``goal_k`` -1 = any heading; ``cell_weight`` (H, W), >= 0: a
+    translation into a cell costs its length times ``1 + weight``. Raises PlanningTimedOut when
+    ``deadline`` passes, TooLarge when the search would not fit in memory.
     """
     num_k, h, w = layers.shape
     check_search_memory(num_k, h, w)
@@ -235,10 +252,14 @@ def search_layers(
     padded = np.ones((num_k, h + 2, w + 2), dtype=np.bool_)
     padded[:, 1:-1, 1:-1] = layers
     starts = np.array([[k, r + 1, c + 1] for k, r, c in starts], dtype=np.int64).reshape(-1, 3)
+    weights = np.zeros((1, 1)) if cell_weight is None else np.pad(np.asarray(cell_weight, dtype=float), 1)
+    if cell_weight is not None and weights.shape != (h + 2, w + 2):
+        raise ValueError(f"cell_weight has shape {np.shape(cell_weight)}, the layers {(h, w)}")
     parent, goal, cost, expansions, checks, status = _se2_kernel(
         padded, starts, int(goal_cell[0]) + 1, int(goal_cell[1]) + 1, int(goal_k), float(rot_cost_cells),
         deadline.kernel_at,
         int(initial_capacity if initial_capacity is not None else min(10 * padded.size, 1 << 20)),
+        weights, cell_weight is not None,
     )
     if status == _TIMED_OUT:
         deadline.raise_timeout(f"SE(2) A* ({int(expansions)} expansions)")
@@ -275,9 +296,15 @@ class FullSearch:
 
 
 class SE2AStarPlanner(GridPlanner[OccupancyGrid]):
-    """Complete SE(2) A* for a polygonal footprint (see the module docstring)."""
+    """Complete SE(2) A* for a polygonal footprint (see the module docstring).
 
-    def __init__(self, footprint, headings: int = 32, rotation_weight: float | None = None):
+    The cost keywords are :class:`~maru_planner.base.cost_model.CostSettings` fields (default ``default_costs``:
+    cost-aware here, the plain paper search for MSPP).
+    """
+
+    default_costs = CostSettings(cost_travel_multiplier=DEFAULT_COST_TRAVEL_MULTIPLIER)
+
+    def __init__(self, footprint, headings: int = 32, rotation_weight: float | None = None, **costs):
         self.footprint = as_polygon(footprint)
         if not 1 <= int(headings) <= 3600:
             raise InvalidRequest(f"headings must be in [1, 3600], got {headings}")
@@ -286,6 +313,7 @@ class SE2AStarPlanner(GridPlanner[OccupancyGrid]):
         self.rotation_weight = self.r_out if rotation_weight is None else float(rotation_weight)
         if not (math.isfinite(self.rotation_weight) and self.rotation_weight >= 0):
             raise InvalidRequest(f"rotation_weight must be finite and >= 0, got {rotation_weight}")
+        self.costs = CostModel(dataclasses.replace(self.default_costs, **costs), self.r_in, self.r_out)
         self._offsets: dict[tuple, list[np.ndarray]] = {}
 
     def offsets(self, grid: OccupancyGrid, deadline: Deadline | None = None) -> list[np.ndarray]:
@@ -301,6 +329,10 @@ class SE2AStarPlanner(GridPlanner[OccupancyGrid]):
     def heading_of(self, grid: OccupancyGrid, pose: Pose) -> int:
         return heading_index(grid.heading_to_grid(pose[2]), self.headings)
 
+    def cost_weights(self, run: PlanRun) -> np.ndarray | None:
+        """The search's per-cell weights at the reference point (None: the plain search)."""
+        return self.costs.weights(run.layers.get("costmap"))
+
     # ----------------------------------------------------------- skeleton steps
     def new_stats(self) -> PlanStats:
         return SE2Stats(deciding_stage="full", headings=self.headings)
@@ -308,6 +340,8 @@ class SE2AStarPlanner(GridPlanner[OccupancyGrid]):
     def prepare(self, grid: OccupancyGrid | None, run: PlanRun) -> OccupancyGrid:
         grid = require_grid(grid)
         self.offsets(grid, run.deadline)
+        if self.costs.needs_layer:
+            run.layers["costmap"] = self.costs.layer(grid, run.deadline)
         return grid
 
     def collision(self, space: OccupancyGrid, pose: Pose, cell: Cell) -> str | None:
@@ -315,7 +349,7 @@ class SE2AStarPlanner(GridPlanner[OccupancyGrid]):
         return "the footprint covers an occupied cell" if offsets_collide(space.occupied, offsets, *cell) else None
 
     def search(self, space: OccupancyGrid, start: Endpoint, goal: Endpoint, run: PlanRun) -> np.ndarray:
-        full = self.full_search(space, start, goal, run.deadline)
+        full = self.full_search(space, start, goal, run.deadline, self.cost_weights(run))
         stats = run.stats_as(SE2Stats)
         stats.expansions, stats.collision_checks = full.search.expansions, full.search.collision_checks
         stats.cspace_time, stats.cspace_cells, stats.search_time = full.cspace_time, full.cspace_cells, full.search_time
@@ -323,9 +357,12 @@ class SE2AStarPlanner(GridPlanner[OccupancyGrid]):
             raise NoPath("no path: SE(2) A* exhausted the free configurations")
         stats.cost = full.search.cost * space.resolution
         run.message = "solved by full SE(2) A*"
-        return states_to_path(space, full.search.states, self.headings)
+        return self.smooth_states(space, states_to_path(space, full.search.states, self.headings), run)
 
-    def full_search(self, grid: OccupancyGrid, start: Endpoint, goal: Endpoint, deadline: Deadline) -> FullSearch:
+    def full_search(
+        self, grid: OccupancyGrid, start: Endpoint, goal: Endpoint, deadline: Deadline,
+        cell_weight: np.ndarray | None = None,
+    ) -> FullSearch:
         """C-space layers for the whole map, then the search (memory checked before either)."""
         check_search_memory(self.headings, *grid.shape)
         t = time.perf_counter()
@@ -333,5 +370,30 @@ class SE2AStarPlanner(GridPlanner[OccupancyGrid]):
                                self.offsets(grid, deadline), deadline)
         cspace_time = time.perf_counter() - t
         out = search_layers(layers, [(self.heading_of(grid, start.pose), *start.cell)], goal.cell,
-                            self.heading_of(grid, goal.pose), self.rot_cost_cells(grid.resolution), deadline=deadline)
+                            self.heading_of(grid, goal.pose), self.rot_cost_cells(grid.resolution), deadline=deadline,
+                            cell_weight=cell_weight)
         return FullSearch(out, cspace_time, int(layers.size), time.perf_counter() - t)
+
+    def smooth_states(self, grid: OccupancyGrid, path: np.ndarray, run: PlanRun) -> np.ndarray:
+        """With ``smooth``: each run of poses at one heading smoothed on that heading's C-space (turns in place
+        stay where they are, headings unchanged)."""
+        layer = run.layers.get("costmap")
+        if not self.costs.settings.smooth or layer is None or len(path) < 3:
+            return path
+        offsets = self.offsets(grid, run.deadline)
+        stretches = [self._stretch(grid, path, first, last, offsets) for first, last in stretches_at_headings(path)]
+        xy, info = self.costs.smooth(grid, path[:, :2], layer, stretches, run.deadline)
+        run.stats.smoothing = info
+        return np.column_stack([xy, path[:, 2]])
+
+    def _stretch(self, grid: OccupancyGrid, path: np.ndarray, first: int, last: int, offsets) -> Stretch:
+        """The stretch's window (its cells + a margin) of the C-space layer at its heading."""
+        k = heading_index(grid.heading_to_grid(path[first, 2]), self.headings)
+        cells = np.array([grid.world_to_cell(x, y) for x, y in path[first : last + 1, :2]])
+        (r0, c0), (r1, c1) = cells.min(axis=0) - _SMOOTH_MARGIN, cells.max(axis=0) + _SMOOTH_MARGIN + 1
+        r0, c0, r1, c1 = max(r0, 0), max(c0, 0), min(r1, grid.height), min(c1, grid.width)
+        reach = int(np.max(np.abs(offsets[k]))) if len(offsets[k]) else 0
+        R0, C0 = max(r0 - reach, 0), max(c0 - reach, 0)
+        crop = grid.occupied[R0 : min(r1 + reach, grid.height), C0 : min(c1 + reach, grid.width)]
+        blocked = dilate(crop, offsets[k])[r0 - R0 : r1 - R0, c0 - C0 : c1 - C0]
+        return Stretch(first, last, blocked, (int(r0), int(c0)))

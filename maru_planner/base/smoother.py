@@ -16,7 +16,7 @@ changes:
 
 A path is smoothed in *stretches* (first and last vertex fixed): a disc path is one stretch, an SE(2)
 path one per run of poses at one heading (its turns in place stay where the planner put them). The
-result is checked again segment by segment; if anything fails, the original path is returned.
+result is checked again, every segment that changed; if anything fails, the original path is returned.
 All of it runs in cell units (cell (r, c) spans [r, r + 1) x [c, c + 1)).
 """
 
@@ -209,15 +209,18 @@ def smooth_stretch(
         float(params.w_data), float(params.w_smooth), int(params.max_its), float(params.tolerance), max_turn, turn0,
         deadline.kernel_at,
     )
-    if timed_out or not _recheck(y, blocked, stretch.offset, occupied, dist_cells, cap, baseline, max_turn, turn0):
+    if timed_out or not _recheck(x, y, blocked, stretch.offset, occupied, dist_cells, cap, baseline, max_turn, turn0):
         return SmoothOutcome(x, sweeps, 0, False)
     moved = int(np.count_nonzero(np.hypot(*(y - x).T) > 1e-9))
     return SmoothOutcome(y, sweeps, moved, True)
 
 
-def _recheck(y, blocked, offset, occupied, dist_cells, cap, baseline, max_turn, turn0) -> bool:
-    """The whole smoothed stretch again: every segment free and as far from obstacles as required, turns kept."""
+def _recheck(x, y, blocked, offset, occupied, dist_cells, cap, baseline, max_turn, turn0) -> bool:
+    """The smoothed stretch again: every changed segment free and as far from obstacles as required, turns kept."""
+    moved = np.hypot(*(y - x).T) > 0.0
     for j in range(len(y) - 1):
+        if not (moved[j] or moved[j + 1]):
+            continue  # the planner's own segment
         if not segment_free(blocked, offset[0], offset[1], y[j], y[j + 1]):
             return False
         if capped_clearance(occupied, dist_cells, y[j], y[j + 1], cap) < baseline[j] - _EPS:

@@ -44,8 +44,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from maru_planner.base.budget import Deadline, unlimited
-from maru_planner.base.grid import OccupancyGrid
-from maru_planner.base.planner import DiscPlanner, Endpoint, PlanRun
 from maru_planner.base.result import PlanStats, PlanStatus, status_of
 from maru_planner.errors import (
     GoalOccupied,
@@ -394,9 +392,24 @@ def segment_is_free(occupied: np.ndarray, a, b) -> bool:
     return True
 
 
-def shortcut_cells(occupied: np.ndarray, cells: list, deadline: Deadline | None = None) -> list:
+def segment_max_cost(cost: np.ndarray, a, b) -> int:
+    """The highest cost among the cells :func:`segment_is_free` reads for the segment a-b."""
+    (r0, c0), (r1, c1) = a, b
+    n = int(np.ceil(4.0 * max(abs(r1 - r0), abs(c1 - c0)))) + 1
+    t = np.linspace(0.0, 1.0, n)
+    rows, cols = r0 + 0.5 + t * (r1 - r0), c0 + 0.5 + t * (c1 - c0)
+    h, w = cost.shape
+    ri = np.clip(np.floor(rows[:, None] + np.array([-0.25, 0.25])).astype(int), 0, h - 1)
+    ci = np.clip(np.floor(cols[:, None] + np.array([-0.25, 0.25])).astype(int), 0, w - 1)
+    return int(cost[ri[:, :, None], ci[:, None, :]].max())
+
+
+def shortcut_cells(occupied: np.ndarray, cells: list, deadline: Deadline | None = None,
+                   cost: np.ndarray | None = None) -> list:
     """Keep only the turning points: from each anchor, the farthest cell still in line of sight.
 
+    With ``cost`` (a cost layer), a shortcut is taken only where it crosses no cell costlier than the
+    chain it replaces: it never cuts closer to an obstacle than the chain did.
     When ``deadline`` passes, the rest of the chain is kept as it is (still a valid path).
     """
     if len(cells) <= 2:
@@ -404,14 +417,20 @@ def shortcut_cells(occupied: np.ndarray, cells: list, deadline: Deadline | None 
     deadline = deadline or unlimited()
     out = [cells[0]]
     anchor = 0
+    chain_max = -1
     j = 1
     while j < len(cells):
         if deadline.expired():
             return out + list(cells[anchor + 1 :])
-        if segment_is_free(occupied, cells[anchor], cells[j]):
+        if cost is not None:
+            chain_max = max(chain_max, segment_max_cost(cost, cells[j - 1], cells[j]))
+        if segment_is_free(occupied, cells[anchor], cells[j]) and (
+            cost is None or j == anchor + 1 or segment_max_cost(cost, cells[anchor], cells[j]) <= chain_max
+        ):
             j += 1
             continue
         anchor = j - 1
+        chain_max = -1 if cost is None else segment_max_cost(cost, cells[anchor], cells[j])
         out.append(cells[anchor])
     out.append(cells[-1])
     return out
@@ -443,8 +462,11 @@ class TunnelPlanner:
         self.params.validate()
 
     def plan_cells(self, occupied: np.ndarray, start, goal, deadline: Deadline | None = None,
-                   stats: TunnelStats | None = None) -> CellPlan:
-        """Plan from cell ``start`` to ``goal``; fills ``stats`` (a fresh TunnelStats by default)."""
+                   stats: TunnelStats | None = None, cost: np.ndarray | None = None) -> CellPlan:
+        """Plan from cell ``start`` to ``goal``; fills ``stats`` (a fresh TunnelStats by default).
+
+        ``cost`` (a cost layer's costs): the shortcuts never cross a cell costlier than the chain they replace.
+        """
         occupied = np.asarray(occupied, dtype=bool)
         start, goal = (int(start[0]), int(start[1])), (int(goal[0]), int(goal[1]))
         t0 = time.perf_counter()
@@ -453,11 +475,11 @@ class TunnelPlanner:
         try:
             for cell, name in ((start, "start"), (goal, "goal")):
                 _check_endpoint(occupied, cell, name)
-            return self._search(occupied, start, goal, attempts, stats, deadline or unlimited(), t0)
+            return self._search(occupied, start, goal, attempts, stats, deadline or unlimited(), t0, cost)
         except MaruError as error:
             return self._finish(error, str(error), [], attempts, occupied, stats, t0, unlimited())
 
-    def _search(self, occupied, start, goal, attempts, stats, deadline, t0) -> CellPlan:
+    def _search(self, occupied, start, goal, attempts, stats, deadline, t0, cost=None) -> CellPlan:
         p = self.params
         for size in range(p.big_cell_size, p.min_big_cell_size - 1, -1):
             bg = BigCellGrid(occupied, size)
@@ -467,7 +489,7 @@ class TunnelPlanner:
                 attempts.append(attempt)
                 if cells is not None:
                     return self._finish(None, f"path found with big cells of {size}×{size}",
-                                        cells, attempts, occupied, stats, t0, deadline)
+                                        cells, attempts, occupied, stats, t0, deadline, cost)
                 if attempt.failed_stage == "TFP" or size > p.min_big_cell_size:
                     break
                 if len(blocked) >= p.max_virtual_obstacles:
@@ -502,64 +524,11 @@ class TunnelPlanner:
         attempt = Attempt(bg.size, None, bg.to_rc(tunnel), lumped, bg.to_rc(thin), _as_array(cells), virtual)
         return attempt, cells
 
-    def _finish(self, error, message, cells, attempts, occupied, stats: TunnelStats, t0, deadline) -> CellPlan:
+    def _finish(self, error, message, cells, attempts, occupied, stats: TunnelStats, t0, deadline,
+                cost=None) -> CellPlan:
         waypoints = cells
         if cells and self.params.shortcut:
-            waypoints = shortcut_cells(occupied, cells, deadline)
+            waypoints = shortcut_cells(occupied, cells, deadline, cost)
         stats.expansions = stats.tfp_expansions + stats.pfp_expansions
         stats.planning_time = time.perf_counter() - t0
         return CellPlan(error, message, _as_array(cells), _as_array(waypoints), attempts, stats)
-
-
-# ----------------------------------------------------------------- world frame
-
-
-def cells_to_path(grid, cells: np.ndarray, start_theta: float, goal_theta: float) -> np.ndarray:
-    """(row, col) cells → (x, y, θ) rows; θ follows each segment, the ends keep the request's θ."""
-    if len(cells) == 0:
-        return np.zeros((0, 3))
-    xy = grid.cells_to_world(cells)
-    theta = np.empty(len(xy))
-    if len(xy) > 1:
-        d = np.diff(xy, axis=0)
-        theta[:-1] = np.arctan2(d[:, 1], d[:, 0])
-    theta[0] = start_theta
-    theta[-1] = goal_theta
-    return np.column_stack([xy, theta])
-
-
-class TunnelGridPlanner(DiscPlanner):
-    """Registry entry ``tunnel``: the tunnel planner on an ``OccupancyGrid`` for a disc robot.
-
-    Obstacles are grown by ``robot_radius`` metres (default: the footprint's
-    circumradius, 0.25 m without a footprint — the paper's robot). Other
-    keyword arguments are :class:`TunnelParams` fields.
-    """
-
-    default_radius = 0.25
-
-    def __init__(self, footprint=None, robot_radius: float | None = None, **params):
-        super().__init__(robot_radius, footprint)
-        self.planner = TunnelPlanner(**params)
-
-    @property
-    def robot_radius(self) -> float:
-        return self.radius
-
-    def new_stats(self) -> PlanStats:
-        return TunnelStats(deciding_stage="tunnel")
-
-    def search(self, space: OccupancyGrid, start: Endpoint, goal: Endpoint, run: PlanRun) -> np.ndarray:
-        plan = self.planner.plan_cells(space.occupied, start.cell, goal.cell, run.deadline, run.stats_as(TunnelStats))
-        run.stats.collision_checks = run.stats.expansions
-        last = plan.attempts[-1] if plan.attempts else None
-        run.stats.deciding_stage = f"tunnel b={last.big_cell_size}" if last else "tunnel"
-        run.layers.update(attempts=plan.attempts, raw_cells=plan.raw_cells, waypoints=plan.waypoints)
-        if plan.error is not None:
-            raise plan.error
-        path = cells_to_path(space, plan.waypoints, start.pose[2], goal.pose[2])
-        path[0, :2] = start.pose[:2]
-        path[-1, :2] = goal.pose[:2]
-        run.stats.cost = float(np.sum(np.linalg.norm(np.diff(path[:, :2], axis=0), axis=1)))
-        run.message = plan.message
-        return path

@@ -88,7 +88,10 @@ def _check_ends(robot: Any, constraints: PathConstraints, start: np.ndarray, goa
     """Both ends inside the path constraints (else they cannot hold along the motion)."""
     if constraints.empty:
         return
-    for q, what, error_cls in ((start, "start", errors.StartViolatesConstraints), (goal, "goal", errors.InvalidRequest)):
+    for q, what, error_cls in (
+        (start, "start", errors.StartViolatesConstraints),
+        (goal, "goal", errors.InvalidRequest),
+    ):
         orientation, position = constraints.violation(robot, q)
         if orientation > 0 or position > 0:
             raise error_cls(

@@ -33,8 +33,8 @@ from maru_planner.planning.cartesian import CartesianRequest, CartesianResult, d
 from maru_planner.planning.config import COLLISION_MODELS, TIME_PARAMETERIZATIONS, PlannerConfig
 from maru_planner.planning.links import check_link
 from maru_planner.planning.motion_planner import MotionPlanner
-from maru_planner.planning.problems import PROBLEMS
 from maru_planner.planning.planners.registry import PLANNERS, get_spec, merged_params
+from maru_planner.planning.problems import PROBLEMS
 from maru_planner.planning.types import MotionRequest, MotionResult, PlanStatus, status_of_error
 from maru_planner.robot import RobotModel, load_example_robot
 from maru_planner.scene import Scene

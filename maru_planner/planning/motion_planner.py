@@ -41,7 +41,7 @@ from maru_planner.planning.stages.simplify import simplify
 from maru_planner.planning.stages.time_dense import time_dense
 from maru_planner.planning.stages.verify import verify
 from maru_planner.planning.types import MotionRequest, MotionResult
-from maru_planner.scene_attached import attachment_key, robot_with_attached
+from maru_planner.robot.attached import attachment_key, robot_with_attached
 
 __all__ = [
     "CERTIFIED_CHORD_STEP",
@@ -177,5 +177,3 @@ class MotionPlanner:
         with self._lock:
             self._follow_attachments()
             return compute_cartesian_path(self.context, request)
-
-

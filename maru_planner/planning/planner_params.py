@@ -2,8 +2,8 @@
 
 from maru_planner.planning.planners.planner_params import (
     PlannerParams,
-    stored_params,
     ompl_params,
+    stored_params,
 )
 
 __all__ = [

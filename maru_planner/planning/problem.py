@@ -17,6 +17,7 @@ from maru_planner.planning.requests import safety_margin
 from maru_planner.planning.space import EdgeChecker, GroupSetup
 from maru_planner.planning.types import MotionRequest, MotionResult
 
+
 @dataclass
 class PlanningProblem:
     """One request, checked and resolved: what to plan, for which robot, on which checker, by when."""

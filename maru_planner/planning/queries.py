@@ -55,9 +55,7 @@ class StateValidity:
     position_violation: float = 0.0
 
 
-def check_state_validity(
-    robot, checker, q: np.ndarray, constraints: PathConstraints | None = None
-) -> StateValidity:
+def check_state_validity(robot, checker, q: np.ndarray, constraints: PathConstraints | None = None) -> StateValidity:
     """Collisions (self, scene, attached objects), joint limits and ``constraints`` at full configuration ``q``."""
     q = _robot_state(robot, q)
     pairs = list(checker.colliding_pairs(q))

@@ -2,18 +2,18 @@
 
 from maru_planner.planning.planners.registry import (
     CAPABILITIES,
-    ArmPlanner,
-    ReportsGraphSize,
-    ProvesFailure,
-    RoadmapPlanner,
-    PlannerFactory,
-    ArmPlannerSpec,
     PLANNERS,
-    register,
-    planner_ids,
+    ArmPlanner,
+    ArmPlannerSpec,
+    PlannerFactory,
+    ProvesFailure,
+    ReportsGraphSize,
+    RoadmapPlanner,
     get_spec,
-    merged_params,
     make_planner,
+    merged_params,
+    planner_ids,
+    register,
 )
 
 __all__ = [

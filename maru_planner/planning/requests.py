@@ -13,9 +13,9 @@ from typing import Any
 import numpy as np
 
 from maru_planner import errors
-from maru_planner.trajectory import check_method, check_scaling
 from maru_planner.planning.config import PlannerConfig
 from maru_planner.planning.types import MotionRequest
+from maru_planner.trajectory import check_method, check_scaling
 
 
 def finite_time(value: Any, name: str) -> float:

@@ -148,11 +148,10 @@ class PlanningNode(ManagedNode):
             (srv.ComputeCartesianPath, "compute_cartesian_path", self._on_compute_cartesian_path),
         ):
             self.create_managed_service(srv_type, name, callback, qos_profile=requests_qos, callback_group=services)
-        for msg_type, topic, callback, depth in (
-            (JointState, "/joint_states", self._on_joint_states, JOINT_STATES_DEPTH),
-            (SceneObstacle, "/planning_scene_obstacles", self._on_scene_obstacle, 50),
-        ):
-            self.create_subscription(msg_type, topic, callback, depth, callback_group=MutuallyExclusiveCallbackGroup())
+        self.create_subscription(JointState, "/joint_states", self._on_joint_states, JOINT_STATES_DEPTH,
+                                 callback_group=MutuallyExclusiveCallbackGroup())  # fmt: skip
+        self.create_subscription(SceneObstacle, "/planning_scene_obstacles", self._on_scene_obstacle, 50,
+                                 callback_group=MutuallyExclusiveCallbackGroup())  # fmt: skip
         self._trajectory_pub = self.create_lifecycle_publisher(JointTrajectory, "~/planned_trajectory", LATCHED)
         self._markers = MarkerPublisher(
             self.create_lifecycle_publisher(MarkerArray, "~/markers", 10), self._robot, self.settings.planning_frame,

@@ -126,7 +126,7 @@ def assess_rows_nb(configs, config_of, seg, pair, half, run_arrays, pair_arrays,
     leaves no slack (coal's verdict fails the path)."""
     pair_margin, rate_free, motion, downstream = run_arrays
     first, second, obstacle, other, covered, measure, moves_first, moves_other, gap, box_center, box_rot, box_half = (
-        pair_arrays)
+        pair_arrays)  # fmt: skip
     parent, kind, axis, prot, ppos, idx_q, g_joint, g_local, g_radius, q_joint, levers, prismatic = robot_arrays
     n_rows, n_geoms, nq, n_configs = seg.shape[0], g_joint.shape[0], q_joint.shape[0], configs.shape[0]
     rots, poss = np.empty((n_configs, parent.shape[0], 3, 3)), np.empty((n_configs, parent.shape[0], 3))
@@ -157,10 +157,10 @@ def assess_rows_nb(configs, config_of, seg, pair, half, run_arrays, pair_arrays,
                 lever = 0.0
                 if moves_first[p, j]:
                     lever += 1.0 if prismatic[j] else min(
-                        levers[g, j], to_axis[c, g, j] + g_radius[g] + half[r] * downstream[s, g, j])
+                        levers[g, j], to_axis[c, g, j] + g_radius[g] + half[r] * downstream[s, g, j])  # fmt: skip
                 if moves_other[p, j]:
                     lever += 1.0 if prismatic[j] else min(
-                        levers[o, j], to_axis[c, o, j] + g_radius[o] + half[r] * downstream[s, o, j])
+                        levers[o, j], to_axis[c, o, j] + g_radius[o] + half[r] * downstream[s, o, j])  # fmt: skip
                 total += lever * motion[s, j]
             rate[r] = total
         need[r] = margin[r] + half[r] * rate[r]
@@ -185,7 +185,7 @@ def assess_rows_nb(configs, config_of, seg, pair, half, run_arrays, pair_arrays,
         no_slack = bound[r] <= margin[r]
         thin = proves_too_little(bound[r] - margin[r], half[r] * rate[r])
         refine[r] = bound[r] < need[r] and (volume[r] + gap[p] >= need[r] or no_slack) and (
-            no_slack or thin or not covered[p])
+            no_slack or thin or not covered[p])  # fmt: skip
         measured[r] = refine[r] and measure[p] != MEASURE_NONE
         if not measured[r]:
             continue

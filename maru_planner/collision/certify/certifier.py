@@ -39,9 +39,8 @@ from maru_planner.collision.certify.rounds import (
     round_configs_nb,
 )
 from maru_planner.collision.checker import CollisionChecker, hull_or_self, robot_hull, self_collision_pairs
-from maru_planner.collision.kernels.fk import tree_arrays
 from maru_planner.collision.kernels.support_bounds import HULL, NO_SHAPE
-from maru_planner.collision.kinematic_tree import KinematicTree
+from maru_planner.collision.kinematic_tree import KinematicTree, tree_arrays
 from maru_planner.collision.shape_records import robot_shape_records
 from maru_planner.collision.sphere_model import SphereModel
 from maru_planner.robot.model import RobotModel
@@ -244,7 +243,7 @@ class PathCertifier:
     def _certify(
         self, path: np.ndarray, deviation: np.ndarray, curve: np.ndarray, margin: float, deadline: float | None,
         bend: np.ndarray | None = None,
-    ) -> tuple[Certificate, CertificationRun]:
+    ) -> tuple[Certificate, CertificationRun]:  # fmt: skip
         """Prove the segments of ``path`` (deviation (segments, nq), ``curve`` and ``bend`` as
         :class:`CertificationRun` takes them; ``bend`` None: straight segments)."""
         bend = np.zeros((max(len(path) - 1, 0), self._model.nq)) if bend is None else bend

@@ -66,7 +66,8 @@ def cover_bounds_nb(rots, poss, rows, config_of, first, second, obstacle, enough
             if obstacle[r]:
                 k = primitive[h]
                 lower = obstacle_distance(cluster_world[ca, 0], cluster_world[ca, 1], cluster_world[ca, 2], k, box_c,
-                                          box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r) - c_radius[ca]
+                                          box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h,
+                                          cyl_r) - c_radius[ca]  # fmt: skip
                 if lower >= best:
                     continue
                 if lower >= enough[r]:
@@ -75,7 +76,8 @@ def cover_bounds_nb(rots, poss, rows, config_of, first, second, obstacle, enough
                 place_members(ca, c_start, balls_placed, rot, pos, s_joint, s_center, sphere_world)
                 for sa in range(c_start[ca], c_start[ca + 1]):
                     d = obstacle_distance(sphere_world[sa, 0], sphere_world[sa, 1], sphere_world[sa, 2], k, box_c,
-                                          box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r) - s_radius[sa]
+                                          box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h,
+                                          cyl_r) - s_radius[sa]  # fmt: skip
                     best = min(best, d)
                 continue
             for cb in range(g_clusters[h], g_clusters[h + 1]):

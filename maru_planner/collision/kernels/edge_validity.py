@@ -60,7 +60,7 @@ def _near_roots(q, indices, roots, exact_near):
 def check_edge(
     qa, qb, resolution, base, indices, ri, rf, sf, grid_i, grid_f, amb, mark, shapes, confirm, amb_states, st, roots,
     exact_near,
-):
+):  # fmt: skip
     """VALID, COLLIDING or AMBIGUOUS for the edge qa → qb (qa excluded) on the sphere model.
 
     The edge's states, as full configurations (``base`` supplies the joints outside the group's

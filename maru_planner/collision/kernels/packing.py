@@ -32,7 +32,7 @@ def pack_robot(parent, kind, axis, prot, ppos, idx_q, s_joint, s_center, s_radiu
 def pack_scene(box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact):
     """Scene primitives as one float64 array (counts first; ``exact`` as 0/1)."""
     parts = [[len(box_c), len(sph_c), len(cyl_c)], box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r,
-             exact]
+             exact]  # fmt: skip
     return np.concatenate([np.ravel(np.asarray(p, dtype=np.float64)) for p in parts])
 
 

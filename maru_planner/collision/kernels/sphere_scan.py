@@ -224,8 +224,8 @@ def scan_nb(Q, start, ri, rf, sf, grid_i, grid_f, amb, mark, stop_at_ambiguous):
     ``grid_i``/``grid_f``: :func:`~.grid.build_grid`'s; ``mark``: (2, n_obs + 1) int64 kept across calls. With
     ``stop_at_ambiguous`` false, AMBIGUOUS rows are reported as COLLIDING (the pure sphere model).
     """
-    (parent, kind, axis, prot, ppos, idx_q, s_joint, s_center, s_radius, s_inner, g_start, g_joint, g_center,
-     g_radius, self_pairs, padding, c_start, c_joint, c_center, c_radius, g_clusters) = unpack_robot(ri, rf)
+    (parent, kind, axis, prot, ppos, idx_q, s_joint, s_center, s_radius, s_inner, g_start, g_joint, g_center, g_radius,
+     self_pairs, padding, c_start, c_joint, c_center, c_radius, g_clusters) = unpack_robot(ri, rf)  # fmt: skip
     box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h, cyl_r, exact = unpack_scene(sf)
     nj = parent.shape[0]
     rot = np.empty((nj, 3, 3))
@@ -258,5 +258,5 @@ def sphere_obstacle_distances_nb(world, sf):
     for s in range(world.shape[0]):
         for k in range(n_obs):
             out[s, k] = point_obstacle_distance(world[s], k, box_c, box_r, box_h, sph_c, sph_r, cyl_c, cyl_a, cyl_h,
-                                                cyl_r)
+                                                cyl_r)  # fmt: skip
     return out

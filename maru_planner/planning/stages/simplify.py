@@ -24,8 +24,11 @@ def simplify(problem: PlanningProblem, result: MotionResult) -> None:
     raw = result.path
     problem.monitor.report("simplify", best_cost=result.stats.raw_path_length)
     if problem.request.simplify:
-        t_simp = time.monotonic()
-        result.path = _constrained(problem, raw) if problem.constrained else _shortcut(problem, raw)
+        t_simp, checks0 = time.monotonic(), problem.checker.check_count
+        try:
+            result.path = _constrained(problem, raw) if problem.constrained else _shortcut(problem, raw)
+        finally:
+            result.stats.collision_checks += int(problem.checker.check_count - checks0)
         result.stats.simplify_time = time.monotonic() - t_simp
     problem.monitor.report("parameterize", best_cost=path_length(result.path))
 

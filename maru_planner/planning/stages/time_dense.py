@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import time
 
+import numpy as np
+
 from maru_planner.planning.cartesian import time_dense_path
 from maru_planner.planning.problem import PlanningProblem
 from maru_planner.planning.types import MotionResult, PlanStatus
@@ -20,7 +22,7 @@ def time_dense(problem: PlanningProblem, result: MotionResult) -> None:
     method = request.time_parameterization or config.time_parameterization
     scalings = (float(request.velocity_scaling), float(request.acceleration_scaling))
     result.trajectory = time_dense_path(problem.robot, config, problem.context.certifier, problem.full(result.path),
-                                        problem.indices, method, scalings, problem.deadline,
+                                        np.asarray(problem.indices), method, scalings, problem.deadline,
                                         problem.margin_kept)  # fmt: skip
     stats.parameterize_time = time.monotonic() - t_par
     path = result.path
