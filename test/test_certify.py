@@ -296,16 +296,16 @@ def test_a_repair_never_starts_at_a_waypoint_touching_an_obstacle(arm):
 def test_a_margin_0_repair_is_searched_padded(arm, monkeypatch, model):
     """Twice a margin of 0 is 0: a repair's search is padded by up to MIN_REPAIR_PADDING, half-way to its anchors'
     clearance, so that its edges (checked at states) do not graze what certification just rejected."""
-    from maru_planner.planning import motion_planner
+    from maru_planner.planning.stages import repair
 
     paddings = []
-    padded = motion_planner.padded_checker
+    padded = repair.padded_checker
 
     def recording(robot, checker, padding):
         paddings.append(padding)
         return padded(robot, checker, padding)
 
-    monkeypatch.setattr(motion_planner, "padded_checker", recording)
+    monkeypatch.setattr(repair, "padded_checker", recording)
     scene = Scene([Obstacle("plate", "box", size=(0.04, 0.002, 0.05), pose=[REACH + 0.01, 0.0, 0.0])])
     request = MotionRequest("all", start={"j1": -0.3, "j2": 0.0}, goal_joints={"j1": 0.4, "j2": 0.0},
                             planner_id="RRTConnect", time_budget=10.0, seed=1)  # fmt: skip
@@ -314,7 +314,7 @@ def test_a_margin_0_repair_is_searched_padded(arm, monkeypatch, model):
     result = planner.plan(request)
     assert result.success and result.stats.certified and result.stats.repairs >= 1, result.message
     assert result.stats.collision_model == model
-    assert paddings and all(0.0 < p <= motion_planner.REPAIR_MIN_PADDING for p in paddings)
+    assert paddings and all(0.0 < p <= repair.REPAIR_MIN_PADDING for p in paddings)
 
 
 def test_repair_gives_up_without_a_local_path(arm):

@@ -18,6 +18,7 @@ from maru_planner.collision.kernels.primitives import AMBIGUOUS, COLLIDING, VALI
 from maru_planner.collision.kernels.sphere_scan import scan_nb
 from maru_planner.collision.spheres import SphereCollisionChecker, verify_path
 from maru_planner.planning import PLANNERS, MotionPlanner, MotionRequest, PlannerConfig, PlanStatus
+from maru_planner.planning.pipeline import Pipeline
 from maru_planner.planning.planners.compiled_rrtc import CompiledRRTConnect
 from maru_planner.planning.planners.kernels import rrtc as kernel
 from maru_planner.planning.problems import PROBLEMS
@@ -317,13 +318,13 @@ def test_certification_repairs_search_with_the_kernel_on_padded_spheres(monkeypa
     config = PlannerConfig(collision_model="spheres", verify_resolution=0.025, safety_margin=0.01)
     planner = MotionPlanner.from_scene(robot, problem.scene, config)
     searches = []
-    plan = MotionPlanner.plan
+    run = Pipeline.run
 
-    def recording_plan(self, request, monitor=None):
-        searches.append((request.planner_id, type(self.checker).__name__, getattr(self.checker, "padding", 0.0)))
-        return plan(self, request, monitor)
+    def recording_run(self, context, request, monitor, t0):
+        searches.append((request.planner_id, type(context.checker).__name__, getattr(context.checker, "padding", 0.0)))
+        return run(self, context, request, monitor, t0)
 
-    monkeypatch.setattr(MotionPlanner, "plan", recording_plan)
+    monkeypatch.setattr(Pipeline, "run", recording_run)
     goal = {k: v for k, v in problem.request.goal.items() if k in ARM}
     res = planner.plan(MotionRequest("arm", start=problem.request.start, goal_joints=goal, seed=0, simplify=False,
                                      planner_id="CompiledRRTConnect", time_budget=10.0))  # fmt: skip

@@ -9,7 +9,9 @@ Example::
 The footprint is one argument: polygon vertices ``x,y`` in metres (base_link)
 separated by spaces or ``;`` (write ``--footprint=...`` if the first is negative), or
 ``rect:LENGTH:WIDTH``, or ``disc:RADIUS`` (a 16-gon). The JSON is
-``{"success", "status", "message", "path": [[x, y, theta], ...], "stats"}``.
+``{"success", "status", "message", "path": [[x, y, theta], ...], "stats", "clearance": {"min_m", "mean_m"}}``:
+the clearance is the path's exact distance to the nearest obstacle cell centre of the map it was planned
+on (the minimum along the path and the mean over its length; null without a path).
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ import numpy as np
 from maru_planner.base import registry
 from maru_planner.base.biped.planners import world_defaults
 from maru_planner.base.budget import DEFAULT_TIME_LIMIT
+from maru_planner.base.clearance import path_clearance
 from maru_planner.base.footprint import disc, rectangle
 from maru_planner.base.grid import OccupancyGrid
 from maru_planner.base.result import BasePlanResult, PlanStatus
@@ -88,14 +91,27 @@ def _params(pairs: list[str]) -> dict:
     return params
 
 
-def result_to_json(result: BasePlanResult) -> dict:
+def result_to_json(result: BasePlanResult, grid: OccupancyGrid | None = None) -> dict:
     return {
         "success": bool(result.success),
         "status": result.status.value,
         "message": result.message,
         "path": result.path.tolist(),
         "stats": result.stats.to_dict(),
+        "clearance": result_clearance(result, grid),
     }
+
+
+def result_clearance(result: BasePlanResult, grid: OccupancyGrid | None) -> dict | None:
+    """``{"min_m", "mean_m"}`` of the path on the map it was planned on (a biped's 2-D map, else ``grid``)."""
+    if len(result.path) == 0:
+        return None
+    planned = result.layers.get("map")
+    if planned is not None and not isinstance(planned, OccupancyGrid):  # a biped planner's own 2-D map
+        grid = OccupancyGrid(planned.occupied, planned.resolution, (planned.origin[0], planned.origin[1], 0.0))
+    if grid is None:
+        return None
+    return path_clearance(grid, result.path).to_dict()
 
 
 def _planners_help() -> str:
@@ -168,7 +184,7 @@ def _request(args: argparse.Namespace) -> tuple:
 def _write_outputs(args: argparse.Namespace, spec_id: str, grid, footprint, result: BasePlanResult) -> None:
     if args.json:
         with open(args.json, "w") as f:
-            json.dump(result_to_json(result), f, indent=1)
+            json.dump(result_to_json(result, grid), f, indent=1)
     if args.png:
         _write_png(args, spec_id, grid, footprint, result)
 

@@ -10,6 +10,7 @@ from geometry_msgs.msg import Point32, PoseStamped
 from nav_msgs.msg import OccupancyGrid as OccupancyGridMsg
 from nav_msgs.msg import Path
 
+from maru_planner.base.costmap import CostLayer, to_occupancy_values
 from maru_planner.base.grid import OccupancyGrid
 from maru_planner.base.result import PlanStats, PlanStatus, status_of
 from maru_planner.errors import InvalidMap, InvalidPlanner, InvalidRequest, MaruError
@@ -69,6 +70,16 @@ def grid_from_msg(msg: OccupancyGridMsg, *, occupied_threshold: int = 65, unknow
 
 def grid_to_msg(grid: OccupancyGrid, occupied: np.ndarray, stamp, frame_id: str) -> OccupancyGridMsg:
     """A grown map as nav_msgs/OccupancyGrid (100 grown/occupied, 0 free)."""
+    return _values_msg(grid, np.where(np.asarray(occupied, dtype=bool), 100, 0).astype(np.int8), stamp, frame_id)
+
+
+def costmap_to_msg(grid: OccupancyGrid, layer: CostLayer, stamp, frame_id: str) -> OccupancyGridMsg:
+    """A cost layer as nav_msgs/OccupancyGrid, scaled as Nav2's costmap publisher (0 free .. 99 inscribed,
+    100 lethal, -1 unknown)."""
+    return _values_msg(grid, to_occupancy_values(layer.cost, grid.unknown), stamp, frame_id)
+
+
+def _values_msg(grid: OccupancyGrid, values: np.ndarray, stamp, frame_id: str) -> OccupancyGridMsg:
     msg = OccupancyGridMsg()
     msg.header.stamp = stamp
     msg.header.frame_id = frame_id
@@ -76,7 +87,7 @@ def grid_to_msg(grid: OccupancyGrid, occupied: np.ndarray, stamp, frame_id: str)
     msg.info.width, msg.info.height = grid.width, grid.height
     msg.info.origin.position.x, msg.info.origin.position.y = grid.origin[0], grid.origin[1]
     set_yaw(msg.info.origin.orientation, grid.origin[2])
-    msg.data = np.where(np.asarray(occupied, dtype=bool), 100, 0).astype(np.int8).ravel().tolist()
+    msg.data = np.asarray(values, dtype=np.int8).ravel().tolist()
     return msg
 
 

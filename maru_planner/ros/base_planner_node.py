@@ -11,9 +11,15 @@
   expansions; a cancel stops the search at its next deadline check, the goal ends CANCELED);
 - publishes the last path on ``plan`` (nav_msgs/Path) and, only while someone
   subscribes, the grown maps on ``~/eca_map``, ``~/baa_map`` and
-  ``~/grown_map`` (nav_msgs/OccupancyGrid).
+  ``~/grown_map`` (nav_msgs/OccupancyGrid);
+- publishes the cost map on ``~/costmap`` (nav_msgs/OccupancyGrid, latched, Nav2's 0-100 scaling): Nav2's
+  inflation layer of the map for the ``footprint`` parameter, ``inflation_radius`` and
+  ``cost_scaling_factor``, again whenever the map or one of those changes.
 
-Parameters: the fields of :class:`BaseNodeConfig` (descriptors with ranges; ``config/base_planner.yaml``).
+Parameters: the fields of :class:`BaseNodeConfig` (descriptors with ranges; ``config/base_planner.yaml``),
+and per grid planner ``<planner_id>.cost_travel_multiplier``, ``.smooth`` and ``.min_turning_radius``
+(Nav2 style: the planner's own parameters under its name). ``inflation_radius`` and
+``cost_scaling_factor`` go to every planner that has them.
 Run-time changes apply to the next request (``unknown_is_occupied`` and ``occupied_threshold``
 re-read the last map); a bad value is rejected with the reason. Any planner of
 ``maru_planner.base.registry`` is served; it gets the ``headings`` and ``biped_world`` parameters
@@ -45,13 +51,15 @@ from rclpy.task import Future
 from maru_planner.base import registry
 from maru_planner.base.biped.planners import resolve_world_path
 from maru_planner.base.biped.world import load_world
-from maru_planner.base.footprint import as_polygon
+from maru_planner.base.budget import Deadline
+from maru_planner.base.costmap import NAV2_COST_SCALING_FACTOR, NAV2_INFLATION_RADIUS, check_inflation, cost_layer
+from maru_planner.base.footprint import as_polygon, footprint_radii
 from maru_planner.base.grid import OccupancyGrid
 from maru_planner.base.planner import BasePlanner
 from maru_planner.base.result import BasePlanResult
 from maru_planner.errors import InvalidRequest, MaruError
 from maru_planner.monitor import PlanMonitor, Progress
-from maru_planner.params import dataclass_params, param
+from maru_planner.params import ParamSpec, dataclass_params, param
 from maru_planner.ros import base_conversions as conv
 from maru_planner.ros import parameters
 from maru_planner.ros.lifecycle import ManagedNode, run_node
@@ -79,18 +87,34 @@ class BaseNodeConfig:
     occupied_threshold: int = param(65, "map values >= this are obstacles", lower=1, upper=100)
     map_topic: str = param("map", "nav_msgs/OccupancyGrid topic (transient local)", read_only=True)
     biped_world: str = param("", "3-D world YAML for world_3d planners (biped_*); empty = plan on the map")
+    inflation_radius: float = param(NAV2_INFLATION_RADIUS, "m: Nav2 inflation layer's radius (cost map and planners)",
+                                    lower=0.0, upper=100.0)
+    cost_scaling_factor: float = param(NAV2_COST_SCALING_FACTOR, "1/m: decay rate of the inflation cost (Nav2)",
+                                       lower=0.0, upper=1e6)
 
 
 NODE_SPECS = dataclass_params(BaseNodeConfig)
+COSTMAP_PARAMS = ("inflation_radius", "cost_scaling_factor")
+PLANNER_COST_PARAMS = ("cost_travel_multiplier", "smooth", "min_turning_radius")
+
+
+def planner_cost_specs() -> dict[str, ParamSpec]:
+    """``<planner_id>.<name>`` for each registered planner's own cost parameters (defaults: the planner's)."""
+    specs: dict[str, ParamSpec] = {}
+    for planner_id in registry.planner_ids():
+        own = registry.spec(planner_id).params
+        specs.update(parameters.prefixed({n: own[n] for n in PLANNER_COST_PARAMS if n in own}, planner_id))
+    return specs
 
 
 def check_config(config: BaseNodeConfig) -> None:
     """InvalidRequest naming the parameter when the values cannot serve requests."""
     registry.spec(config.planner_id)
     try:
-        as_polygon(conv.footprint_from_param(config.footprint))
+        polygon = as_polygon(conv.footprint_from_param(config.footprint))
     except (MaruError, ValueError) as exc:
         raise InvalidRequest(f"parameter 'footprint': {exc}") from None
+    check_inflation(config.inflation_radius, config.cost_scaling_factor, footprint_radii(polygon)[0])
     if config.biped_world:
         load_world(resolve_world_path(config.biped_world))
 
@@ -102,19 +126,24 @@ class BasePlannerNode(ManagedNode):
     def __init__(self, **kwargs: Any):
         """InvalidParameter (one line) for a bad parameter; with ``autostart`` what configuring raises."""
         super().__init__("base_planner_node", **kwargs)
-        self.config = BaseNodeConfig(**parameters.declare_parameters(self, NODE_SPECS))
+        self.specs = {**NODE_SPECS, **planner_cost_specs()}
+        values = parameters.declare_parameters(self, self.specs)
+        self.config = BaseNodeConfig(**{k: v for k, v in values.items() if k in NODE_SPECS})
+        self.planner_costs = {k: v for k, v in values.items() if k not in NODE_SPECS}
         self.grid: OccupancyGrid | None = None
         self.map_msg: OccupancyGridMsg | None = None
         self.map_error = "not configured"
         self.planners: dict[tuple, BasePlanner] = {}
         self.requests = 0
         self._plan_action: PlanActionServer | None = None
-        parameters.add_on_set_parameters_callback(self, NODE_SPECS, self.when_configured(self.apply_parameters))
+        parameters.add_on_set_parameters_callback(self, self.specs, self.when_configured(self.apply_parameters))
         self.start()
 
     def configure(self) -> None:
         """Check the parameters, warm the planners up, follow the map, offer the services."""
-        self.config = BaseNodeConfig(**parameters.read_parameters(self, NODE_SPECS))
+        values = parameters.read_parameters(self, self.specs)
+        self.config = BaseNodeConfig(**{k: v for k, v in values.items() if k in NODE_SPECS})
+        self.planner_costs = {k: v for k, v in values.items() if k not in NODE_SPECS}
         check_config(self.config)
         registry.warm_up()
         self.map_error = "no map received yet on " + self.config.map_topic
@@ -127,6 +156,7 @@ class BasePlannerNode(ManagedNode):
             name: self.create_lifecycle_publisher(OccupancyGridMsg, f"~/{name}_map", latched)
             for name in ("eca", "baa", "grown")
         }
+        self.costmap_pub = self.create_lifecycle_publisher(OccupancyGridMsg, "~/costmap", latched)
         self._planning = ThreadPoolExecutor(max_workers=1, thread_name_prefix="base_planner")
         callbacks = ReentrantCallbackGroup()  # a callback awaiting its plan must not block the others
         self.create_managed_service(
@@ -147,6 +177,9 @@ class BasePlannerNode(ManagedNode):
             f"base planner ready (default planner {self.config.planner_id!r}, planners {registry.planner_ids()})"
         )
 
+    def activate(self) -> None:
+        self._schedule_costmap()  # what was computed while inactive was not sent
+
     def cleanup(self) -> None:
         self._planning.shutdown(wait=False, cancel_futures=True)  # a running plan ends at its deadline
         self.grid, self.map_msg = None, None
@@ -160,12 +193,31 @@ class BasePlannerNode(ManagedNode):
     # ------------------------------------------------------------- parameters
     def apply_parameters(self, changes: dict[str, Any]) -> None:
         """Check the changed configuration as a whole, then use it (raises to reject with the reason)."""
-        config = dataclasses.replace(self.config, **changes)
+        config = dataclasses.replace(self.config, **{k: v for k, v in changes.items() if k in NODE_SPECS})
         check_config(config)
         self.config = config
+        self.planner_costs.update({k: v for k, v in changes.items() if k not in NODE_SPECS})
         self.planners.clear()
         if self.map_msg is not None and {"unknown_is_occupied", "occupied_threshold"} & set(changes):
             self._on_map(self.map_msg)
+        elif {"footprint", *COSTMAP_PARAMS} & set(changes):
+            self._schedule_costmap()
+
+    # ---------------------------------------------------------------- cost map
+    def _schedule_costmap(self) -> None:
+        """Compute and publish the cost map of the current map on the planning thread (after queued plans)."""
+        if self.grid is not None:
+            self._planning.submit(self._publish_costmap, self.grid, self.config)
+
+    def _publish_costmap(self, grid: OccupancyGrid, config: BaseNodeConfig) -> None:
+        try:
+            inscribed, circumscribed = footprint_radii(conv.footprint_from_param(config.footprint))
+            layer = cost_layer(grid, inscribed, circumscribed, config.inflation_radius, config.cost_scaling_factor,
+                               Deadline(max(config.allowed_planning_time, 1.0)))
+        except MaruError as exc:
+            self.get_logger().warning(f"cost map not published: {exc}")
+            return
+        self.costmap_pub.publish(conv.costmap_to_msg(grid, layer, self.get_clock().now().to_msg(), grid.frame_id))
 
     # -------------------------------------------------------------------- map
     def _on_map(self, msg: OccupancyGridMsg) -> None:
@@ -178,6 +230,7 @@ class BasePlannerNode(ManagedNode):
             self.map_msg = msg
             self.map_error = ""
             self.get_logger().info(f"map {self.grid.width} x {self.grid.height} cells of {self.grid.resolution} m")
+            self._schedule_costmap()
         except (MaruError, ValueError) as exc:
             self.grid, self.map_msg = None, None
             self.map_error = f"the last map was rejected: {exc}"
@@ -228,6 +281,11 @@ class BasePlannerNode(ManagedNode):
             params["headings"] = self.config.headings
         if spec.has(registry.WORLD_3D) and self.config.biped_world:
             params["world"] = self.config.biped_world
+        for name in COSTMAP_PARAMS:
+            if name in spec.params:
+                params[name] = getattr(self.config, name)
+        prefix = f"{spec.id}."
+        params.update({k[len(prefix) :]: v for k, v in self.planner_costs.items() if k.startswith(prefix)})
         key = (spec.id, np.asarray(footprint, dtype=float).tobytes(), tuple(sorted(params.items())))
         if key not in self.planners:
             if len(self.planners) >= _PLANNER_CACHE_SIZE:

@@ -32,7 +32,8 @@ REPAIR_RESOLUTION = 0.02  # rad: the coarsest motion step of a repair's local se
 REPAIR_SHORTCUT_TRIES = 10  # a repair's local path is short: few failed shortcuts end its simplification
 REPAIR_MIN_PADDING = 0.005  # m: the most a repair may pad when twice the margin is less (a margin of 0 included)
 COMPILED_PLANNER, OMPL_PLANNER = "CompiledRRTConnect", "RRTConnect"  # the local planner on spheres / exact
-LOCAL_PIPELINE = Pipeline([search, simplify, parameterize], [verify])
+VERIFIED = Pipeline([search, simplify, parameterize], [verify])  # a sphere checker's paths, on the exact one
+UNCHECKED = Pipeline([search, simplify, parameterize])  # the exact checker's (the certifier checks the result)
 
 
 class RepairPlanner:
@@ -67,7 +68,8 @@ class RepairPlanner:
         )  # fmt: skip
         nested = PlanMonitor()
         with self.monitor.attach(_CancelsNested(nested)):
-            found = LOCAL_PIPELINE.run(context, sub, nested, time.monotonic())
+            pipeline = VERIFIED if context.exact_checker is not None else UNCHECKED
+            found = pipeline.run(context, sub, nested, time.monotonic())
         if not found.success or found.path is None:
             return None
         start = np.clip(np.asarray(qa, dtype=float), self.robot.lower_limits, self.robot.upper_limits)
