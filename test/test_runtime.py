@@ -24,12 +24,12 @@ from maru_planner.runtime import (
     IkRequest,
     JointStateStore,
     MoveObstacle,
-    PlanningContext,
     PlanningRuntime,
     RemoveObstacle,
     RobotDescription,
     RobotSource,
     RuntimeSettings,
+    WorkerContext,
     WorkerPool,
     description_source,
     ik_timeout,
@@ -91,7 +91,7 @@ def local():
 
 def test_the_pool_admits_workers_plus_queue_size_then_answers_busy():
     release = threading.Event()
-    pool = WorkerPool([PlanningContext(planner=None, scene_version=0)], queue_size=1)  # type: ignore[arg-type]
+    pool = WorkerPool([WorkerContext(planner=None, scene_version=0)], queue_size=1)  # type: ignore[arg-type]
     try:
         pool.submit(lambda context: release.wait())
         pool.submit(lambda context: None)

@@ -132,7 +132,10 @@ class CostModel:
         stretches: list[Stretch],
         deadline: Deadline | None = None,
     ) -> tuple[np.ndarray, dict]:
-        """Map-frame ``xy`` (n, 2) with each stretch smoothed (see ``smoother.py``) and a summary for the stats."""
+        """Map-frame ``xy`` (n, 2) with each stretch smoothed (see ``smoother.py``) and a summary for the stats.
+
+        ``grid`` gives the geometry (a grown map will do); distances are to ``layer.obstacles``, the map's own.
+        """
         xy = np.array(xy, dtype=float)
         points = to_cell_units(grid, xy)
         dist_cells = layer.distance / grid.resolution
@@ -140,7 +143,7 @@ class CostModel:
         info = {"stretches": len(stretches), "sweeps": 0, "moved": 0, "accepted": True}
         params = self.smoother_params()
         for stretch in stretches:
-            out: SmoothOutcome = smooth_stretch(points, stretch, grid.occupied, dist_cells, cap, params,
+            out: SmoothOutcome = smooth_stretch(points, stretch, layer.obstacles, dist_cells, cap, params,
                                                 grid.resolution, deadline)
             info["sweeps"] = max(info["sweeps"], out.sweeps)
             if not out.accepted:

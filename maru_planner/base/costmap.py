@@ -74,12 +74,13 @@ def cost_of_distance(
 class CostLayer:
     """A map's Nav2 costs (uint8, the grid's shape) and the numbers that made them.
 
-    ``distance`` holds the exact centre-to-centre distance to the nearest obstacle (metres, float64) where
+    ``obstacles`` are the occupied cells it was made from; ``distance`` holds the exact centre-to-centre distance to the nearest obstacle (metres, float64) where
     it is at most ``inflation_radius`` (plus the margin :func:`cost_layer` was given), ``inf`` elsewhere.
     """
 
     cost: np.ndarray
     distance: np.ndarray
+    obstacles: np.ndarray  # the occupied cells it was made from (the map's, not a grown one)
     resolution: float
     inscribed_radius: float
     circumscribed_radius: float
@@ -113,7 +114,7 @@ def cost_layer(
     distance = grid.distance_field(inflation_radius + max(distance_margin, 0.0), deadline)
     guard = 1e-9 * grid.resolution
     cost = cost_of_distance(distance, inscribed_radius, inflation_radius, cost_scaling_factor, guard)
-    return CostLayer(cost, distance, grid.resolution, float(inscribed_radius), float(circumscribed_radius),
+    return CostLayer(cost, distance, grid.occupied, grid.resolution, float(inscribed_radius), float(circumscribed_radius),
                      float(inflation_radius), float(cost_scaling_factor))
 
 

@@ -14,34 +14,15 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Mapping
-from typing import TYPE_CHECKING, Any, Protocol
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
 from maru_planner.errors import InvalidRequest, NoIKSolution
-
-if TYPE_CHECKING:  # annotations only: model.py imports this module (IKStrategy)
-    from maru_planner.robot.model import RobotModel
-
-Validity = Callable[[np.ndarray], bool]
-
-
-class IKStrategy(Protocol):
-    """A robot-specific IK method (see the module docstring)."""
-
-    def __call__(
-        self,
-        robot: RobotModel,
-        targets: Mapping[str, np.ndarray],
-        q_seed: np.ndarray,
-        group: str | None,
-        *,
-        deadline: float | None,
-        is_valid: Validity | None,
-    ) -> np.ndarray | None: ...
-
+from maru_planner.robot.ik_strategy import IKStrategy, Validity  # noqa: F401 (IKStrategy: re-exported, its old home)
+from maru_planner.robot.model import RobotModel
 
 LOCAL = pin.ReferenceFrame.LOCAL
 

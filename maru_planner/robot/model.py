@@ -20,7 +20,7 @@ import pinocchio as pin
 
 from maru_planner.errors import InvalidGroup, InvalidRequest
 from maru_planner.robot import robot_profile
-from maru_planner.robot.ik import IKStrategy
+from maru_planner.robot.ik_strategy import IKStrategy
 from maru_planner.robot.robot_profile import DEFAULT_ACCELERATION_LIMIT, RobotProfile
 from maru_planner.robot.srdf import SrdfInfo, parse_srdf
 

@@ -19,7 +19,7 @@ from pathlib import Path
 
 from maru_planner.errors import InvalidRequest
 from maru_planner.paths import urdf_path
-from maru_planner.robot.ik import IKStrategy
+from maru_planner.robot.ik_strategy import IKStrategy
 
 DEFAULT_ACCELERATION_LIMIT = 4.0  # rad/s^2 (or m/s^2): URDF has no field for it
 

@@ -55,7 +55,8 @@ from maru_planner.ros.planning_parameters import (
     runtime_settings,
 )
 from maru_planner.ros.robot_description import LATCHED, robot_source, wait_for_robot_description
-from maru_planner.runtime import DescriptionFiles, JointStateStore, PlanningContext, PlanningRuntime, WorkerPool
+from maru_planner.runtime import DescriptionFiles, JointStateStore, PlanningRuntime, WorkerPool
+from maru_planner.runtime import WorkerContext as PlanningContext
 from maru_planner.runtime.robot_loading import DEFAULT_SRDF, DEFAULT_URDF
 from maru_planner.runtime.scene_store import DEFAULT_SCENE, SceneStore
 from maru_planner.scene import Scene

@@ -14,7 +14,7 @@ scene, the robot's latest joint values, admission, worker threads and processes,
 - :mod:`~maru_planner.runtime.planning_runtime`: :class:`PlanningRuntime`.
 """
 
-from maru_planner.runtime.admission import PlanningContext, WorkerPool
+from maru_planner.runtime.admission import WorkerContext, WorkerPool
 from maru_planner.runtime.planning_runtime import PlanningRuntime, RuntimeSettings
 from maru_planner.runtime.process_pool import ProcessPool
 from maru_planner.runtime.requests import IkRequest, ik_timeout
@@ -38,7 +38,6 @@ __all__ = [
     "IkRequest",
     "JointStateStore",
     "MoveObstacle",
-    "PlanningContext",
     "PlanningRuntime",
     "ProcessPool",
     "RemoveObstacle",
@@ -47,6 +46,7 @@ __all__ = [
     "RuntimeSettings",
     "SceneEdit",
     "SceneStore",
+    "WorkerContext",
     "WorkerPool",
     "configuration",
     "description_source",

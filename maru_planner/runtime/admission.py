@@ -19,7 +19,7 @@ from maru_planner.runtime.process_pool import ProcessPool
 
 
 @dataclass
-class PlanningContext:
+class WorkerContext:
     """Everything one worker thread needs to plan: its own planner (robot model, checker) at ``scene_version``.
 
     With ``processes`` (``worker_processes``), plans go to those worker processes; the thread's own
@@ -32,16 +32,16 @@ class PlanningContext:
 
 
 class WorkerPool:
-    """Planning threads, one :class:`PlanningContext` each, behind a bounded admission count.
+    """Planning threads, one :class:`WorkerContext` each, behind a bounded admission count.
 
     ``submit`` admits a job while fewer than ``len(contexts) + queue_size`` are planning or
     waiting, else raises ``errors.Busy`` at once. ``close`` lets the admitted jobs finish,
     then the threads end (the runtime swaps in a new pool when its planner settings change).
     """
 
-    def __init__(self, contexts: list[PlanningContext], queue_size: int, name: str = "planner"):
+    def __init__(self, contexts: list[WorkerContext], queue_size: int, name: str = "planner"):
         self.queue_size = queue_size
-        self._jobs: queue.SimpleQueue[Callable[[PlanningContext], None] | None] = queue.SimpleQueue()
+        self._jobs: queue.SimpleQueue[Callable[[WorkerContext], None] | None] = queue.SimpleQueue()
         self._lock = threading.Lock()
         self._admitted = 0
         self._threads = [
@@ -61,7 +61,7 @@ class WorkerPool:
         with self._lock:
             return self._admitted
 
-    def submit(self, job: Callable[[PlanningContext], None]) -> None:
+    def submit(self, job: Callable[[WorkerContext], None]) -> None:
         """Queue ``job(context)`` for the next free worker; errors.Busy if the queue is full."""
         with self._lock:
             capacity = self.workers + self.queue_size
@@ -78,7 +78,7 @@ class WorkerPool:
         for _ in self._threads:
             self._jobs.put(None)
 
-    def _serve(self, context: PlanningContext) -> None:
+    def _serve(self, context: WorkerContext) -> None:
         while (job := self._jobs.get()) is not None:
             try:
                 job(context)

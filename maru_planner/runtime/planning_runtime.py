@@ -37,7 +37,7 @@ from maru_planner.planning.queries import StateValidity
 from maru_planner.planning.types import MotionRequest, MotionResult
 from maru_planner.robot import RobotModel
 from maru_planner.runtime import requests
-from maru_planner.runtime.admission import PlanningContext, WorkerPool
+from maru_planner.runtime.admission import WorkerContext, WorkerPool
 from maru_planner.runtime.process_pool import ProcessPool
 from maru_planner.runtime.requests import IkRequest
 from maru_planner.runtime.robot_loading import RobotSource, check_group
@@ -203,7 +203,7 @@ class PlanningRuntime:
         """Run ``fn(context, *args)`` on a planning worker, the context brought to the latest scene first."""
         future: Future = Future()
 
-        def job(context: PlanningContext) -> None:
+        def job(context: WorkerContext) -> None:
             if not future.set_running_or_notify_cancel():
                 return
             try:
@@ -216,7 +216,7 @@ class PlanningRuntime:
             self._pool.submit(job)
         return future
 
-    def _sync_scene(self, context: PlanningContext) -> None:
+    def _sync_scene(self, context: WorkerContext) -> None:
         """Bring the context's planner (and the worker processes) to the latest scene."""
         processes = context.processes
         latest = self._scenes.version
@@ -242,10 +242,10 @@ class PlanningRuntime:
             self._log(warm_up(contexts[0].planner.robot, config).summary())
         return WorkerPool(contexts, settings.queue_size)
 
-    def _make_context(self, config: PlannerConfig, processes: ProcessPool | None) -> PlanningContext:
+    def _make_context(self, config: PlannerConfig, processes: ProcessPool | None) -> WorkerContext:
         scene_dict, version = self._scenes.snapshot()
         planner = MotionPlanner.from_scene(self.source.load(), Scene.from_dict(scene_dict), config)
-        return PlanningContext(planner, version, processes)
+        return WorkerContext(planner, version, processes)
 
     def _fit_spheres_once(self) -> None:
         """Fit the robot's sphere model here, once per geometry (disk-cached), so the planners and worker processes

@@ -1,4 +1,4 @@
-"""What the planning runtime runs on a worker: each function takes the worker's :class:`PlanningContext` first.
+"""What the planning runtime runs on a worker: each function takes the worker's :class:`WorkerContext` first.
 
 A plan goes to the worker processes when there are some, else to the thread's own planner; IK, FK, validity
 checks and Cartesian paths use the thread's planner (its robot carries the attached objects, its checker
@@ -20,7 +20,7 @@ from maru_planner.planning.constraints import PathConstraints
 from maru_planner.planning.queries import StateValidity, check_state_validity, compute_fk
 from maru_planner.planning.types import MotionRequest, MotionResult
 from maru_planner.robot.ik import solve_ik
-from maru_planner.runtime.admission import PlanningContext, time_left
+from maru_planner.runtime.admission import WorkerContext, time_left
 from maru_planner.runtime.robot_state import configuration
 
 
@@ -53,14 +53,14 @@ def ik_timeout(value: float, default: float, maximum: float) -> float:
 
 
 def plan_in_context(
-    context: PlanningContext, request: MotionRequest, deadline: float, monitor: PlanMonitor | None
+    context: WorkerContext, request: MotionRequest, deadline: float, monitor: PlanMonitor | None
 ) -> MotionResult:
     budget = time_left(deadline, "allowed_planning_time")
     planner = context.processes or context.planner
     return planner.plan(dataclasses.replace(request, time_budget=budget), monitor)
 
 
-def ik_in_context(context: PlanningContext, request: IkRequest, deadline: float) -> np.ndarray:
+def ik_in_context(context: WorkerContext, request: IkRequest, deadline: float) -> np.ndarray:
     time_left(deadline, "IK timeout")
     robot = context.planner.robot  # with the attached objects (their checker checks them)
     q_seed = configuration(robot, request.seed, strict=request.strict_seed)
@@ -68,12 +68,12 @@ def ik_in_context(context: PlanningContext, request: IkRequest, deadline: float)
     return solve_ik(robot, request.targets, q_seed, request.group, deadline=deadline, is_valid=is_valid)
 
 
-def fk_in_context(context: PlanningContext, values: dict[str, float], links: list[str]) -> dict[str, np.ndarray]:
+def fk_in_context(context: WorkerContext, values: dict[str, float], links: list[str]) -> dict[str, np.ndarray]:
     robot = context.planner.robot
     return compute_fk(robot, configuration(robot, values, strict=True), links)
 
 
-def validity_in_context(context: PlanningContext, values: dict[str, float], constraints: PathConstraints
+def validity_in_context(context: WorkerContext, values: dict[str, float], constraints: PathConstraints
                         ) -> StateValidity:  # fmt: skip
     planner = context.planner
     constraints.check_links(planner.robot)
@@ -81,5 +81,5 @@ def validity_in_context(context: PlanningContext, values: dict[str, float], cons
     return check_state_validity(planner.robot, planner.exact_checker or planner.checker, q, constraints)
 
 
-def cartesian_in_context(context: PlanningContext, request: CartesianRequest) -> CartesianResult:
+def cartesian_in_context(context: WorkerContext, request: CartesianRequest) -> CartesianResult:
     return context.planner.cartesian_path(request)
