@@ -227,8 +227,6 @@ def listing(imports: list[Import]) -> str:
     return "\n".join(f"  {i.path.relative_to(REPO_ROOT)}:{i.line} imports {i.target}" for i in imports)
 
 
-
-
 # --- layers ----------------------------------------------------------------------------------------------------
 #: The layer table, top first: a module may import modules of its own entry and of any entry on a LOWER row, never
 #: one on its own row (peers) or above. A module belongs to the longest entry its dotted name starts with (names
@@ -258,11 +256,11 @@ LAYERS: tuple[tuple[str, ...], ...] = (
 KERNELS = ("collision.kernels", "planning.planners.kernels")
 
 
-def layer_of(module: str, package: str = PACKAGE) -> tuple[int, str]:
-    """(row in :data:`LAYERS`, entry) of ``module``: its longest matching entry."""
+def layer_of(module: str, package: str = PACKAGE, layers: tuple[tuple[str, ...], ...] = LAYERS) -> tuple[int, str]:
+    """(row in ``layers``, entry) of ``module``: its longest matching entry."""
     name = module[len(package) + 1 :] if module != package else ""
     best: tuple[int, str] | None = None
-    for row, entries in enumerate(LAYERS):
+    for row, entries in enumerate(layers):
         for entry in entries:
             if (name == entry or name.startswith(entry + ".") or entry == "") and (
                 best is None or len(entry) > len(best[1])
@@ -291,7 +289,9 @@ def is_reexport(path: Path) -> bool:
     return all(plain(node) for node in body)
 
 
-def layer_violations(imports: list[Import], package: str = PACKAGE) -> list[Import]:
+def layer_violations(
+    imports: list[Import], package: str = PACKAGE, layers: tuple[tuple[str, ...], ...] = LAYERS
+) -> list[Import]:
     """Imports of a module on the importer's own row (a peer) or above it; re-export modules are exempt as
     importers (they sit with what they re-export), not as targets."""
     exempt = {i.importer for i in imports if i.path.name == "__init__.py" or is_reexport(i.path)}
@@ -299,17 +299,20 @@ def layer_violations(imports: list[Import], package: str = PACKAGE) -> list[Impo
     for imp in imports:
         if not internal(imp.target, package) or imp.importer in exempt:
             continue
-        (row, entry), (target_row, target_entry) = layer_of(imp.importer, package), layer_of(imp.target, package)
+        row, entry = layer_of(imp.importer, package, layers)
+        target_row, target_entry = layer_of(imp.target, package, layers)
         if entry != target_entry and target_row <= row:
             out.append(imp)
     return out
 
 
-def kernel_violations(imports: list[Import], package: str = PACKAGE) -> list[Import]:
-    """Imports of a non-kernel package module by a module of a :data:`KERNELS` folder."""
+def kernel_violations(
+    imports: list[Import], package: str = PACKAGE, kernels: tuple[str, ...] = KERNELS
+) -> list[Import]:
+    """Imports of a non-kernel package module by a module of a ``kernels`` folder."""
 
     def in_kernels(module: str) -> bool:
         name = module[len(package) + 1 :]
-        return any(name == k or name.startswith(k + ".") for k in KERNELS)
+        return any(name == k or name.startswith(k + ".") for k in kernels)
 
     return [i for i in imports if in_kernels(i.importer) and internal(i.target, package) and not in_kernels(i.target)]
