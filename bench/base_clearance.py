@@ -68,24 +68,26 @@ class Case:
     cost_scaling_factor: float
 
 
-def movingai_cases(per_map: int) -> list[Case]:
+def movingai_cases(per_map: int, inflation: float = 5.0, scaling: float = 3.0) -> list[Case]:
     cases = []
     for entry in MOVINGAI_MAPS:
         path = DATA / "movingai" / f"{entry}.map"
         grid = OccupancyGrid(load_map(path), 1.0)
         for i, scen in enumerate(spread(load_scenarios(Path(f"{path}.scen")), per_map)):
             cases.append(Case(entry.split("/")[0], f"{path.stem}#{i}", grid, scen["start"], scen["goal"],
-                              0.0, 5.0, 3.0))
+                              0.0, inflation, scaling))
     return cases
 
 
-def barn_cases(worlds: list[int]) -> list[Case]:
-    _, r_out = footprint_radii(JACKAL)
+def barn_cases(worlds: list[int], inflation: float = 0.30, scaling: float = 10.0, robot: str = "circumscribed"
+               ) -> list[Case]:
+    r_in, r_out = footprint_radii(JACKAL)
+    radius = r_out if robot == "circumscribed" else r_in
     cases = []
     for n in worlds:
         occupied = np.load(DATA / "barn" / "full_grid_files" / f"full_grid_{n}.npy").astype(bool)
         grid = OccupancyGrid(occupied, BARN_RESOLUTION)
-        cases.append(Case("barn", f"world_{n}", grid, BARN_START, BARN_GOAL, r_out, 0.30, 10.0))
+        cases.append(Case("barn", f"world_{n}", grid, BARN_START, BARN_GOAL, radius, inflation, scaling))
     return cases
 
 
@@ -217,12 +219,53 @@ def summarise(rows: list[dict], names: list[str]) -> dict:
     return out
 
 
+# (label, multiplier, MovingAI (inflation, scaling), BARN (inflation, scaling), BARN robot): what the targets take
+SWEEP = [
+    ("issue's settings", 5.0, (5.0, 3.0), (0.30, 10.0), "circumscribed"),
+    ("issue's settings", 10.0, (5.0, 3.0), (0.30, 10.0), "circumscribed"),
+    ("issue's settings", 20.0, (5.0, 3.0), (0.30, 10.0), "circumscribed"),
+    ("gentle decay, BARN inscribed disc", 2.0, (5.0, 0.6), (0.30, 10.0), "inscribed"),
+    ("gentle decay, BARN inscribed disc", 10.0, (5.0, 0.6), (0.30, 10.0), "inscribed"),
+    ("wide gentle decay", 10.0, (10.0, 0.3), (0.60, 3.0), "inscribed"),
+]
+
 TARGETS = {"mean_clearance_ratio": (">=", 2.0), "length_ratio": ("<=", 1.15), "plan_time_ratio": ("<=", 2.0),
            "lethal_paths": ("<=", 0)}
 
 
 def verdicts(stats: dict) -> dict:
     return {key: (stats[key] >= bound if op == ">=" else stats[key] <= bound) for key, (op, bound) in TARGETS.items()}
+
+
+def sweep(per_map: int, worlds: list[int]) -> list[dict]:
+    """The cost-aware planners under other settings (one plan per query, no peers)."""
+    out = []
+    progress = Progress(len(SWEEP))
+    for label, multiplier, movingai, barn, robot in SWEEP:
+        cases = movingai_cases(per_map, *movingai) + barn_cases(worlds, *barn, robot)
+        rows = [bench_case(case, multiplier, 1, []) for case in cases]
+        out.append({"label": label, "multiplier": multiplier, "movingai": list(movingai), "barn": list(barn),
+                    "barn_robot": robot,
+                    "movingai_summary": summarise([r for r in rows if r["family"] != "barn"], list(OURS)),
+                    "barn_summary": summarise([r for r in rows if r["family"] == "barn"], list(OURS))})
+        progress.step(f"{label} x{multiplier:g}")
+    return out
+
+
+def sweep_markdown(rows: list[dict]) -> str:
+    lines = ["", "## What the targets take: the cost-aware + smoothed planner under other settings", "",
+             "One plan per query, the same queries. MovingAI (inflation cells, scaling per cell); BARN (inflation m, "
+             "scaling 1/m, the disc the grown map uses).", "",
+             "| settings | multiplier | MovingAI | BARN | MovingAI clearance ratio / length ratio | "
+             "BARN clearance ratio / length ratio | lethal |", "|---|---|---|---|---|---|---|"]
+    for r in rows:
+        m, b = r["movingai_summary"].get("cost_smooth", {}), r["barn_summary"].get("cost_smooth", {})
+        lines.append(f"| {r['label']} | {r['multiplier']:g} | {r['movingai'][0]:g} / {r['movingai'][1]:g} | "
+                     f"{r['barn'][0]:g} / {r['barn'][1]:g}, {r['barn_robot']} | "
+                     f"{m.get('mean_clearance_ratio', math.nan):.2f} / {m.get('length_ratio', math.nan):.3f} | "
+                     f"{b.get('mean_clearance_ratio', math.nan):.2f} / {b.get('length_ratio', math.nan):.3f} | "
+                     f"{m.get('lethal_paths', 0) + b.get('lethal_paths', 0)} |")
+    return "\n".join(lines) + "\n"
 
 
 def markdown(summary: dict, args, context: str) -> str:
@@ -302,12 +345,22 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--repeats", type=int, help="plans per query, the best time kept (default 3, 1 quick)")
     parser.add_argument("--per-map", type=int, help="MovingAI queries per map (default 20, 4 quick)")
     parser.add_argument("--peers", nargs="*", default=list(PEERS), choices=PEERS)
+    parser.add_argument("--barn-worlds", type=int, help="BARN worlds, spread over 0..299 (default 300, 30 quick)")
+    parser.add_argument("--no-sweep", action="store_true", help="skip the settings sweep (done in full runs)")
     parser.add_argument("--out", default=str(RESULTS / "base_clearance"), help="output stem (json/md/png)")
+    parser.add_argument("--movingai", nargs=2, type=float, default=(5.0, 3.0), metavar=("INFLATION", "SCALING"),
+                        help="MovingAI inflation_radius (cells) and cost_scaling_factor (default 5 3)")
+    parser.add_argument("--barn", nargs=2, type=float, default=(0.30, 10.0), metavar=("INFLATION", "SCALING"),
+                        help="BARN inflation_radius (m) and cost_scaling_factor (default 0.30 10)")
+    parser.add_argument("--barn-robot", choices=("circumscribed", "inscribed"), default="circumscribed",
+                        help="BARN disc: the Jackal's circumradius (valid at any heading, default) or its "
+                             "inscribed radius (Nav2's lethal cells, the rest only costed)")
     args = parser.parse_args(argv)
     args.repeats = args.repeats or (1 if args.quick else 3)
     per_map = args.per_map or (4 if args.quick else 20)
-    worlds = list(range(0, 300, 10)) if args.quick else list(range(300))
-    cases = movingai_cases(per_map) + barn_cases(worlds)
+    count = args.barn_worlds or (30 if args.quick else 300)
+    worlds = sorted({int(i) for i in np.linspace(0, 299, count).round()})
+    cases = movingai_cases(per_map, *args.movingai) + barn_cases(worlds, *args.barn, args.barn_robot)
     our_planners(cases[0], args.multiplier)["cost_smooth"].plan(
         cases[0].grid, (*cases[0].grid.cell_to_world(*cases[0].start), 0), (*cases[0].grid.cell_to_world(
             *cases[0].goal), 0))  # load the compiled kernels outside the timings
@@ -324,18 +377,20 @@ def main(argv: list[str] | None = None) -> int:
                "barn": summarise([r for r in rows if r["family"] == "barn"], names)}
     for family in families:
         summary[f"movingai/{family}"] = summarise([r for r in rows if r["family"] == family], names)
+    swept = [] if args.quick or args.no_sweep else sweep(per_map, worlds)
     context = (f"{len(rows) - len(worlds)} MovingAI queries ({', '.join(MOVINGAI_MAPS)}), {len(worlds)} BARN worlds; "
                f"peers: {', '.join(args.peers) or 'none'}")
     results = {
         "quick": args.quick, "multiplier": args.multiplier, "repeats": args.repeats, "targets": TARGETS,
-        "summary": summary,
+        "summary": summary, "sweep": swept,
         "verdicts": {f: {n: verdicts(s) for n, s in per.items() if n in OURS} for f, per in summary.items()},
         "queries": [{**{k: v for k, v in r.items() if k != "paths"},
                      "paths": {n: {k: v for k, v in p.items() if k != "xy"} for n, p in r["paths"].items()}}
                     for r in rows],
     }
     by_name = {c.name: c for c in cases}
-    write_results(Path(args.out), results, markdown(summary, args, context),
+    text = markdown(summary, args, context) + (sweep_markdown(swept) if swept else "")
+    write_results(Path(args.out), results, text,
                   lambda png: plot(rows, by_name, png, args.multiplier))
     return 0
 

@@ -29,8 +29,8 @@ sys.path.insert(0, str(ROOT))
 from _common import RESULTS, Progress, log, write_results  # noqa: E402
 
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig  # noqa: E402
-from maru_planner.planning.problems import PROBLEMS  # noqa: E402
 from maru_planner.planning.planners.rc_rrt import RCRRT  # noqa: E402
+from maru_planner.planning.problems import PROBLEMS  # noqa: E402
 from maru_planner.robot import RobotModel  # noqa: E402
 from maru_planner.scene import Scene  # noqa: E402
 

@@ -12,7 +12,7 @@ from conftest import panda_clutter
 
 from maru_planner.collision.spheres import SphereCollisionChecker
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig, postprocess
-from maru_planner.planning.compiled_shortcut import shortcut
+from maru_planner.planning.planners.compiled_shortcut import shortcut
 from maru_planner.planning.space import EdgeChecker, GroupSpace
 from maru_planner.scene import Scene
 from maru_planner.trajectory import drop_collinear, path_length
@@ -113,7 +113,7 @@ def test_free_space_leaves_one_edge(panda):
 
 def test_the_kernel_warm_up_runs_it(maru1, monkeypatch):
     """The warm-up's plans may leave nothing to shortcut (a straight motion): it shortcuts a bent path itself."""
-    from maru_planner.planning import compiled_shortcut
+    from maru_planner.planning.planners import compiled_shortcut
     from maru_planner.runtime import warm_up as warm
 
     calls = []

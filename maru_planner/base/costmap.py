@@ -61,12 +61,15 @@ def cost_of_distance(
     ``guard`` (metres) is added to both radii in the comparisons (rounding of ``cells * resolution``).
     """
     d = np.asarray(distance, dtype=np.float64)
+    cost = np.full(d.shape, FREE_SPACE, dtype=np.uint8)
+    band = d <= inflation_radius + guard
+    near = d[band]
     with np.errstate(over="ignore"):
-        factor = np.exp(-cost_scaling_factor * np.maximum(d - inscribed_radius, 0.0))
-    cost = ((INSCRIBED_INFLATED_OBSTACLE - 1) * factor).astype(np.uint8)  # truncation, as Nav2's cast
-    cost[d > inflation_radius + guard] = FREE_SPACE
-    cost[d <= inscribed_radius + guard] = INSCRIBED_INFLATED_OBSTACLE
-    cost[d == 0.0] = LETHAL_OBSTACLE
+        factor = np.exp(-cost_scaling_factor * np.maximum(near - inscribed_radius, 0.0))
+    values = ((INSCRIBED_INFLATED_OBSTACLE - 1) * factor).astype(np.uint8)  # truncation, as Nav2's cast
+    values[near <= inscribed_radius + guard] = INSCRIBED_INFLATED_OBSTACLE
+    values[near == 0.0] = LETHAL_OBSTACLE
+    cost[band] = values
     return cost
 
 

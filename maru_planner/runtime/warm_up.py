@@ -119,7 +119,7 @@ def shortcut_bent_path(planner: MotionPlanner, group: str, start: dict[str, floa
     """On a compiled sphere checker, the compiled shortcut of :func:`_bent_path`."""
     if not is_compiled_sphere_checker(planner.checker):
         return
-    from maru_planner.planning.compiled_shortcut import shortcut  # lazy: numba, loaded with the sphere checker
+    from maru_planner.planning.planners.compiled_shortcut import shortcut  # lazy: numba, loaded with the sphere checker
 
     space, path = _bent_path(planner, group, start, goal)
     shortcut(path, EdgeChecker(space, planner.checker, planner.config.resolution), SEED, time.monotonic() + BUDGET, 1)

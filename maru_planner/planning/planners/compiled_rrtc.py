@@ -1,6 +1,6 @@
 """CompiledRRTConnect: RRT-Connect whose whole search loop runs in one numba kernel, as an ``ompl.base.Planner``.
 
-The search (:mod:`maru_planner.planning.rrtc_kernel`) plans on the sphere model of a
+The search (:mod:`maru_planner.planning.planners.kernels.rrtc`) plans on the sphere model of a
 :class:`~maru_planner.collision.SphereCollisionChecker`: trees, nearest neighbours, extend/connect
 and edge checks at the facade's motion resolution never leave compiled code, except
 

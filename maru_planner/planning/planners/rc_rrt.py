@@ -26,7 +26,7 @@ through an :class:`~maru_planner.planning.space.EdgeChecker` (one batched call p
 given, else through the SpaceInformation's motion validator.
 
 On a sphere checker with numba kernels the whole loop runs compiled instead
-(:mod:`maru_planner.planning.rcrrt_kernel`: the same steps, brute-force nearest neighbours, a
+(:mod:`maru_planner.planning.planners.kernels.rcrrt`: the same steps, brute-force nearest neighbours, a
 splitmix64 sampler), leaving it about every 2 ms for the termination condition and for states the
 spheres leave to the exact model. Same seed, same path on either loop, but not the same path on both.
 
@@ -271,7 +271,7 @@ class RCRRT(ob.Planner):
         return ob.PlannerStatus(ob.PlannerStatus.TIMEOUT)
 
     def _search_compiled(self, start: np.ndarray, goal: np.ndarray, ptc):
-        """:meth:`_search` in :mod:`~maru_planner.planning.rcrrt_kernel`; the tree ends in this planner's arrays."""
+        """:meth:`_search` in :mod:`~maru_planner.planning.planners.kernels.rcrrt`; the tree ends in this planner's arrays."""
         kernel = _kernel()
         # lazy: numba loads with these, and only a sphere checker (which loaded it already) gets here
         from maru_planner.collision.kernels.edge_validity import CHECKS, N_AMB

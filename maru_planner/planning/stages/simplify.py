@@ -40,7 +40,7 @@ def _shortcut(problem: PlanningProblem, raw: np.ndarray) -> np.ndarray:
     max_tries = problem.config.simplify_max_tries
     if is_compiled_sphere_checker(edges.checker):
         # lazy: numba is loaded already (a sphere checker exists); exact-only callers never need it
-        from maru_planner.planning.compiled_shortcut import shortcut as compiled_shortcut
+        from maru_planner.planning.planners.compiled_shortcut import shortcut as compiled_shortcut
 
         return compiled_shortcut(raw, edges, problem.seed, problem.deadline, max_tries, monitor.check)
 

@@ -1,5 +1,5 @@
 """Shortcut simplification of a path as one numba kernel, on the sphere checker the search ran on
-(:func:`maru_planner.planning.compiled_shortcut.shortcut` runs it).
+(:func:`maru_planner.planning.planners.compiled_shortcut.shortcut` runs it).
 
 The algorithm is :func:`maru_planner.planning.postprocess.shortcut`'s: the direct start→goal edge
 first, then random pairs of waypoints joined wherever the straight edge between them is free, until
