@@ -74,13 +74,17 @@ def movingai_cases(per_map: int, inflation: float = 5.0, scaling: float = 3.0) -
         path = DATA / "movingai" / f"{entry}.map"
         grid = OccupancyGrid(load_map(path), 1.0)
         for i, scen in enumerate(spread(load_scenarios(Path(f"{path}.scen")), per_map)):
-            cases.append(Case(entry.split("/")[0], f"{path.stem}#{i}", grid, scen["start"], scen["goal"],
-                              0.0, inflation, scaling))
+            cases.append(
+                Case(
+                    entry.split("/")[0], f"{path.stem}#{i}", grid, scen["start"], scen["goal"], 0.0, inflation, scaling
+                )
+            )
     return cases
 
 
-def barn_cases(worlds: list[int], inflation: float = 0.30, scaling: float = 10.0, robot: str = "circumscribed"
-               ) -> list[Case]:
+def barn_cases(
+    worlds: list[int], inflation: float = 0.30, scaling: float = 10.0, robot: str = "circumscribed"
+) -> list[Case]:
     r_in, r_out = footprint_radii(JACKAL)
     radius = r_out if robot == "circumscribed" else r_in
     cases = []
@@ -97,8 +101,9 @@ def our_planners(case: Case, multiplier: float) -> dict[str, GridAStarPlanner]:
     return {
         "plain": GridAStarPlanner(robot_radius=case.robot_radius, cost_travel_multiplier=0.0, **costs),
         "cost": GridAStarPlanner(robot_radius=case.robot_radius, cost_travel_multiplier=multiplier, **costs),
-        "cost_smooth": GridAStarPlanner(robot_radius=case.robot_radius, cost_travel_multiplier=multiplier,
-                                        smooth=True, **costs),
+        "cost_smooth": GridAStarPlanner(
+            robot_radius=case.robot_radius, cost_travel_multiplier=multiplier, smooth=True, **costs
+        ),
     }
 
 
@@ -121,8 +126,11 @@ def run_pmp(grown: np.ndarray, case: Case) -> tuple[np.ndarray, float]:
 
     h, w = grown.shape
     type_map = np.where(grown.T, TYPES.OBSTACLE, TYPES.FREE).astype(np.int8)  # indexed (x, y)
-    planner = AStar(map_=Grid(bounds=[[0, w], [0, h]], resolution=1.0, type_map=type_map),
-                    start=(case.start[1], case.start[0]), goal=(case.goal[1], case.goal[0]))
+    planner = AStar(
+        map_=Grid(bounds=[[0, w], [0, h]], resolution=1.0, type_map=type_map),
+        start=(case.start[1], case.start[0]),
+        goal=(case.goal[1], case.goal[0]),
+    )
     t = time.perf_counter()
     path, info = planner.plan()
     dt = time.perf_counter() - t
@@ -162,8 +170,15 @@ def score(case: Case, xy: np.ndarray, seconds: float, edt: np.ndarray, cost: np.
     if len(xy) == 0:
         return {"solved": False, "time_ms": 1e3 * seconds}
     clearance = path_clearance(case.grid, xy, edt)
-    return {"solved": True, "time_ms": 1e3 * seconds, "length_m": length(xy), "min_clearance_m": clearance.min_m,
-            "mean_clearance_m": clearance.mean_m, "lethal": touches_lethal(case.grid, xy, cost), "xy": xy}
+    return {
+        "solved": True,
+        "time_ms": 1e3 * seconds,
+        "length_m": length(xy),
+        "min_clearance_m": clearance.min_m,
+        "mean_clearance_m": clearance.mean_m,
+        "lethal": touches_lethal(case.grid, xy, cost),
+        "xy": xy,
+    }
 
 
 def bench_case(case: Case, multiplier: float, repeats: int, peers: list[str]) -> dict:
@@ -176,8 +191,11 @@ def bench_case(case: Case, multiplier: float, repeats: int, peers: list[str]) ->
         row["paths"][name] = score(case, xy, seconds, edt, layer.cost) | {"status": status}
     grown = grid.inflate(case.robot_radius).occupied
     weights = layer.traversal_weights(multiplier)
-    runners = {"pmp": lambda: run_pmp(grown, case), "pathfinding": lambda: run_pathfinding(grown, case, None),
-               "pathfinding_cost": lambda: run_pathfinding(grown, case, weights)}
+    runners = {
+        "pmp": lambda: run_pmp(grown, case),
+        "pathfinding": lambda: run_pathfinding(grown, case, None),
+        "pathfinding_cost": lambda: run_pathfinding(grown, case, weights),
+    }
     for name in peers:
         cells, seconds = runners[name]()
         xy = grid.cells_to_world(cells) if len(cells) else np.zeros((0, 2))
@@ -194,8 +212,11 @@ def summarise(rows: list[dict], names: list[str]) -> dict:
     """Per planner: ratios to the plain (shortest) path on the queries both solved."""
     out = {}
     for name in names:
-        pairs = [(r["paths"]["plain"], r["paths"][name]) for r in rows
-                 if name in r["paths"] and r["paths"]["plain"]["solved"] and r["paths"][name]["solved"]]
+        pairs = [
+            (r["paths"]["plain"], r["paths"][name])
+            for r in rows
+            if name in r["paths"] and r["paths"]["plain"]["solved"] and r["paths"][name]["solved"]
+        ]
         if not pairs:
             continue
         clear = [p["mean_clearance_m"] / b["mean_clearance_m"] for b, p in pairs if b["mean_clearance_m"] > 0]
@@ -229,8 +250,12 @@ SWEEP = [
     ("wide gentle decay", 10.0, (10.0, 0.3), (0.60, 3.0), "inscribed"),
 ]
 
-TARGETS = {"mean_clearance_ratio": (">=", 2.0), "length_ratio": ("<=", 1.15), "plan_time_ratio": ("<=", 2.0),
-           "lethal_paths": ("<=", 0)}
+TARGETS = {
+    "mean_clearance_ratio": (">=", 2.0),
+    "length_ratio": ("<=", 1.15),
+    "plan_time_ratio": ("<=", 2.0),
+    "lethal_paths": ("<=", 0),
+}
 
 
 def verdicts(stats: dict) -> dict:
@@ -244,38 +269,55 @@ def sweep(per_map: int, worlds: list[int]) -> list[dict]:
     for label, multiplier, movingai, barn, robot in SWEEP:
         cases = movingai_cases(per_map, *movingai) + barn_cases(worlds, *barn, robot)
         rows = [bench_case(case, multiplier, 1, []) for case in cases]
-        out.append({"label": label, "multiplier": multiplier, "movingai": list(movingai), "barn": list(barn),
-                    "barn_robot": robot,
-                    "movingai_summary": summarise([r for r in rows if r["family"] != "barn"], list(OURS)),
-                    "barn_summary": summarise([r for r in rows if r["family"] == "barn"], list(OURS))})
+        out.append(
+            {
+                "label": label,
+                "multiplier": multiplier,
+                "movingai": list(movingai),
+                "barn": list(barn),
+                "barn_robot": robot,
+                "movingai_summary": summarise([r for r in rows if r["family"] != "barn"], list(OURS)),
+                "barn_summary": summarise([r for r in rows if r["family"] == "barn"], list(OURS)),
+            }
+        )
         progress.step(f"{label} x{multiplier:g}")
     return out
 
 
 def sweep_markdown(rows: list[dict]) -> str:
-    lines = ["", "## What the targets take: the cost-aware + smoothed planner under other settings", "",
-             "One plan per query, the same queries. MovingAI (inflation cells, scaling per cell); BARN (inflation m, "
-             "scaling 1/m, the disc the grown map uses).", "",
-             "| settings | multiplier | MovingAI | BARN | MovingAI clearance ratio / length ratio | "
-             "BARN clearance ratio / length ratio | lethal |", "|---|---|---|---|---|---|---|"]
+    lines = [
+        "",
+        "## What the targets take: the cost-aware + smoothed planner under other settings",
+        "",
+        "One plan per query, the same queries. MovingAI (inflation cells, scaling per cell); BARN (inflation m, "
+        "scaling 1/m, the disc the grown map uses).",
+        "",
+        "| settings | multiplier | MovingAI | BARN | MovingAI clearance ratio / length ratio | "
+        "BARN clearance ratio / length ratio | lethal |",
+        "|---|---|---|---|---|---|---|",
+    ]
     for r in rows:
         m, b = r["movingai_summary"].get("cost_smooth", {}), r["barn_summary"].get("cost_smooth", {})
-        lines.append(f"| {r['label']} | {r['multiplier']:g} | {r['movingai'][0]:g} / {r['movingai'][1]:g} | "
-                     f"{r['barn'][0]:g} / {r['barn'][1]:g}, {r['barn_robot']} | "
-                     f"{m.get('mean_clearance_ratio', math.nan):.2f} / {m.get('length_ratio', math.nan):.3f} | "
-                     f"{b.get('mean_clearance_ratio', math.nan):.2f} / {b.get('length_ratio', math.nan):.3f} | "
-                     f"{m.get('lethal_paths', 0) + b.get('lethal_paths', 0)} |")
+        lines.append(
+            f"| {r['label']} | {r['multiplier']:g} | {r['movingai'][0]:g} / {r['movingai'][1]:g} | "
+            f"{r['barn'][0]:g} / {r['barn'][1]:g}, {r['barn_robot']} | "
+            f"{m.get('mean_clearance_ratio', math.nan):.2f} / {m.get('length_ratio', math.nan):.3f} | "
+            f"{b.get('mean_clearance_ratio', math.nan):.2f} / {b.get('length_ratio', math.nan):.3f} | "
+            f"{m.get('lethal_paths', 0) + b.get('lethal_paths', 0)} |"
+        )
     return "\n".join(lines) + "\n"
 
 
 def markdown(summary: dict, args, context: str) -> str:
     lines = [
-        "# Base paths that keep their distance (issue 37): cost-aware 2-D A* vs the shortest path", "",
+        "# Base paths that keep their distance (issue 37): cost-aware 2-D A* vs the shortest path",
+        "",
         f"Run: {'--quick' if args.quick else 'full'}, cost_travel_multiplier {args.multiplier:g}, best of "
         f"{args.repeats} plan(s) per query; {context}.",
         "Ratios are to our plain A* (the shortest path on the same grown map), per query, then averaged "
         "(plan time: median). Clearance: exact distance from the path to the nearest obstacle cell centre.",
-        "Targets: mean clearance >= 2x, length <= 1.15x, plan time <= 2x the plain planner's, 0 lethal paths.", "",
+        "Targets: mean clearance >= 2x, length <= 1.15x, plan time <= 2x the plain planner's, 0 lethal paths.",
+        "",
         "| data set | planner | queries | mean clearance ratio | min clearance ratio | length ratio (max) "
         "| lethal paths | plan time ratio | median ms | targets met |",
         "|---|---|---|---|---|---|---|---|---|---|",
@@ -287,7 +329,8 @@ def markdown(summary: dict, args, context: str) -> str:
             lines.append(
                 f"| {family} | {name} | {s['queries']} | {s['mean_clearance_ratio']:.2f} | "
                 f"{s['min_clearance_ratio']:.2f} | {s['length_ratio']:.3f} ({s['max_length_ratio']:.3f}) | "
-                f"{s['lethal_paths']} | {s['plan_time_ratio']:.2f} | {s['median_time_ms']:.2f} | {flags} |")
+                f"{s['lethal_paths']} | {s['plan_time_ratio']:.2f} | {s['median_time_ms']:.2f} | {flags} |"
+            )
     return "\n".join(lines) + "\n"
 
 
@@ -301,30 +344,53 @@ def plot(rows: list[dict], cases: dict[str, Case], path: Path, multiplier: float
     for family in ("barn", "maze", "room"):
         candidates = [r for r in rows if r["family"] == family and r["paths"]["cost_smooth"]["solved"]]
         if candidates:
-            picks.append(max(candidates, key=lambda r: r["paths"]["cost_smooth"]["mean_clearance_m"]
-                             / max(r["paths"]["plain"]["mean_clearance_m"], 1e-9)))
+            picks.append(
+                max(
+                    candidates,
+                    key=lambda r: (
+                        r["paths"]["cost_smooth"]["mean_clearance_m"]
+                        / max(r["paths"]["plain"]["mean_clearance_m"], 1e-9)
+                    ),
+                )
+            )
     fig, axes = plt.subplots(1, len(picks) + 1, figsize=(5 * (len(picks) + 1), 4.6))
     axes = np.atleast_1d(axes)
     for ax, row in zip(axes, picks, strict=False):
         case = cases[row["case"]]
-        layer = cost_layer(case.grid, case.robot_radius, case.robot_radius, case.inflation_radius,
-                           case.cost_scaling_factor)
+        layer = cost_layer(
+            case.grid, case.robot_radius, case.robot_radius, case.inflation_radius, case.cost_scaling_factor
+        )
         ox, oy, _ = case.grid.origin
         extent = (ox, ox + case.grid.width * case.grid.resolution, oy, oy + case.grid.height * case.grid.resolution)
         ax.imshow(layer.cost, origin="lower", cmap="magma_r", extent=extent, vmin=0, vmax=254)
         for name, colour in (("plain", "tab:blue"), ("cost_smooth", "tab:green")):
             entry = row["paths"][name]
-            ax.plot(entry["xy"][:, 0], entry["xy"][:, 1], color=colour, lw=1.4,
-                    label=f"{name}: mean clearance {entry['mean_clearance_m']:.2f}, length {entry['length_m']:.1f}")
-        ax.set_title(f"{row['case']} over its cost map", fontsize=9)
-        ax.legend(fontsize=7, loc="lower left")
+            ax.plot(
+                entry["xy"][:, 0],
+                entry["xy"][:, 1],
+                color=colour,
+                lw=1.4,
+                label=f"{name}: mean clearance {entry['mean_clearance_m']:.2f}, length {entry['length_m']:.1f}",
+            )
+        both = np.concatenate([row["paths"][n]["xy"] for n in ("plain", "cost_smooth")])
+        pad = max(0.15 * float(np.ptp(both, axis=0).max()), 8 * case.grid.resolution)
+        ax.set_xlim(both[:, 0].min() - pad, both[:, 0].max() + pad)
+        ax.set_ylim(both[:, 1].min() - pad, both[:, 1].max() + pad)
+        ax.set_title(f"{row['case']} over its cost map (black: lethal)", fontsize=9)
+        ax.legend(fontsize=7, loc="best")
         ax.set_aspect("equal")
     ax = axes[-1]
-    for family, marker in (("barn", "o"), ("dao", "s"), ("room", "^"), ("maze", "v"), ("street", "D"),
-                           ("random", "x")):
-        pts = [(r["paths"]["cost_smooth"]["length_ratio"], r["paths"]["cost_smooth"]["mean_clearance_m"]
-                / r["paths"]["plain"]["mean_clearance_m"]) for r in rows if r["family"] == family
-               and r["paths"]["cost_smooth"]["solved"] and r["paths"]["plain"]["mean_clearance_m"] > 0]
+    for family, marker in (("barn", "o"), ("dao", "s"), ("room", "^"), ("maze", "v"), ("street", "D"), ("random", "x")):
+        pts = [
+            (
+                r["paths"]["cost_smooth"]["length_ratio"],
+                r["paths"]["cost_smooth"]["mean_clearance_m"] / r["paths"]["plain"]["mean_clearance_m"],
+            )
+            for r in rows
+            if r["family"] == family
+            and r["paths"]["cost_smooth"]["solved"]
+            and r["paths"]["plain"]["mean_clearance_m"] > 0
+        ]
         if pts:
             ax.scatter(*np.array(pts).T, s=10, marker=marker, label=family, alpha=0.7)
     ax.axhline(2.0, color="grey", ls=":", lw=1)
@@ -348,13 +414,29 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--barn-worlds", type=int, help="BARN worlds, spread over 0..299 (default 300, 30 quick)")
     parser.add_argument("--no-sweep", action="store_true", help="skip the settings sweep (done in full runs)")
     parser.add_argument("--out", default=str(RESULTS / "base_clearance"), help="output stem (json/md/png)")
-    parser.add_argument("--movingai", nargs=2, type=float, default=(5.0, 3.0), metavar=("INFLATION", "SCALING"),
-                        help="MovingAI inflation_radius (cells) and cost_scaling_factor (default 5 3)")
-    parser.add_argument("--barn", nargs=2, type=float, default=(0.30, 10.0), metavar=("INFLATION", "SCALING"),
-                        help="BARN inflation_radius (m) and cost_scaling_factor (default 0.30 10)")
-    parser.add_argument("--barn-robot", choices=("circumscribed", "inscribed"), default="circumscribed",
-                        help="BARN disc: the Jackal's circumradius (valid at any heading, default) or its "
-                             "inscribed radius (Nav2's lethal cells, the rest only costed)")
+    parser.add_argument(
+        "--movingai",
+        nargs=2,
+        type=float,
+        default=(5.0, 3.0),
+        metavar=("INFLATION", "SCALING"),
+        help="MovingAI inflation_radius (cells) and cost_scaling_factor (default 5 3)",
+    )
+    parser.add_argument(
+        "--barn",
+        nargs=2,
+        type=float,
+        default=(0.30, 10.0),
+        metavar=("INFLATION", "SCALING"),
+        help="BARN inflation_radius (m) and cost_scaling_factor (default 0.30 10)",
+    )
+    parser.add_argument(
+        "--barn-robot",
+        choices=("circumscribed", "inscribed"),
+        default="circumscribed",
+        help="BARN disc: the Jackal's circumradius (valid at any heading, default) or its "
+        "inscribed radius (Nav2's lethal cells, the rest only costed)",
+    )
     args = parser.parse_args(argv)
     args.repeats = args.repeats or (1 if args.quick else 3)
     per_map = args.per_map or (4 if args.quick else 20)
@@ -362,8 +444,10 @@ def main(argv: list[str] | None = None) -> int:
     worlds = sorted({int(i) for i in np.linspace(0, 299, count).round()})
     cases = movingai_cases(per_map, *args.movingai) + barn_cases(worlds, *args.barn, args.barn_robot)
     our_planners(cases[0], args.multiplier)["cost_smooth"].plan(
-        cases[0].grid, (*cases[0].grid.cell_to_world(*cases[0].start), 0), (*cases[0].grid.cell_to_world(
-            *cases[0].goal), 0))  # load the compiled kernels outside the timings
+        cases[0].grid,
+        (*cases[0].grid.cell_to_world(*cases[0].start), 0),
+        (*cases[0].grid.cell_to_world(*cases[0].goal), 0),
+    )  # load the compiled kernels outside the timings
     progress = Progress(len(cases))
     rows = []
     t0 = time.perf_counter()
@@ -373,25 +457,36 @@ def main(argv: list[str] | None = None) -> int:
     log(f"{len(cases)} queries in {time.perf_counter() - t0:.0f} s")
     names = list(OURS) + list(args.peers)
     families = sorted({c.family for c in cases if c.family != "barn"})
-    summary = {"movingai": summarise([r for r in rows if r["family"] in families], names),
-               "barn": summarise([r for r in rows if r["family"] == "barn"], names)}
+    summary = {
+        "movingai": summarise([r for r in rows if r["family"] in families], names),
+        "barn": summarise([r for r in rows if r["family"] == "barn"], names),
+    }
     for family in families:
         summary[f"movingai/{family}"] = summarise([r for r in rows if r["family"] == family], names)
     swept = [] if args.quick or args.no_sweep else sweep(per_map, worlds)
-    context = (f"{len(rows) - len(worlds)} MovingAI queries ({', '.join(MOVINGAI_MAPS)}), {len(worlds)} BARN worlds; "
-               f"peers: {', '.join(args.peers) or 'none'}")
+    context = (
+        f"{len(rows) - len(worlds)} MovingAI queries ({', '.join(MOVINGAI_MAPS)}), {len(worlds)} BARN worlds; "
+        f"peers: {', '.join(args.peers) or 'none'}"
+    )
     results = {
-        "quick": args.quick, "multiplier": args.multiplier, "repeats": args.repeats, "targets": TARGETS,
-        "summary": summary, "sweep": swept,
+        "quick": args.quick,
+        "multiplier": args.multiplier,
+        "repeats": args.repeats,
+        "targets": TARGETS,
+        "summary": summary,
+        "sweep": swept,
         "verdicts": {f: {n: verdicts(s) for n, s in per.items() if n in OURS} for f, per in summary.items()},
-        "queries": [{**{k: v for k, v in r.items() if k != "paths"},
-                     "paths": {n: {k: v for k, v in p.items() if k != "xy"} for n, p in r["paths"].items()}}
-                    for r in rows],
+        "queries": [
+            {
+                **{k: v for k, v in r.items() if k != "paths"},
+                "paths": {n: {k: v for k, v in p.items() if k != "xy"} for n, p in r["paths"].items()},
+            }
+            for r in rows
+        ],
     }
     by_name = {c.name: c for c in cases}
     text = markdown(summary, args, context) + (sweep_markdown(swept) if swept else "")
-    write_results(Path(args.out), results, text,
-                  lambda png: plot(rows, by_name, png, args.multiplier))
+    write_results(Path(args.out), results, text, lambda png: plot(rows, by_name, png, args.multiplier))
     return 0
 
 

@@ -13,7 +13,6 @@ import pytest
 
 from maru_planner.base import registry
 from maru_planner.base.astar import astar_2d
-from maru_planner.base.cli import main
 from maru_planner.base.clearance import (
     distance_transform,
     path_clearance,
@@ -21,6 +20,7 @@ from maru_planner.base.clearance import (
     segment_distance,
     to_cell_units,
 )
+from maru_planner.base.cli import main
 from maru_planner.base.footprint import disc, rectangle
 from maru_planner.base.grid import OccupancyGrid
 from maru_planner.base.se2 import search_layers
@@ -157,8 +157,9 @@ def test_papers_planners_take_the_cost_layer_as_an_option(planner_id):
     grid, robot = corridor(), disc(0.2)
     start, goal = (0.5, 1.45, 0.0), (7.5, 1.55, 0.0)
     plain = registry.plan(planner_id, grid, start, goal, robot)
-    aware = registry.plan(planner_id, grid, start, goal, robot, cost_travel_multiplier=5.0, inflation_radius=1.0,
-                          cost_scaling_factor=3.0)
+    aware = registry.plan(
+        planner_id, grid, start, goal, robot, cost_travel_multiplier=5.0, inflation_radius=1.0, cost_scaling_factor=3.0
+    )
     assert aware.success and "costmap" in aware.layers
     assert path_clearance(grid, aware.path).min_m >= path_clearance(grid, plain.path).min_m - 1e-9
 
@@ -197,8 +198,27 @@ def test_exact_clearance_against_enumeration():
 def test_cli_json_reports_clearance_for_every_grid_planner(tmp_path, planner_id):
     out = tmp_path / "plan.json"
     headings = ["--param", "headings=8"] if registry.spec(planner_id).has(registry.NEEDS_HEADINGS) else []
-    code = main(["--map", HOUSE, "--planner", planner_id, "--start", "2.5", "21", "0", "--goal", "22", "3", "0",
-                 "--footprint", "disc:0.3", "--json", str(out), *headings])
+    code = main(
+        [
+            "--map",
+            HOUSE,
+            "--planner",
+            planner_id,
+            "--start",
+            "2.5",
+            "21",
+            "0",
+            "--goal",
+            "22",
+            "3",
+            "0",
+            "--footprint",
+            "disc:0.3",
+            "--json",
+            str(out),
+            *headings,
+        ]
+    )
     data = json.loads(out.read_text())
     assert code == 0, data["message"]
     assert set(data["clearance"]) == {"min_m", "mean_m"}
@@ -208,8 +228,16 @@ def test_cli_json_reports_clearance_for_every_grid_planner(tmp_path, planner_id)
 @pytest.mark.parametrize("planner_id", ["biped_track", "biped_wall"])
 def test_cli_json_reports_clearance_for_the_biped_planners(tmp_path, planner_id):
     out = tmp_path / "plan.json"
-    code = main(["--world", str(config_path("worlds", "biped", "corridor_wide.yaml")), "--planner", planner_id,
-                 "--json", str(out)])
+    code = main(
+        [
+            "--world",
+            str(config_path("worlds", "biped", "corridor_wide.yaml")),
+            "--planner",
+            planner_id,
+            "--json",
+            str(out),
+        ]
+    )
     data = json.loads(out.read_text())
     assert code == 0, data["message"]
     assert data["clearance"]["min_m"] > 0 and data["clearance"]["mean_m"] >= data["clearance"]["min_m"]
@@ -217,6 +245,20 @@ def test_cli_json_reports_clearance_for_the_biped_planners(tmp_path, planner_id)
 
 def test_failed_plan_has_no_clearance(tmp_path):
     out = tmp_path / "plan.json"
-    main(["--map", str(config_path("maps", "paper002_impossible.yaml")), "--start", "1", "2", "0", "--goal", "5",
-          "2", "0", "--json", str(out)])
+    main(
+        [
+            "--map",
+            str(config_path("maps", "paper002_impossible.yaml")),
+            "--start",
+            "1",
+            "2",
+            "0",
+            "--goal",
+            "5",
+            "2",
+            "0",
+            "--json",
+            str(out),
+        ]
+    )
     assert json.loads(out.read_text())["clearance"] is None

@@ -146,8 +146,26 @@ def test_direct_construction_checks_too():
     ],
 )
 def test_cli_bad_cost_parameter_is_one_line_and_exit_2(capsys, param, needle):
-    code = main(["--map", MEDIUM, "--planner", "astar", "--start", "1", "2", "0", "--goal", "5", "2", "0",
-                 "--footprint", "disc:0.1", "--param", param])
+    code = main(
+        [
+            "--map",
+            MEDIUM,
+            "--planner",
+            "astar",
+            "--start",
+            "1",
+            "2",
+            "0",
+            "--goal",
+            "5",
+            "2",
+            "0",
+            "--footprint",
+            "disc:0.1",
+            "--param",
+            param,
+        ]
+    )
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1 and needle in err[0] and "Traceback" not in err[0], err
 

@@ -29,26 +29,73 @@ def _env() -> dict:
 
 
 def run_toy(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "toy_base_planner", *args], capture_output=True, text=True,
-                          cwd=REPO, env=_env(), timeout=180)
+    return subprocess.run(
+        [sys.executable, "-m", "toy_base_planner", *args],
+        capture_output=True,
+        text=True,
+        cwd=REPO,
+        env=_env(),
+        timeout=180,
+    )
 
 
 def test_toy_appears_in_the_cli_help_and_plans():
     help_text = run_toy("cli", "--help")
     assert help_text.returncode == 0 and f"  {TOY}: toy: a point robot" in help_text.stdout
     assert "samples_per_cell (default 2)" in help_text.stdout
-    out = run_toy("cli", "--map", str(config_path("maps", "paper002_easy.yaml")), "--planner", TOY,
-                  "--start", "1", "2", "0", "--goal", "2", "2", "0", "--param", "samples_per_cell=3")
+    out = run_toy(
+        "cli",
+        "--map",
+        str(config_path("maps", "paper002_easy.yaml")),
+        "--planner",
+        TOY,
+        "--start",
+        "1",
+        "2",
+        "0",
+        "--goal",
+        "2",
+        "2",
+        "0",
+        "--param",
+        "samples_per_cell=3",
+    )
     assert out.returncode == 0, out.stderr
     assert "solved: straight segment is free" in out.stderr
-    bad = run_toy("cli", "--map", str(config_path("maps", "paper002_easy.yaml")), "--planner", TOY,
-                  "--start", "1", "2", "0", "--goal", "2", "2", "0", "--param", "headings=32")
+    bad = run_toy(
+        "cli",
+        "--map",
+        str(config_path("maps", "paper002_easy.yaml")),
+        "--planner",
+        TOY,
+        "--start",
+        "1",
+        "2",
+        "0",
+        "--goal",
+        "2",
+        "2",
+        "0",
+        "--param",
+        "headings=32",
+    )
     assert bad.returncode == 2 and "no parameter 'headings'" in bad.stderr
 
 
 def test_toy_runs_through_the_parametrised_planner_tests():
-    cmd = [sys.executable, "-m", "pytest", "-p", "no:cacheprovider", "-p", "toy_base_planner", "-q", "-k", TOY,
-           str(TEST_DIR / "test_base_planners.py")]
+    cmd = [
+        sys.executable,
+        "-m",
+        "pytest",
+        "-p",
+        "no:cacheprovider",
+        "-p",
+        "toy_base_planner",
+        "-q",
+        "-k",
+        TOY,
+        str(TEST_DIR / "test_base_planners.py"),
+    ]
     out = subprocess.run(cmd, capture_output=True, text=True, cwd=REPO, env=_env(), timeout=600)
     assert out.returncode == 0, out.stdout[-3000:]
     summary = out.stdout.strip().splitlines()[-1]

@@ -39,7 +39,9 @@ def random_room(seed: int) -> OccupancyGrid:
 def segment_minima(grid: OccupancyGrid, xy: np.ndarray) -> np.ndarray:
     cells = to_cell_units(grid, xy)
     occ = np.ascontiguousarray(grid.occupied)
-    return np.array([segment_distance(occ, cells[j], cells[j + 1], 1e9) for j in range(len(cells) - 1)]) * grid.resolution
+    return (
+        np.array([segment_distance(occ, cells[j], cells[j + 1], 1e9) for j in range(len(cells) - 1)]) * grid.resolution
+    )
 
 
 def assert_never_nearer(grid, before, after, cap):
@@ -94,8 +96,9 @@ def test_se2_smoothing_keeps_headings_and_turns_in_place():
     assert np.array_equal(smooth.path[:, 2], plain.path[:, 2])  # the same heading at every pose
     turns = [i for i in range(1, len(plain.path)) if plain.path[i, 2] != plain.path[i - 1, 2]]
     for i in turns:  # the turns in place are where the planner put them
-        assert np.allclose(smooth.path[i, :2], plain.path[i, :2]) and np.allclose(smooth.path[i - 1, :2],
-                                                                                  plain.path[i - 1, :2])
+        assert np.allclose(smooth.path[i, :2], plain.path[i, :2]) and np.allclose(
+            smooth.path[i - 1, :2], plain.path[i - 1, :2]
+        )
     for x, y, theta in smooth.path:  # every pose of the smoothed path is free at its heading
         assert not footprint_collides(grid.occupied, robot, grid.resolution, *grid.world_to_cell(x, y), theta)
     assert_never_nearer(grid, plain.path[:, :2], smooth.path[:, :2], cap=0.55)
@@ -131,8 +134,9 @@ def test_an_expired_deadline_keeps_the_planned_path():
     grid, points, dist = _zigzag_stretch()
     deadline = Deadline(1.0)
     deadline.terminate()
-    out = smooth_stretch(points, Stretch(0, len(points) - 1, grid.occupied), grid.occupied, dist, 5.5,
-                         SmootherParams(), 0.1, deadline)
+    out = smooth_stretch(
+        points, Stretch(0, len(points) - 1, grid.occupied), grid.occupied, dist, 5.5, SmootherParams(), 0.1, deadline
+    )
     assert not out.accepted and np.array_equal(out.points, points)
 
 
@@ -144,7 +148,6 @@ def test_a_path_along_a_wall_is_not_pulled_towards_it():
     rows = 8 + np.array([0, 0, 1, 1, 0, 0, 1, 1, 0, 0, 1, 1, 0], float)
     points = np.column_stack([rows + 0.5, np.arange(13) * 1.0 + 20.5])
     dist = distance_transform(grid.occupied)
-    out = smooth_stretch(points, Stretch(0, len(points) - 1, grid.occupied), occupied, dist, 5.5,
-                         SmootherParams(), 0.1)
+    out = smooth_stretch(points, Stretch(0, len(points) - 1, grid.occupied), occupied, dist, 5.5, SmootherParams(), 0.1)
     assert out.accepted
     assert out.points[:, 0].min() >= points[:, 0].min() - 1e-9  # no vertex moved nearer the wall

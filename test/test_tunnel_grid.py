@@ -48,8 +48,7 @@ def test_house_query_solved_on_the_grown_map(house):
     assert path_is_free(house, grown, plan.path)
     optimal = GridAStarPlanner(robot_radius=0.25, cost_travel_multiplier=0.0).plan(house, HOUSE_START, HOUSE_GOAL)
     assert plan.path_length() <= 1.3 * optimal.path_length()
-    plain = astar_2d(grown, house.world_to_cell(*HOUSE_START[:2]), house.world_to_cell(*HOUSE_GOAL[:2]),
-                     method="astar")
+    plain = astar_2d(grown, house.world_to_cell(*HOUSE_START[:2]), house.world_to_cell(*HOUSE_GOAL[:2]), method="astar")
     assert plan.stats.expansions < plain.expansions  # the paper's point: far fewer cells looked at
     assert {"attempts", "raw_cells", "waypoints", "grown"} <= set(plan.layers)
 

@@ -56,8 +56,9 @@ def _njit(func):
 
 
 @_njit
-def _astar_kernel(blocked, sr, sc, gr, gc, cell_cost, cost_mode, g_best, parent, seen, closed, keys, gs, ids, gen,
-                  deadline_at):
+def _astar_kernel(
+    blocked, sr, sc, gr, gc, cell_cost, cost_mode, g_best, parent, seen, closed, keys, gs, ids, gen, deadline_at
+):
     """A* on a grid padded with one blocked cell on every side.
 
     ``blocked`` is the padded (height + 2, width + 2) array; cells are given in
@@ -338,7 +339,13 @@ class _Workspace:
 
 
 def astar_2d(
-    occupied, start_cell, goal_cell, *, cell_cost=None, cell_weight=None, method: str = "jps",
+    occupied,
+    start_cell,
+    goal_cell,
+    *,
+    cell_cost=None,
+    cell_weight=None,
+    method: str = "jps",
     deadline: Deadline | None = None,
 ) -> AStarResult:
     """Optimal 8-connected A* without corner cutting on a boolean occupancy array.
@@ -429,13 +436,13 @@ class GridAStarPlanner(DiscPlanner):
     def search(self, space: OccupancyGrid, start: Endpoint, goal: Endpoint, run: PlanRun) -> np.ndarray:
         stats = run.stats
         weights = self.cost_weights(run)
-        path, cost, expansions = astar_2d(space.occupied, start.cell, goal.cell, cell_weight=weights,
-                                          deadline=run.deadline)
+        path, cost, expansions = astar_2d(
+            space.occupied, start.cell, goal.cell, cell_weight=weights, deadline=run.deadline
+        )
         stats.expansions, stats.collision_checks = expansions, 8 * expansions
         if len(path) == 0:
             raise NoPath("no path: A* exhausted the free cells of the grown map")
         stats.cost = cost * space.resolution
         run.message = "solved by 2-D A*" + (" (cost-aware)" if weights is not None else "")
         poses = cells_to_path(space, path, start.pose[2], goal.pose[2])
-        return self.smooth_path(space, poses, run,
-                                lambda xy: interpolate_headings(xy, start.pose[2], goal.pose[2]))
+        return self.smooth_path(space, poses, run, lambda xy: interpolate_headings(xy, start.pose[2], goal.pose[2]))

@@ -124,20 +124,34 @@ def _planners_help() -> str:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog=PROG, description=__doc__.split("\n")[0], epilog=_planners_help() + "\n\n" + EXIT_CODES,
-                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = _Parser(
+        prog=PROG,
+        description=__doc__.split("\n")[0],
+        epilog=_planners_help() + "\n\n" + EXIT_CODES,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     parser.add_argument("--map", help="map_server YAML (not needed with --world)")
     parser.add_argument("--world", help="3-D world YAML for a world_3d planner (start/goal default to its own)")
-    parser.add_argument("--planner", default=registry.DEFAULT_PLANNER,
-                        help=f"one of {', '.join(registry.planner_ids())} ('-' may replace '_')")
+    parser.add_argument(
+        "--planner",
+        default=registry.DEFAULT_PLANNER,
+        help=f"one of {', '.join(registry.planner_ids())} ('-' may replace '_')",
+    )
     parser.add_argument("--start", nargs=3, type=float, metavar=("X", "Y", "THETA"))
     parser.add_argument("--goal", nargs=3, type=float, metavar=("X", "Y", "THETA"))
-    parser.add_argument("--footprint", default="rect:0.9:0.3",
-                        help="'x,y x,y ...' vertices (use --footprint=... when the first is negative), "
-                        "rect:L:W or disc:R (default rect:0.9:0.3)")
+    parser.add_argument(
+        "--footprint",
+        default="rect:0.9:0.3",
+        help="'x,y x,y ...' vertices (use --footprint=... when the first is negative), "
+        "rect:L:W or disc:R (default rect:0.9:0.3)",
+    )
     parser.add_argument("--param", action="append", default=[], help="planner parameter key=value (JSON value)")
-    parser.add_argument("--time-limit", type=float, default=DEFAULT_TIME_LIMIT,
-                        help=f"planning budget in seconds (default {DEFAULT_TIME_LIMIT:g})")
+    parser.add_argument(
+        "--time-limit",
+        type=float,
+        default=DEFAULT_TIME_LIMIT,
+        help=f"planning budget in seconds (default {DEFAULT_TIME_LIMIT:g})",
+    )
     parser.add_argument("--unknown-free", action="store_true", help="treat unknown cells as free")
     parser.add_argument("--json", help="write the result here")
     parser.add_argument("--png", help="write a picture here")
@@ -197,8 +211,15 @@ def _write_png(args: argparse.Namespace, spec_id: str, grid, footprint, result: 
     if "world" in result.layers:
         save_result_png(args.png, result, spec_id)
     else:
-        save_plan_png(args.png, grid, result, args.start, args.goal, footprint,
-                      f"{spec_id}: {result.status.value} ({result.stats.deciding_stage})")
+        save_plan_png(
+            args.png,
+            grid,
+            result,
+            args.start,
+            args.goal,
+            footprint,
+            f"{spec_id}: {result.status.value} ({result.stats.deciding_stage})",
+        )
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -213,8 +234,11 @@ def main(argv: list[str] | None = None) -> int:
     print(f"planning with {spec.id} on {where}...", file=sys.stderr)
     t0 = time.perf_counter()
     result = planner.plan(grid, args.start, args.goal, time_limit=args.time_limit)
-    print(f"{result.status.value}: {result.message} ({time.perf_counter() - t0:.3f} s, "
-          f"{len(result.path)} poses, stage {result.stats.deciding_stage})", file=sys.stderr)
+    print(
+        f"{result.status.value}: {result.message} ({time.perf_counter() - t0:.3f} s, "
+        f"{len(result.path)} poses, stage {result.stats.deciding_stage})",
+        file=sys.stderr,
+    )
     try:
         _write_outputs(args, spec.id, grid, footprint, result)
     except OSError as exc:

@@ -36,16 +36,23 @@ class CostSettings:
     """The cost and smoothing parameters every grid planner declares (Nav2's names where Nav2 has one)."""
 
     inflation_radius: float | None = param(
-        None, "m: the cost decays to 0 here (Nav2); default Nav2's 0.55 or the circumscribed radius if larger",
-        lower=0.0)
-    cost_scaling_factor: float = param(NAV2_COST_SCALING_FACTOR, "1/m: exponential decay rate of the cost (Nav2)",
-                                       lower=0.0, upper=1e6)
+        None,
+        "m: the cost decays to 0 here (Nav2); default Nav2's 0.55 or the circumscribed radius if larger",
+        lower=0.0,
+    )
+    cost_scaling_factor: float = param(
+        NAV2_COST_SCALING_FACTOR, "1/m: exponential decay rate of the cost (Nav2)", lower=0.0, upper=1e6
+    )
     cost_travel_multiplier: float = param(
-        0.0, "weight of the cost against length (Smac 2D: step length x (1 + this x cost / 252)); 0 = shortest",
-        lower=0.0, upper=1e6)
+        0.0,
+        "weight of the cost against length (Smac 2D: step length x (1 + this x cost / 252)); 0 = shortest",
+        lower=0.0,
+        upper=1e6,
+    )
     smooth: bool = param(False, "smooth the path (Nav2 simple smoother; never nearer to obstacles, re-checked)")
-    min_turning_radius: float = param(0.0, "m: the smoother turns no sharper than this (0 = in place allowed)",
-                                      lower=0.0, upper=1e6)
+    min_turning_radius: float = param(
+        0.0, "m: the smoother turns no sharper than this (0 = in place allowed)", lower=0.0, upper=1e6
+    )
 
 
 COST_FIELDS = tuple(f.name for f in dataclasses.fields(CostSettings))
@@ -55,8 +62,9 @@ def cost_params(cost_travel_multiplier: float = 0.0) -> dict[str, ParamSpec]:
     """The cost parameters' specs, with this planner's default multiplier."""
     specs = dataclass_params(CostSettings)
     specs["inflation_radius"] = dataclasses.replace(specs["inflation_radius"], type=float)
-    specs["cost_travel_multiplier"] = dataclasses.replace(specs["cost_travel_multiplier"],
-                                                          default=float(cost_travel_multiplier))
+    specs["cost_travel_multiplier"] = dataclasses.replace(
+        specs["cost_travel_multiplier"], default=float(cost_travel_multiplier)
+    )
     return specs
 
 
@@ -112,8 +120,15 @@ class CostModel:
     def layer(self, grid: OccupancyGrid, deadline: Deadline | None = None, reach: float = 0.0) -> CostLayer:
         """The cost layer of ``grid``; its distances reach at least ``reach`` m (a grown map's radius)."""
         margin = max(reach - self.inflation_radius, 0.0) + DISTANCE_MARGIN_CELLS * grid.resolution
-        return cost_layer(grid, self.inscribed_radius, self.circumscribed_radius, self.inflation_radius,
-                          self.settings.cost_scaling_factor, deadline, margin)
+        return cost_layer(
+            grid,
+            self.inscribed_radius,
+            self.circumscribed_radius,
+            self.inflation_radius,
+            self.settings.cost_scaling_factor,
+            deadline,
+            margin,
+        )
 
     def weights(self, layer: CostLayer | None) -> np.ndarray | None:
         """Per-cell step-length factor minus one for the search, or None when the plan is the plain shortest."""
@@ -143,8 +158,9 @@ class CostModel:
         info = {"stretches": len(stretches), "sweeps": 0, "moved": 0, "accepted": True}
         params = self.smoother_params()
         for stretch in stretches:
-            out: SmoothOutcome = smooth_stretch(points, stretch, layer.obstacles, dist_cells, cap, params,
-                                                grid.resolution, deadline)
+            out: SmoothOutcome = smooth_stretch(
+                points, stretch, layer.obstacles, dist_cells, cap, params, grid.resolution, deadline
+            )
             info["sweeps"] = max(info["sweeps"], out.sweeps)
             if not out.accepted:
                 info["accepted"] = False

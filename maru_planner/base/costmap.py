@@ -53,7 +53,10 @@ def check_inflation(inflation_radius: float, cost_scaling_factor: float, inscrib
 
 
 def cost_of_distance(
-    distance: np.ndarray, inscribed_radius: float, inflation_radius: float, cost_scaling_factor: float,
+    distance: np.ndarray,
+    inscribed_radius: float,
+    inflation_radius: float,
+    cost_scaling_factor: float,
     guard: float = 0.0,
 ) -> np.ndarray:
     """Nav2's cost (uint8) of cells at ``distance`` metres (centre to centre) from the nearest obstacle.
@@ -77,8 +80,9 @@ def cost_of_distance(
 class CostLayer:
     """A map's Nav2 costs (uint8, the grid's shape) and the numbers that made them.
 
-    ``obstacles`` are the occupied cells it was made from; ``distance`` holds the exact centre-to-centre distance to the nearest obstacle (metres, float64) where
-    it is at most ``inflation_radius`` (plus the margin :func:`cost_layer` was given), ``inf`` elsewhere.
+    ``obstacles`` are the occupied cells it was made from; ``distance`` holds the exact centre-to-centre
+    distance to the nearest obstacle (metres, float64) where it is at most ``inflation_radius`` (plus the
+    margin :func:`cost_layer` was given), ``inf`` elsewhere.
     """
 
     cost: np.ndarray
@@ -117,8 +121,16 @@ def cost_layer(
     distance = grid.distance_field(inflation_radius + max(distance_margin, 0.0), deadline)
     guard = 1e-9 * grid.resolution
     cost = cost_of_distance(distance, inscribed_radius, inflation_radius, cost_scaling_factor, guard)
-    return CostLayer(cost, distance, grid.occupied, grid.resolution, float(inscribed_radius), float(circumscribed_radius),
-                     float(inflation_radius), float(cost_scaling_factor))
+    return CostLayer(
+        cost,
+        distance,
+        grid.occupied,
+        grid.resolution,
+        float(inscribed_radius),
+        float(circumscribed_radius),
+        float(inflation_radius),
+        float(cost_scaling_factor),
+    )
 
 
 def _translation_table() -> np.ndarray:

@@ -181,9 +181,7 @@ class OccupancyGrid:
     def with_occupied(self, occupied: np.ndarray) -> OccupancyGrid:
         """Same geometry, different occupancy (unknown cells carried over as information only)."""
         unknown = None if self.unknown is None else self.unknown.copy()
-        return OccupancyGrid(
-            occupied, self.resolution, self.origin, unknown, False, self.frame_id, dict(self.meta)
-        )
+        return OccupancyGrid(occupied, self.resolution, self.origin, unknown, False, self.frame_id, dict(self.meta))
 
     # ---------------------------------------------------------- int8 values
     @classmethod
@@ -208,9 +206,7 @@ class OccupancyGrid:
         if data.size != width * height:
             raise InvalidMap(f"map data has {data.size} values, width x height = {width} x {height} = {width * height}")
         cells = data.reshape(height, width)
-        return cls(
-            cells >= occupied_threshold, resolution, origin, cells < 0, unknown_is_occupied, frame_id=frame_id
-        )
+        return cls(cells >= occupied_threshold, resolution, origin, cells < 0, unknown_is_occupied, frame_id=frame_id)
 
     # ---------------------------------------------------------------- file I/O
     @classmethod

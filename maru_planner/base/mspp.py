@@ -119,14 +119,16 @@ class MultiStagePlanner(SE2AStarPlanner):
         finally:
             run.stats_as(MultiStageStats).total()
 
-    def _smooth_baa(self, grid: OccupancyGrid, path: np.ndarray, start: Endpoint, goal: Endpoint,
-                    run: PlanRun) -> np.ndarray:
+    def _smooth_baa(
+        self, grid: OccupancyGrid, path: np.ndarray, start: Endpoint, goal: Endpoint, run: PlanRun
+    ) -> np.ndarray:
         """A BAA path smoothed on the BAA map (any heading is free there), headings interpolated again."""
         layer = run.layers.get("costmap")
         if not self.costs.settings.smooth or layer is None or len(path) < 3:
             return path
-        xy, info = self.costs.smooth(grid, path[:, :2], layer, [Stretch(0, len(path) - 1, run.layers["baa"])],
-                                     run.deadline)
+        xy, info = self.costs.smooth(
+            grid, path[:, :2], layer, [Stretch(0, len(path) - 1, run.layers["baa"])], run.deadline
+        )
         run.stats.smoothing = info
         return np.column_stack([xy, interpolate_headings(xy, start.pose[2], goal.pose[2])])
 
@@ -148,8 +150,10 @@ class MultiStagePlanner(SE2AStarPlanner):
             n_start, n_goal = int(np.sum(labels == ls)), int(np.sum(labels == lg))
             side, cells = ("start", n_start) if n_start <= n_goal else ("goal", n_goal)
             run.stats.deciding_stage = "ECA"
-            raise NoPathProven(f"no path: {side} enclosed (obstacles grown by R_min = {self.r_in:.3f} m "
-                               f"leave it a region of {cells} cells)")
+            raise NoPathProven(
+                f"no path: {side} enclosed (obstacles grown by R_min = {self.r_in:.3f} m "
+                f"leave it a region of {cells} cells)"
+            )
 
     def _baa(self, grid: OccupancyGrid, start: Endpoint, goal: Endpoint, run: PlanRun) -> np.ndarray | None:
         t = time.perf_counter()
@@ -159,8 +163,9 @@ class MultiStagePlanner(SE2AStarPlanner):
         run.layers["baa"] = baa
         path = None
         if not baa[start.cell] and not baa[goal.cell]:
-            cells, _, expansions = astar_2d(baa, start.cell, goal.cell, cell_weight=self.cost_weights(run),
-                                            deadline=run.deadline)
+            cells, _, expansions = astar_2d(
+                baa, start.cell, goal.cell, cell_weight=self.cost_weights(run), deadline=run.deadline
+            )
             stage.expansions, stage.collision_checks = expansions, 8 * expansions
             if len(cells):
                 run.stats.deciding_stage, run.message = "BAA", "solved by BAA"
@@ -214,8 +219,9 @@ class LocalMultiStagePlanner(MultiStagePlanner):
         eca, baa = run.layers["eca"], run.layers["baa"]
         stage = run.stats_as(MultiStageStats).add(StageStats("local", windows=[]))
         run.monitor.report(stage.name)
-        guide, _, guide_exp = astar_2d(eca, start.cell, goal.cell, cell_cost=baa * self.narrow_penalty,
-                                       deadline=run.deadline)
+        guide, _, guide_exp = astar_2d(
+            eca, start.cell, goal.cell, cell_cost=baa * self.narrow_penalty, deadline=run.deadline
+        )
         stage.guide_expansions = guide_exp
         pieces = None
         if len(guide):
@@ -259,8 +265,17 @@ class LocalMultiStagePlanner(MultiStagePlanner):
             for grow in (1, 2, 4):
                 margin = int(math.ceil(grow * self.local_margin / grid.resolution))
                 box = self._window(guide[a : b + 1], margin, grid.shape)
-                states = self._window_search(grid, box, guide[a], guide[b], sk if a == 0 else -1,
-                                             gk if b == len(guide) - 1 else -1, baa, stage, run)
+                states = self._window_search(
+                    grid,
+                    box,
+                    guide[a],
+                    guide[b],
+                    sk if a == 0 else -1,
+                    gk if b == len(guide) - 1 else -1,
+                    baa,
+                    stage,
+                    run,
+                )
                 windows.append(box)
                 if states is not None:
                     break
@@ -305,14 +320,23 @@ class LocalMultiStagePlanner(MultiStagePlanner):
         if gk >= 0 and not baa[tuple(exit_)]:
             gk = -1
         weights = self.cost_weights(run)
-        out = search_layers(window_layers, starts, (exit_[0] - r0, exit_[1] - c0), gk,
-                            self.rot_cost_cells(grid.resolution), deadline=run.deadline,
-                            cell_weight=None if weights is None else weights[r0:r1, c0:c1])
+        out = search_layers(
+            window_layers,
+            starts,
+            (exit_[0] - r0, exit_[1] - c0),
+            gk,
+            self.rot_cost_cells(grid.resolution),
+            deadline=run.deadline,
+            cell_weight=None if weights is None else weights[r0:r1, c0:c1],
+        )
         stage.expansions += out.expansions
         stage.collision_checks += out.collision_checks
         assert stage.windows is not None  # the local stage is made with windows=[]
-        stage.windows.append(WindowStats([int(v) for v in box], int(window_layers.size), out.expansions, out.found,
-                                         time.perf_counter() - t))
+        stage.windows.append(
+            WindowStats(
+                [int(v) for v in box], int(window_layers.size), out.expansions, out.found, time.perf_counter() - t
+            )
+        )
         if not out.found:
             return None
         states = out.states.copy()

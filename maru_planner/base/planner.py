@@ -247,7 +247,8 @@ class DiscPlanner(GridPlanner[OccupancyGrid]):
         layer = run.layers.get("costmap")
         if not self.costs.settings.smooth or layer is None or len(path) < 3:
             return path
-        xy, info = self.costs.smooth(space, path[:, :2], layer, [Stretch(0, len(path) - 1, space.occupied)],
-                                     run.deadline)
+        xy, info = self.costs.smooth(
+            space, path[:, :2], layer, [Stretch(0, len(path) - 1, space.occupied)], run.deadline
+        )
         run.stats.smoothing = info
         return np.column_stack([xy, headings(xy)])

@@ -129,10 +129,21 @@ def plan(
 
 # ------------------------------------------------------------------------- the planners
 HEADINGS = ParamSpec("headings", 32, "SE(2) heading discretisation (the paper: 31)", lower=1, upper=3600)
-ROTATION_WEIGHT = ParamSpec("rotation_weight", None, "metres per radian of turning in place; default R_max",
-                            lower=0.0, optional=True, type=float)
-WORLD = ParamSpec("world", None, "3-D world YAML (relative paths also under config/); none = plan on the grid",
-                  optional=True, type=str)
+ROTATION_WEIGHT = ParamSpec(
+    "rotation_weight",
+    None,
+    "metres per radian of turning in place; default R_max",
+    lower=0.0,
+    optional=True,
+    type=float,
+)
+WORLD = ParamSpec(
+    "world",
+    None,
+    "3-D world YAML (relative paths also under config/); none = plan on the grid",
+    optional=True,
+    type=str,
+)
 
 
 def _params(*specs: ParamSpec) -> dict[str, ParamSpec]:
@@ -140,54 +151,99 @@ def _params(*specs: ParamSpec) -> dict[str, ParamSpec]:
 
 
 def _robot_radius(default: str) -> ParamSpec:
-    return ParamSpec("robot_radius", None, f"disc radius (m): the obstacle growth; default {default}",
-                     lower=0.0, optional=True, type=float)
+    return ParamSpec(
+        "robot_radius",
+        None,
+        f"disc radius (m): the obstacle growth; default {default}",
+        lower=0.0,
+        optional=True,
+        type=float,
+    )
 
 
 COST_AWARE = cost_params(DEFAULT_COST_TRAVEL_MULTIPLIER).values()  # astar, se2: Nav2's cost-aware planning
 PAPER_COSTS = cost_params(0.0).values()  # the papers' planners: the cost layer as an option
 
-register(BasePlannerSpec(
-    "astar", "2-D A* on the map grown by robot_radius (the footprint's circumradius), Nav2's inflation costs "
-    "(cost_travel_multiplier=0: the shortest path, JPS)",
-    GridAStarPlanner, _params(_robot_radius("the footprint's circumradius"), *COST_AWARE),
-    frozenset({USES_FOOTPRINT}),
-))
-register(BasePlannerSpec(
-    "se2", "complete SE(2) A* for the footprint polygon over all headings (paper 002's full search), cost-aware",
-    SE2AStarPlanner, _params(HEADINGS, ROTATION_WEIGHT, *COST_AWARE),
-    frozenset({USES_FOOTPRINT, NEEDS_HEADINGS}),
-))
-register(BasePlannerSpec(
-    "mspp", "paper 002's multi-stage planner: ECA (proves no path) -> BAA (2-D A*) -> full SE(2) A*",
-    MultiStagePlanner, _params(HEADINGS, ROTATION_WEIGHT, *PAPER_COSTS),
-    frozenset({USES_FOOTPRINT, NEEDS_HEADINGS, PROVES_NO_PATH}),
-))
-register(BasePlannerSpec(
-    "mspp_local", "MSPP with the SE(2) search only in windows around the guide path's narrow parts",
-    LocalMultiStagePlanner,
-    _params(HEADINGS, ROTATION_WEIGHT,
-            ParamSpec("local_margin", None, "window margin around a narrow run (m); default 2 R_max",
-                      lower=0.0, optional=True, type=float),
-            ParamSpec("narrow_penalty", 4.0, "guide-path cost per cell within R_max of an obstacle",
-                      lower=0.0, upper=1e6),
-            *PAPER_COSTS),
-    frozenset({USES_FOOTPRINT, NEEDS_HEADINGS, PROVES_NO_PATH}),
-))
-register(BasePlannerSpec(
-    "tunnel", "paper 003's heuristic tunnel planner (TFP -> LCRP -> PFP) for a disc robot",
-    TunnelGridPlanner,
-    _params(_robot_radius("the footprint's circumradius, 0.25 without"),
-            *dataclass_params(TunnelParams).values(), *PAPER_COSTS),
-    frozenset({USES_FOOTPRINT}),
-))
-register(BasePlannerSpec(
-    "biped_track", "paper 004's track following (Voronoi mid-lines, turning rule) for a biped",
-    biped_track, _params(WORLD, *dataclass_params(TrackParams).values()),
-    frozenset({USES_FOOTPRINT, WORLD_3D}),
-))
-register(BasePlannerSpec(
-    "biped_wall", "paper 004's virtual-wall walk (free rotation ranges) for a biped",
-    biped_wall, _params(WORLD, *dataclass_params(WallParams).values()),
-    frozenset({USES_FOOTPRINT, WORLD_3D}),
-))
+register(
+    BasePlannerSpec(
+        "astar",
+        "2-D A* on the map grown by robot_radius (the footprint's circumradius), Nav2's inflation costs "
+        "(cost_travel_multiplier=0: the shortest path, JPS)",
+        GridAStarPlanner,
+        _params(_robot_radius("the footprint's circumradius"), *COST_AWARE),
+        frozenset({USES_FOOTPRINT}),
+    )
+)
+register(
+    BasePlannerSpec(
+        "se2",
+        "complete SE(2) A* for the footprint polygon over all headings (paper 002's full search), cost-aware",
+        SE2AStarPlanner,
+        _params(HEADINGS, ROTATION_WEIGHT, *COST_AWARE),
+        frozenset({USES_FOOTPRINT, NEEDS_HEADINGS}),
+    )
+)
+register(
+    BasePlannerSpec(
+        "mspp",
+        "paper 002's multi-stage planner: ECA (proves no path) -> BAA (2-D A*) -> full SE(2) A*",
+        MultiStagePlanner,
+        _params(HEADINGS, ROTATION_WEIGHT, *PAPER_COSTS),
+        frozenset({USES_FOOTPRINT, NEEDS_HEADINGS, PROVES_NO_PATH}),
+    )
+)
+register(
+    BasePlannerSpec(
+        "mspp_local",
+        "MSPP with the SE(2) search only in windows around the guide path's narrow parts",
+        LocalMultiStagePlanner,
+        _params(
+            HEADINGS,
+            ROTATION_WEIGHT,
+            ParamSpec(
+                "local_margin",
+                None,
+                "window margin around a narrow run (m); default 2 R_max",
+                lower=0.0,
+                optional=True,
+                type=float,
+            ),
+            ParamSpec(
+                "narrow_penalty", 4.0, "guide-path cost per cell within R_max of an obstacle", lower=0.0, upper=1e6
+            ),
+            *PAPER_COSTS,
+        ),
+        frozenset({USES_FOOTPRINT, NEEDS_HEADINGS, PROVES_NO_PATH}),
+    )
+)
+register(
+    BasePlannerSpec(
+        "tunnel",
+        "paper 003's heuristic tunnel planner (TFP -> LCRP -> PFP) for a disc robot",
+        TunnelGridPlanner,
+        _params(
+            _robot_radius("the footprint's circumradius, 0.25 without"),
+            *dataclass_params(TunnelParams).values(),
+            *PAPER_COSTS,
+        ),
+        frozenset({USES_FOOTPRINT}),
+    )
+)
+register(
+    BasePlannerSpec(
+        "biped_track",
+        "paper 004's track following (Voronoi mid-lines, turning rule) for a biped",
+        biped_track,
+        _params(WORLD, *dataclass_params(TrackParams).values()),
+        frozenset({USES_FOOTPRINT, WORLD_3D}),
+    )
+)
+register(
+    BasePlannerSpec(
+        "biped_wall",
+        "paper 004's virtual-wall walk (free rotation ranges) for a biped",
+        biped_wall,
+        _params(WORLD, *dataclass_params(WallParams).values()),
+        frozenset({USES_FOOTPRINT, WORLD_3D}),
+    )
+)

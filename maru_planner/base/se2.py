@@ -66,7 +66,11 @@ _SMOOTH_MARGIN = 3  # cells around a stretch its smoothed vertices may use
 
 
 def cspace_layers(
-    occupied: np.ndarray, footprint, resolution: float, headings: int, offsets: list[np.ndarray] | None = None,
+    occupied: np.ndarray,
+    footprint,
+    resolution: float,
+    headings: int,
+    offsets: list[np.ndarray] | None = None,
     deadline: Deadline | None = None,
 ) -> np.ndarray:
     """(K, H, W) bool: configuration-space obstacles for each heading k * 2 pi / K.
@@ -224,9 +228,11 @@ class LayerSearch:
 
 def check_search_memory(headings: int, height: int, width: int) -> None:
     """TooLarge when an SE(2) search over (headings, height, width) would not fit (padded layers, g, parent, closed)."""
-    check_bytes(float(_BYTES_PER_STATE) * headings * (height + 2) * (width + 2),
-                f"SE(2) A* over {headings} headings x {width} x {height} cells",
-                "use fewer headings, a coarser map or mspp_local")
+    check_bytes(
+        float(_BYTES_PER_STATE) * headings * (height + 2) * (width + 2),
+        f"SE(2) A* over {headings} headings x {width} x {height} cells",
+        "use fewer headings, a coarser map or mspp_local",
+    )
 
 
 def search_layers(
@@ -256,10 +262,16 @@ def search_layers(
     if cell_weight is not None and weights.shape != (h + 2, w + 2):
         raise ValueError(f"cell_weight has shape {np.shape(cell_weight)}, the layers {(h, w)}")
     parent, goal, cost, expansions, checks, status = _se2_kernel(
-        padded, starts, int(goal_cell[0]) + 1, int(goal_cell[1]) + 1, int(goal_k), float(rot_cost_cells),
+        padded,
+        starts,
+        int(goal_cell[0]) + 1,
+        int(goal_cell[1]) + 1,
+        int(goal_k),
+        float(rot_cost_cells),
         deadline.kernel_at,
         int(initial_capacity if initial_capacity is not None else min(10 * padded.size, 1 << 20)),
-        weights, cell_weight is not None,
+        weights,
+        cell_weight is not None,
     )
     if status == _TIMED_OUT:
         deadline.raise_timeout(f"SE(2) A* ({int(expansions)} expansions)")
@@ -360,18 +372,29 @@ class SE2AStarPlanner(GridPlanner[OccupancyGrid]):
         return self.smooth_states(space, states_to_path(space, full.search.states, self.headings), run)
 
     def full_search(
-        self, grid: OccupancyGrid, start: Endpoint, goal: Endpoint, deadline: Deadline,
+        self,
+        grid: OccupancyGrid,
+        start: Endpoint,
+        goal: Endpoint,
+        deadline: Deadline,
         cell_weight: np.ndarray | None = None,
     ) -> FullSearch:
         """C-space layers for the whole map, then the search (memory checked before either)."""
         check_search_memory(self.headings, *grid.shape)
         t = time.perf_counter()
-        layers = cspace_layers(grid.occupied, self.footprint, grid.resolution, self.headings,
-                               self.offsets(grid, deadline), deadline)
+        layers = cspace_layers(
+            grid.occupied, self.footprint, grid.resolution, self.headings, self.offsets(grid, deadline), deadline
+        )
         cspace_time = time.perf_counter() - t
-        out = search_layers(layers, [(self.heading_of(grid, start.pose), *start.cell)], goal.cell,
-                            self.heading_of(grid, goal.pose), self.rot_cost_cells(grid.resolution), deadline=deadline,
-                            cell_weight=cell_weight)
+        out = search_layers(
+            layers,
+            [(self.heading_of(grid, start.pose), *start.cell)],
+            goal.cell,
+            self.heading_of(grid, goal.pose),
+            self.rot_cost_cells(grid.resolution),
+            deadline=deadline,
+            cell_weight=cell_weight,
+        )
         return FullSearch(out, cspace_time, int(layers.size), time.perf_counter() - t)
 
     def smooth_states(self, grid: OccupancyGrid, path: np.ndarray, run: PlanRun) -> np.ndarray:

@@ -41,10 +41,8 @@ class SmootherParams:
     """Nav2 simple smoother's parameters (its defaults) and the turning-radius limit of the constrained one."""
 
     w_data: float = param(0.2, "weight pulling each vertex back to the planned path", lower=0.0, upper=1.0)
-    w_smooth: float = param(0.3, "weight pulling each vertex towards its neighbours' midpoint", lower=0.0,
-                            upper=0.5)
-    tolerance: float = param(1e-10, "stop when a sweep moves the vertices less than this in total (cells)",
-                             lower=0.0)
+    w_smooth: float = param(0.3, "weight pulling each vertex towards its neighbours' midpoint", lower=0.0, upper=0.5)
+    tolerance: float = param(1e-10, "stop when a sweep moves the vertices less than this in total (cells)", lower=0.0)
     max_its: int = param(1000, "most Gauss-Seidel sweeps", lower=1, upper=100000)
     min_turning_radius: float = param(0.0, "m; 0 = turning in place allowed (the SE(2) lattice's)", lower=0.0)
 
@@ -129,8 +127,24 @@ def _turns_ok(y, i, n, max_turn, turn0):
 
 
 @numba.njit(cache=True, nogil=True)
-def _smooth_kernel(x, fixed, blocked, off_r, off_c, occupied, dist, cap, baseline, w_data, w_smooth, max_its,
-                   tolerance, max_turn, turn0, deadline_at):
+def _smooth_kernel(
+    x,
+    fixed,
+    blocked,
+    off_r,
+    off_c,
+    occupied,
+    dist,
+    cap,
+    baseline,
+    w_data,
+    w_smooth,
+    max_its,
+    tolerance,
+    max_turn,
+    turn0,
+    deadline_at,
+):
     """Gauss-Seidel sweeps with the guards (module doc); returns (points, sweeps, timed out)."""
     n = x.shape[0]
     y = x.copy()
@@ -147,8 +161,10 @@ def _smooth_kernel(x, fixed, blocked, off_r, off_c, occupied, dist, cap, baselin
             step = math.hypot(cand[0] - y[i, 0], cand[1] - y[i, 1])
             if step < 1e-12:
                 continue
-            if not (segment_free(blocked, off_r, off_c, y[i - 1], cand) and segment_free(blocked, off_r, off_c, cand,
-                                                                                      y[i + 1])):
+            if not (
+                segment_free(blocked, off_r, off_c, y[i - 1], cand)
+                and segment_free(blocked, off_r, off_c, cand, y[i + 1])
+            ):
                 continue
             if capped_clearance(occupied, dist, y[i - 1], cand, cap) < baseline[i - 1] - _EPS:
                 continue
@@ -167,8 +183,9 @@ def _smooth_kernel(x, fixed, blocked, off_r, off_c, occupied, dist, cap, baselin
 
 def segment_clearances(occupied: np.ndarray, dist_cells: np.ndarray, points: np.ndarray, cap: float) -> np.ndarray:
     """Capped exact clearance (cells) of each segment of a polyline (cell units)."""
-    return np.array([capped_clearance(occupied, dist_cells, points[j], points[j + 1], cap)
-                     for j in range(len(points) - 1)])
+    return np.array(
+        [capped_clearance(occupied, dist_cells, points[j], points[j + 1], cap) for j in range(len(points) - 1)]
+    )
 
 
 def turn_rates(points: np.ndarray) -> np.ndarray:
@@ -205,8 +222,21 @@ def smooth_stretch(
     max_turn = resolution / params.min_turning_radius if params.min_turning_radius > 0 else 0.0
     turn0 = turn_rates(x)
     y, sweeps, timed_out = _smooth_kernel(
-        x, fixed, blocked, stretch.offset[0], stretch.offset[1], occupied, dist_cells, float(cap), baseline,
-        float(params.w_data), float(params.w_smooth), int(params.max_its), float(params.tolerance), max_turn, turn0,
+        x,
+        fixed,
+        blocked,
+        stretch.offset[0],
+        stretch.offset[1],
+        occupied,
+        dist_cells,
+        float(cap),
+        baseline,
+        float(params.w_data),
+        float(params.w_smooth),
+        int(params.max_its),
+        float(params.tolerance),
+        max_turn,
+        turn0,
         deadline.kernel_at,
     )
     if timed_out or not _recheck(x, y, blocked, stretch.offset, occupied, dist_cells, cap, baseline, max_turn, turn0):

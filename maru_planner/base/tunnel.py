@@ -201,8 +201,9 @@ def _dist(a, b) -> float:
 # --------------------------------------------------------------------------- TFP
 
 
-def tunnel_finding(bg: BigCellGrid, start: int, goal: int, p: TunnelParams, blocked: set,
-                   deadline: Deadline) -> tuple[array, bytearray, bool]:
+def tunnel_finding(
+    bg: BigCellGrid, start: int, goal: int, p: TunnelParams, blocked: set, deadline: Deadline
+) -> tuple[array, bytearray, bool]:
     """TFP: greedy walk over Σ(β) minimising f_T, backtracking at dead ends.
 
     Returns (T in visiting order, T as a flat mask, reached_goal).
@@ -273,8 +274,9 @@ def _bfs_depths(bg: BigCellGrid, members: bytearray, start: int, blocked: set) -
     return depth
 
 
-def lumped_cell_removal(bg: BigCellGrid, members: bytearray, start: int, goal: int, p: TunnelParams,
-                        blocked: set) -> tuple[list, np.ndarray]:
+def lumped_cell_removal(
+    bg: BigCellGrid, members: bytearray, start: int, goal: int, p: TunnelParams, blocked: set
+) -> tuple[list, np.ndarray]:
     """LCRP: backtrack from β_goal to β_start inside T; returns (B start→goal, lumped cells (k, 2))."""
     mask = np.frombuffer(bytes(members), dtype=np.uint8).reshape(bg.shape).astype(bool)
     lumped = np.flatnonzero(lumped_mask(mask)).astype(np.int32)
@@ -324,8 +326,9 @@ def lumped_cell_removal(bg: BigCellGrid, members: bytearray, start: int, goal: i
 # --------------------------------------------------------------------------- PFP
 
 
-def path_finding(occupied: np.ndarray, bg: BigCellGrid, thin: list, start: tuple, goal: tuple, p: TunnelParams,
-                 deadline: Deadline):
+def path_finding(
+    occupied: np.ndarray, bg: BigCellGrid, thin: list, start: tuple, goal: tuple, p: TunnelParams, deadline: Deadline
+):
     """PFP: greedy depth-first 8-neighbour walk of small cells inside B.
 
     Returns (cells or None, index in B of the β where the walk got stuck, expansions).
@@ -404,8 +407,9 @@ def segment_max_cost(cost: np.ndarray, a, b) -> int:
     return int(cost[ri[:, :, None], ci[:, None, :]].max())
 
 
-def shortcut_cells(occupied: np.ndarray, cells: list, deadline: Deadline | None = None,
-                   cost: np.ndarray | None = None) -> list:
+def shortcut_cells(
+    occupied: np.ndarray, cells: list, deadline: Deadline | None = None, cost: np.ndarray | None = None
+) -> list:
     """Keep only the turning points: from each anchor, the farthest cell still in line of sight.
 
     With ``cost`` (a cost layer), a shortcut is taken only where it crosses no cell costlier than the
@@ -461,8 +465,15 @@ class TunnelPlanner:
         self.params = dataclasses.replace(params or TunnelParams(), **overrides)
         self.params.validate()
 
-    def plan_cells(self, occupied: np.ndarray, start, goal, deadline: Deadline | None = None,
-                   stats: TunnelStats | None = None, cost: np.ndarray | None = None) -> CellPlan:
+    def plan_cells(
+        self,
+        occupied: np.ndarray,
+        start,
+        goal,
+        deadline: Deadline | None = None,
+        stats: TunnelStats | None = None,
+        cost: np.ndarray | None = None,
+    ) -> CellPlan:
         """Plan from cell ``start`` to ``goal``; fills ``stats`` (a fresh TunnelStats by default).
 
         ``cost`` (a cost layer's costs): the shortcuts never cross a cell costlier than the chain they replace.
@@ -488,8 +499,17 @@ class TunnelPlanner:
                 attempt, cells = self._round(occupied, bg, start, goal, blocked, stats, deadline)
                 attempts.append(attempt)
                 if cells is not None:
-                    return self._finish(None, f"path found with big cells of {size}×{size}",
-                                        cells, attempts, occupied, stats, t0, deadline, cost)
+                    return self._finish(
+                        None,
+                        f"path found with big cells of {size}×{size}",
+                        cells,
+                        attempts,
+                        occupied,
+                        stats,
+                        t0,
+                        deadline,
+                        cost,
+                    )
                 if attempt.failed_stage == "TFP" or size > p.min_big_cell_size:
                     break
                 if len(blocked) >= p.max_virtual_obstacles:
@@ -517,15 +537,17 @@ class TunnelPlanner:
         stats.pfp_expansions += expansions
         if cells is None:
             failing = _edge(thin[stuck], thin[min(stuck + 1, len(thin) - 1)])
-            attempt = Attempt(bg.size, "PFP", bg.to_rc(tunnel), lumped, bg.to_rc(thin), empty,
-                              virtual + [tuple(map(bg.rc, failing))])
+            attempt = Attempt(
+                bg.size, "PFP", bg.to_rc(tunnel), lumped, bg.to_rc(thin), empty, virtual + [tuple(map(bg.rc, failing))]
+            )
             attempt.failing_edge = failing
             return attempt, None
         attempt = Attempt(bg.size, None, bg.to_rc(tunnel), lumped, bg.to_rc(thin), _as_array(cells), virtual)
         return attempt, cells
 
-    def _finish(self, error, message, cells, attempts, occupied, stats: TunnelStats, t0, deadline,
-                cost=None) -> CellPlan:
+    def _finish(
+        self, error, message, cells, attempts, occupied, stats: TunnelStats, t0, deadline, cost=None
+    ) -> CellPlan:
         waypoints = cells
         if cells and self.params.shortcut:
             waypoints = shortcut_cells(occupied, cells, deadline, cost)

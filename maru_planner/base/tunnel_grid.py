@@ -63,8 +63,9 @@ class TunnelGridPlanner(DiscPlanner):
     def search(self, space: OccupancyGrid, start: Endpoint, goal: Endpoint, run: PlanRun) -> np.ndarray:
         layer = run.layers.get("costmap")
         cost = layer.cost if layer is not None and self.costs.cost_aware else None
-        plan = self.planner.plan_cells(space.occupied, start.cell, goal.cell, run.deadline, run.stats_as(TunnelStats),
-                                       cost=cost)
+        plan = self.planner.plan_cells(
+            space.occupied, start.cell, goal.cell, run.deadline, run.stats_as(TunnelStats), cost=cost
+        )
         run.stats.collision_checks = run.stats.expansions
         last = plan.attempts[-1] if plan.attempts else None
         run.stats.deciding_stage = f"tunnel b={last.big_cell_size}" if last else "tunnel"

@@ -5,8 +5,8 @@ whatever else is registered). No ROS here."""
 
 from maru_planner.planning.config import PlannerConfig
 from maru_planner.planning.motion_planner import MotionPlanner
-from maru_planner.planning.problem import PlanningProblem
 from maru_planner.planning.planners.registry import PLANNERS, ArmPlannerSpec, get_spec, planner_ids, register
+from maru_planner.planning.problem import PlanningProblem
 from maru_planner.planning.types import MotionRequest, MotionResult, PlanStats, PlanStatus
 from maru_planner.trajectory.trajectory import Trajectory
 

@@ -87,10 +87,12 @@ class BaseNodeConfig:
     occupied_threshold: int = param(65, "map values >= this are obstacles", lower=1, upper=100)
     map_topic: str = param("map", "nav_msgs/OccupancyGrid topic (transient local)", read_only=True)
     biped_world: str = param("", "3-D world YAML for world_3d planners (biped_*); empty = plan on the map")
-    inflation_radius: float = param(NAV2_INFLATION_RADIUS, "m: Nav2 inflation layer's radius (cost map and planners)",
-                                    lower=0.0, upper=100.0)
-    cost_scaling_factor: float = param(NAV2_COST_SCALING_FACTOR, "1/m: decay rate of the inflation cost (Nav2)",
-                                       lower=0.0, upper=1e6)
+    inflation_radius: float = param(
+        NAV2_INFLATION_RADIUS, "m: Nav2 inflation layer's radius (cost map and planners)", lower=0.0, upper=100.0
+    )
+    cost_scaling_factor: float = param(
+        NAV2_COST_SCALING_FACTOR, "1/m: decay rate of the inflation cost (Nav2)", lower=0.0, upper=1e6
+    )
 
 
 NODE_SPECS = dataclass_params(BaseNodeConfig)
@@ -159,9 +161,7 @@ class BasePlannerNode(ManagedNode):
         self.costmap_pub = self.create_lifecycle_publisher(OccupancyGridMsg, "~/costmap", latched)
         self._planning = ThreadPoolExecutor(max_workers=1, thread_name_prefix="base_planner")
         callbacks = ReentrantCallbackGroup()  # a callback awaiting its plan must not block the others
-        self.create_managed_service(
-            PlanBasePath, "plan_base_path", self._on_plan_base_path, callback_group=callbacks
-        )
+        self.create_managed_service(PlanBasePath, "plan_base_path", self._on_plan_base_path, callback_group=callbacks)
         self.create_managed_service(GetPlan, "make_plan", self._on_get_plan, callback_group=callbacks)
         self._plan_action = PlanActionServer(
             self,
@@ -212,8 +212,14 @@ class BasePlannerNode(ManagedNode):
     def _publish_costmap(self, grid: OccupancyGrid, config: BaseNodeConfig) -> None:
         try:
             inscribed, circumscribed = footprint_radii(conv.footprint_from_param(config.footprint))
-            layer = cost_layer(grid, inscribed, circumscribed, config.inflation_radius, config.cost_scaling_factor,
-                               Deadline(max(config.allowed_planning_time, 1.0)))
+            layer = cost_layer(
+                grid,
+                inscribed,
+                circumscribed,
+                config.inflation_radius,
+                config.cost_scaling_factor,
+                Deadline(max(config.allowed_planning_time, 1.0)),
+            )
         except MaruError as exc:
             self.get_logger().warning(f"cost map not published: {exc}")
             return
@@ -238,7 +244,12 @@ class BasePlannerNode(ManagedNode):
 
     # --------------------------------------------------------------- planning
     def plan(
-        self, planner_id: str, footprint: np.ndarray, start_msg, goal_msg, time_limit: float,
+        self,
+        planner_id: str,
+        footprint: np.ndarray,
+        start_msg,
+        goal_msg,
+        time_limit: float,
         monitor: PlanMonitor | None = None,
     ):
         """Returns (error_code, message, result or None, nav_msgs/Path of the result, empty on failure).
@@ -253,7 +264,9 @@ class BasePlannerNode(ManagedNode):
             self._check_request(grid, start_msg, goal_msg, time_limit)
             planner = self._planner(planner_id or self.config.planner_id, footprint)
             result = planner.plan(
-                grid, conv.pose_from_msg(start_msg), conv.pose_from_msg(goal_msg),
+                grid,
+                conv.pose_from_msg(start_msg),
+                conv.pose_from_msg(goal_msg),
                 time_limit=time_limit or self.config.allowed_planning_time,
                 monitor=monitor,
             )
@@ -378,7 +391,6 @@ def main(args: list[str] | None = None) -> int:
     """Entry point of ``ros2 run maru_planner base_planner_node``; exit code 2 on bad start-up input."""
     return run_node("base_planner_node", BasePlannerNode, args,
                     farewell=lambda node: f"served {node.requests} requests")  # fmt: skip
-
 
 
 if __name__ == "__main__":

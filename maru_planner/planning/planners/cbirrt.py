@@ -26,6 +26,7 @@ import numpy as np
 
 from maru_planner import errors
 from maru_planner.params import ParamSpec
+from maru_planner.planning.planners.registry import ArmPlannerSpec, register
 from maru_planner.planning.problem import PlanningProblem
 from maru_planner.planning.space import edge_states
 
@@ -144,3 +145,6 @@ def _cbirrt(problem: PlanningProblem, extend: _Extender, deadline: float, stats:
         f"{PLANNER_ID} found no path on the path constraints within the time budget ({stats.nodes} nodes)",
         source="planner",
     )
+
+
+register(ArmPlannerSpec(PLANNER_ID, DESCRIPTION, None, PARAMS, frozenset({"tree", "path_constraints"}), search=search))

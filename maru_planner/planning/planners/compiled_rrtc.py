@@ -48,6 +48,7 @@ from ompl import util as ou
 from maru_planner.params import ParamSpec
 from maru_planner.planning.checkers import is_compiled_sphere_checker
 from maru_planner.planning.planners.planner_params import PlannerParams, stored_params
+from maru_planner.planning.planners.registry import ArmPlannerSpec, register
 from maru_planner.planning.space import EdgeChecker
 
 # rad. OMPL's automatic range is 2.6 rad for the Panda: on MotionBenchMaker (1 s budget, 0.01 m margin) it timed
@@ -57,8 +58,9 @@ EXACT_NEAR = 1.0  # rad, L-inf: ambiguous states farther from the start and goal
 COMPILED_RRTC_PARAMS: dict[str, ParamSpec] = {
     spec.name: spec
     for spec in (
-        ParamSpec("range", DEFAULT_RANGE, "max extension (rad, L2); 0 = OMPL's automatic 20 % of the space extent",
-                  lower=0.0),  # fmt: skip
+        ParamSpec(
+            "range", DEFAULT_RANGE, "max extension (rad, L2); 0 = OMPL's automatic 20 % of the space extent", lower=0.0
+        ),  # fmt: skip
         ParamSpec(
             "exact_near",
             EXACT_NEAR,
@@ -67,13 +69,26 @@ COMPILED_RRTC_PARAMS: dict[str, ParamSpec] = {
             lower=0.0,
             optional=True,
         ),
-        ParamSpec("balance", True, "extend the smaller tree while the other has at least twice its nodes (VAMP's "
-                  "balance); false: alternate, as OMPL's RRTConnect"),  # fmt: skip
-        ParamSpec("domain_radius", 4.0, "dynamic domain (rad, L2) a node gets at its first failed extension; "
-                  "samples farther than its domain from their nearest node are drawn again; 0 = no domains",
-                  lower=0.0),  # fmt: skip
-        ParamSpec("domain_alpha", 1e-4, "a domain shrinks by this fraction at each failed extension, grows at each "
-                  "success", lower=0.0, upper=1.0),  # fmt: skip
+        ParamSpec(
+            "balance",
+            True,
+            "extend the smaller tree while the other has at least twice its nodes (VAMP's "
+            "balance); false: alternate, as OMPL's RRTConnect",
+        ),  # fmt: skip
+        ParamSpec(
+            "domain_radius",
+            4.0,
+            "dynamic domain (rad, L2) a node gets at its first failed extension; "
+            "samples farther than its domain from their nearest node are drawn again; 0 = no domains",
+            lower=0.0,
+        ),  # fmt: skip
+        ParamSpec(
+            "domain_alpha",
+            1e-4,
+            "a domain shrinks by this fraction at each failed extension, grows at each success",
+            lower=0.0,
+            upper=1.0,
+        ),  # fmt: skip
         ParamSpec("domain_min_radius", 1.0, "smallest dynamic domain (rad)", lower=0.0),
         ParamSpec(
             "seed",
@@ -258,3 +273,14 @@ def _kernel():
     from maru_planner.planning.planners.kernels import rrtc as rrtc_kernel
 
     return rrtc_kernel
+
+
+register(
+    ArmPlannerSpec(
+        "CompiledRRTConnect",
+        "RRT-Connect compiled with numba on the sphere model (VAMP-style); OMPL RRTConnect on other checkers",
+        CompiledRRTConnect.create,
+        COMPILED_RRTC_PARAMS,
+        frozenset({"tree"}),
+    )
+)

@@ -38,6 +38,7 @@ nanobind trampoline cannot pass a ``PlannerData&`` from C++ to Python, so do not
 from __future__ import annotations
 
 import time
+from typing import Any
 
 import numpy as np
 from ompl import base as ob
@@ -48,6 +49,8 @@ from maru_planner.params import ParamSpec
 from maru_planner.planning.checkers import is_compiled_sphere_checker
 from maru_planner.planning.kdtree import GrowingKDTree
 from maru_planner.planning.planners.planner_params import PlannerParams, stored_params
+from maru_planner.planning.planners.registry import ArmPlannerSpec, register
+from maru_planner.planning.space import EdgeChecker
 
 RCRRT_PARAMS: dict[str, ParamSpec] = {
     spec.name: spec
@@ -55,10 +58,17 @@ RCRRT_PARAMS: dict[str, ParamSpec] = {
         ParamSpec("step", 0.3, "lattice step: each input moves one joint by +-step (rad)", lower=1e-6),
         ParamSpec("goal_bias", 0.1, "probability of sampling the goal", lower=0.0, upper=1.0),
         ParamSpec("candidates", 8, "nearest nodes with untried inputs visited per sample", lower=1),
-        ParamSpec("goal_range", 1.5, "L-inf distance (rad) within which the straight edge to the goal is tried",
-                  lower=0.0),  # fmt: skip
-        ParamSpec("seed", None, "seed of the sampler; unset: drawn from OMPL's seeded generator", lower=0,
-                  optional=True, type=int),  # fmt: skip
+        ParamSpec(
+            "goal_range", 1.5, "L-inf distance (rad) within which the straight edge to the goal is tried", lower=0.0
+        ),  # fmt: skip
+        ParamSpec(
+            "seed",
+            None,
+            "seed of the sampler; unset: drawn from OMPL's seeded generator",
+            lower=0,
+            optional=True,
+            type=int,
+        ),  # fmt: skip
     )
 }
 
@@ -271,7 +281,7 @@ class RCRRT(ob.Planner):
         return ob.PlannerStatus(ob.PlannerStatus.TIMEOUT)
 
     def _search_compiled(self, start: np.ndarray, goal: np.ndarray, ptc):
-        """:meth:`_search` in :mod:`~maru_planner.planning.planners.kernels.rcrrt`; the tree ends in this planner's arrays."""
+        """:meth:`_search` in :mod:`~.kernels.rcrrt`; the tree ends in this planner's arrays."""
         kernel = _kernel()
         # lazy: numba loads with these, and only a sphere checker (which loaded it already) gets here
         from maru_planner.collision.kernels.edge_validity import CHECKS, N_AMB
@@ -392,3 +402,20 @@ def _kernel():
     from maru_planner.planning.planners.kernels import rcrrt as rcrrt_kernel
 
     return rcrrt_kernel
+
+
+def _build(si: ob.SpaceInformation, params: dict[str, Any], edge_checker: EdgeChecker | None) -> RCRRT:
+    planner = RCRRT(si, edge_checker)
+    planner.params().set_params(params)
+    return planner
+
+
+register(
+    ArmPlannerSpec(
+        "RCRRT",
+        "resolution-complete RRT (Cheng & LaValle 2002) on a joint lattice",
+        _build,
+        RCRRT_PARAMS,
+        frozenset({"tree", "resolution_complete"}),
+    )
+)

@@ -7,8 +7,9 @@ it can do (``capabilities``). The :class:`~maru_planner.planning.MotionPlanner` 
 and the parametrised tests all read :data:`PLANNERS`, so adding a planner is one :func:`register`
 call (plus the planner's own file).
 
-Built in: ``RRT`` (OMPL RRT, goal bias 0), ``GoalBiasedRRT`` (OMPL RRT, goal bias 0.05 = OMPL's
-default), ``RRTConnect``, ``PRM`` (OMPL's, roadmap kept between queries, see
+Built in (each registered by its own module, imported by ``planning/planners/__init__.py``): ``RRT`` (OMPL RRT,
+goal bias 0), ``GoalBiasedRRT`` (OMPL RRT, goal bias 0.05 = OMPL's default), ``RRTConnect``, ``PRM`` (OMPL's, roadmap
+kept between queries, see
 :mod:`maru_planner.planning.planners.roadmap`), ``RCRRT`` (ours, :mod:`maru_planner.planning.planners.rc_rrt`) and
 ``CompiledRRTConnect`` (ours, numba on the sphere model, :mod:`maru_planner.planning.planners.compiled_rrtc`).
 Parameters are set through OMPL's parameter mechanism under OMPL's own names
@@ -23,14 +24,9 @@ from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import numpy as np
 from ompl import base as ob
-from ompl import geometric as og
 
 from maru_planner.errors import InvalidPlanner, InvalidRequest
 from maru_planner.params import ParamSpec, check_params
-from maru_planner.planning.planners import cbirrt
-from maru_planner.planning.planners.compiled_rrtc import COMPILED_RRTC_PARAMS, CompiledRRTConnect
-from maru_planner.planning.planners.planner_params import ompl_params
-from maru_planner.planning.planners.rc_rrt import RCRRT, RCRRT_PARAMS
 from maru_planner.planning.space import EdgeChecker
 
 if TYPE_CHECKING:
@@ -158,81 +154,3 @@ def make_planner(
     if spec.factory is None:
         raise InvalidPlanner(f"planner {planner_id} is not an OMPL planner: it plans a PlanningProblem")
     return spec.factory(si, merged_params(planner_id, params), edge_checker)
-
-
-# --- the built-in planners ------------------------------------------------------------------
-_RANGE = ParamSpec("range", 0.0, "max edge length (rad); 0 = OMPL's automatic 20 % of the space extent", lower=0.0)
-
-
-def _goal_bias(default: float) -> ParamSpec:
-    return ParamSpec("goal_bias", default, "probability of sampling the goal", lower=0.0, upper=1.0)
-
-
-def _ompl_factory(cls: type, name: str, accessors: Mapping[str, tuple[str, str]], specs: Mapping[str, ParamSpec]):
-    """A factory building OMPL planner ``cls`` named ``name``, its parameters set by OMPL's declared names."""
-
-    def build(si: ob.SpaceInformation, params: dict[str, Any], _edge_checker: EdgeChecker | None) -> ArmPlanner:
-        planner = cls(si)
-        planner.setName(name)
-        ompl_params(planner, specs, accessors).set_params(params)
-        return planner
-
-    return build
-
-
-def _rcrrt(si: ob.SpaceInformation, params: dict[str, Any], edge_checker: EdgeChecker | None) -> ArmPlanner:
-    planner = RCRRT(si, edge_checker)
-    planner.params().set_params(params)
-    return planner
-
-
-def _register_ompl(planner_id: str, description: str, cls: type, specs: tuple[ParamSpec, ...],
-                   accessors: Mapping[str, tuple[str, str]], capabilities: frozenset[str]) -> None:  # fmt: skip
-    by_name = {spec.name: spec for spec in specs}
-    register(ArmPlannerSpec(planner_id, description, _ompl_factory(cls, planner_id, accessors, by_name), by_name,
-                            capabilities))  # fmt: skip
-
-
-_RRT_ACCESSORS = {"range": ("setRange", "getRange"), "goal_bias": ("setGoalBias", "getGoalBias")}
-_register_ompl("RRT", "OMPL RRT without goal bias", og.RRT, (_RANGE, _goal_bias(0.0)), _RRT_ACCESSORS,
-               frozenset({"tree"}))  # fmt: skip
-_register_ompl("RRTConnect", "OMPL RRTConnect: two trees grown toward each other", og.RRTConnect, (_RANGE,),
-               {"range": ("setRange", "getRange")}, frozenset({"tree"}))  # fmt: skip
-_register_ompl(
-    "PRM",
-    "OMPL PRM; the roadmap is kept between queries and re-validated after a scene change",
-    og.PRM,
-    (ParamSpec("max_nearest_neighbors", 3, "milestones each new milestone tries to connect to (OMPL: 10)", lower=1),),
-    {"max_nearest_neighbors": ("setMaxNearestNeighbors", "getMaxNearestNeighbors")},
-    frozenset({"roadmap"}),
-)
-_register_ompl("GoalBiasedRRT", "OMPL RRT sampling the goal with probability goal_bias", og.RRT,
-               (_RANGE, _goal_bias(0.05)), _RRT_ACCESSORS, frozenset({"tree"}))  # fmt: skip
-register(
-    ArmPlannerSpec(
-        "RCRRT",
-        "resolution-complete RRT (Cheng & LaValle 2002) on a joint lattice",
-        _rcrrt,
-        RCRRT_PARAMS,
-        frozenset({"tree", "resolution_complete"}),
-    )
-)
-register(
-    ArmPlannerSpec(
-        "CompiledRRTConnect",
-        "RRT-Connect compiled with numba on the sphere model (VAMP-style); OMPL RRTConnect on other checkers",
-        CompiledRRTConnect.create,
-        COMPILED_RRTC_PARAMS,
-        frozenset({"tree"}),
-    )
-)
-register(
-    ArmPlannerSpec(
-        cbirrt.PLANNER_ID,
-        cbirrt.DESCRIPTION,
-        None,
-        cbirrt.PARAMS,
-        frozenset({"tree", "path_constraints"}),
-        search=cbirrt.search,
-    )
-)
