@@ -33,8 +33,8 @@ sys.path.insert(0, str(ROOT))
 from _common import RESULTS, Progress, log  # noqa: E402
 
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig  # noqa: E402
-from maru_planner.planning.problems import PROBLEMS  # noqa: E402
 from maru_planner.planning.planners.roadmap import Roadmap  # noqa: E402
+from maru_planner.planning.problems import PROBLEMS  # noqa: E402
 from maru_planner.planning.space import GroupSpace  # noqa: E402
 
 PLANNERS = ("RRT", "GoalBiasedRRT", "RRTConnect", "PRM", "RCRRT")

@@ -18,7 +18,14 @@ from planning_toys import BoxWorldChecker, ToyRobot, maze_checker
 from maru_planner.errors import InvalidPlanner, InvalidRequest
 from maru_planner.planning import PLANNERS, MotionPlanner, MotionRequest, PlannerConfig, PlanStatus, planner_ids
 from maru_planner.planning.cli import build_parser, main
-from maru_planner.planning.planners.registry import CAPABILITIES, ArmPlannerSpec, get_spec, make_planner, merged_params, register
+from maru_planner.planning.planners.registry import (
+    CAPABILITIES,
+    ArmPlannerSpec,
+    get_spec,
+    make_planner,
+    merged_params,
+    register,
+)
 from maru_planner.planning.space import GroupSpace
 
 TEST_DIR = Path(__file__).parent

@@ -227,7 +227,8 @@ def test_cli_writes_json_and_png(tmp_path):
                  "0.45,0.15 -0.45,0.15 -0.45,-0.15 0.45,-0.15", "--json", str(out), "--png", str(png)])
     assert code == 0
     data = json.loads(out.read_text())
-    assert set(data) == {"success", "status", "message", "path", "stats"}
+    assert set(data) == {"success", "status", "message", "path", "stats", "clearance"}
+    assert 0.0 < data["clearance"]["min_m"] <= data["clearance"]["mean_m"]
     assert data["success"] and data["status"] == "solved" and data["stats"]["deciding_stage"] == "full"
     assert len(data["path"][0]) == 3 and png.stat().st_size > 1000
     code = main(["--map", str(config_path("maps", "paper002_impossible.yaml")), "--start", "1", "2", "0",

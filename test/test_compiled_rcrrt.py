@@ -12,8 +12,8 @@ from ompl import geometric as og
 from maru_planner.collision.spheres import SphereCollisionChecker
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig, PlanStatus
 from maru_planner.planning.planners import rc_rrt
-from maru_planner.planning.problems import PROBLEMS
 from maru_planner.planning.planners.rc_rrt import RCRRT
+from maru_planner.planning.problems import PROBLEMS
 from maru_planner.planning.space import EdgeChecker, GroupSpace
 from maru_planner.scene import Obstacle, Scene
 

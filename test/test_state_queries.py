@@ -11,8 +11,8 @@ from maru_planner import errors
 from maru_planner.collision import CollisionChecker
 from maru_planner.planning.constraints import OrientationConstraint, PathConstraints, PositionConstraint
 from maru_planner.planning.links import link_names
-from maru_planner.planning.queries import check_state_validity, compute_fk, query_planners
 from maru_planner.planning.planners.registry import PLANNERS
+from maru_planner.planning.queries import check_state_validity, compute_fk, query_planners
 from maru_planner.robot import RobotModel
 from maru_planner.scene import Obstacle, Scene
 
