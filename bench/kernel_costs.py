@@ -146,9 +146,17 @@ def markdown(results: dict) -> str:
              "|---|---|---|---|---|---|---|---|---|"]  # fmt: skip
     for family, kinds in results["runs"].items():
         for kind, row in kinds.items():
-            cells = [family, kind, str(row["problems"]), str(row["states"]), f"{100 * row['median_colliding']:.0f} %",
-                     f"{1e6 * row['median_fk']:.2f}", f"{1e6 * row['median_sphere']:.2f}",
-                     f"{1e6 * row['median_exact']:.1f}", f"{row['median_exact'] / row['median_sphere']:.0f}x"]
+            cells = [
+                family,
+                kind,
+                str(row["problems"]),
+                str(row["states"]),
+                f"{100 * row['median_colliding']:.0f} %",
+                f"{1e6 * row['median_fk']:.2f}",
+                f"{1e6 * row['median_sphere']:.2f}",
+                f"{1e6 * row['median_exact']:.1f}",
+                f"{row['median_exact'] / row['median_sphere']:.0f}x",
+            ]
             lines.append("| " + " | ".join(cells) + " |")
     lines += ["", f"VAMP (published, C++ SIMD): {1e6 * VAMP_PUBLISHED['mbm_panda_median_s']:.0f} µs per whole "
               "MotionBenchMaker problem (median), not per state."]  # fmt: skip

@@ -60,16 +60,18 @@ def load_scenarios(path: Path) -> list[dict]:
             continue
         length_text = parts[8].strip()
         decimals = len(length_text.split(".")[1]) if "." in length_text else 0
-        out.append({
-            "bucket": int(parts[0]),
-            "start": (int(parts[5]), int(parts[4])),  # (row, col) = (y, x)
-            "goal": (int(parts[7]), int(parts[6])),
-            "optimal": float(length_text),
-            # one unit of the last printed digit (dao/random print 6 significant digits, truncated:
-            # 235.764 for 235.76450) or 1e-6 relative (the long maze/room lengths were summed in
-            # floating point by the generator and differ from the exact sums in the 7th-8th digit)
-            "tol": max(10.0 ** -decimals, 1e-6 * float(length_text)) + 1e-9,
-        })
+        out.append(
+            {
+                "bucket": int(parts[0]),
+                "start": (int(parts[5]), int(parts[4])),  # (row, col) = (y, x)
+                "goal": (int(parts[7]), int(parts[6])),
+                "optimal": float(length_text),
+                # one unit of the last printed digit (dao/random print 6 significant digits, truncated:
+                # 235.764 for 235.76450) or 1e-6 relative (the long maze/room lengths were summed in
+                # floating point by the generator and differ from the exact sums in the 7th-8th digit)
+                "tol": max(10.0**-decimals, 1e-6 * float(length_text)) + 1e-9,
+            }
+        )
     return out
 
 
@@ -133,8 +135,9 @@ class PmpPeer:
 
         h, w = blocked.shape
         type_map = np.where(blocked.T, TYPES.OBSTACLE, TYPES.FREE).astype(np.int8)  # indexed (x, y)
-        self.planner = AStar(map_=Grid(bounds=[[0, w], [0, h]], resolution=1.0, type_map=type_map),
-                             start=(0, 0), goal=(0, 0))
+        self.planner = AStar(
+            map_=Grid(bounds=[[0, w], [0, h]], resolution=1.0, type_map=type_map), start=(0, 0), goal=(0, 0)
+        )
 
     def run(self, scen):
         (sr, sc), (gr, gc) = scen["start"], scen["goal"]
@@ -147,8 +150,7 @@ class PmpPeer:
 
 
 # --------------------------------------------------------------------- main
-def bench_map(map_path: Path, per_map: int | None, peer_queries: int, peers: list[str],
-              peer_max_length: float) -> dict:
+def bench_map(map_path: Path, per_map: int | None, peer_queries: int, peers: list[str], peer_max_length: float) -> dict:
     blocked = load_map(map_path)
     scens = load_scenarios(Path(str(map_path) + ".scen"))
     chosen = spread(scens, per_map) if per_map else scens
@@ -158,11 +160,16 @@ def bench_map(map_path: Path, per_map: int | None, peer_queries: int, peers: lis
         ours.append(run_ours(blocked, scen))
         py.append(run_pyastar2d(weights, blocked, scen))
     record = {
-        "map": map_path.stem, "set": map_path.parent.name, "size": list(blocked.shape), "queries": len(chosen),
-        "ours_exact": sum(ok for _, _, ok in ours), "ours_ms": [1e3 * dt for dt, _, _ in ours],
+        "map": map_path.stem,
+        "set": map_path.parent.name,
+        "size": list(blocked.shape),
+        "queries": len(chosen),
+        "ours_exact": sum(ok for _, _, ok in ours),
+        "ours_ms": [1e3 * dt for dt, _, _ in ours],
         "ours_max_abs_err": max(abs(c - s["optimal"]) for (_, c, _), s in zip(ours, chosen, strict=True)),
         "pyastar2d_ms": [1e3 * dt for dt, _, _, _ in py],
-        "pyastar2d_exact": sum(ok for _, _, ok, _ in py), "pyastar2d_corner_cuts": sum(cc for *_, cc in py),
+        "pyastar2d_exact": sum(ok for _, _, ok, _ in py),
+        "pyastar2d_corner_cuts": sum(cc for *_, cc in py),
     }
     short = [i for i, s in enumerate(chosen) if s["optimal"] <= peer_max_length]
     peer_idx = [short[int(i)] for i in np.linspace(0, len(short) - 1, min(peer_queries, len(short))).round()]
@@ -190,8 +197,10 @@ def summarise(records: list[dict]) -> dict:
         ours = [t for r in recs for t in r["ours_ms"]]
         py = [t for r in recs for t in r["pyastar2d_ms"]]
         row = {
-            "queries": len(ours), "ours_exact": sum(r["ours_exact"] for r in recs),
-            "ours_median_ms": med(ours), "pyastar2d_median_ms": med(py),
+            "queries": len(ours),
+            "ours_exact": sum(r["ours_exact"] for r in recs),
+            "ours_median_ms": med(ours),
+            "pyastar2d_median_ms": med(py),
             "ratio_vs_pyastar2d": med(ours) / med(py),
             "pyastar2d_exact": sum(r["pyastar2d_exact"] for r in recs),
             "pyastar2d_corner_cuts": sum(r["pyastar2d_corner_cuts"] for r in recs),
@@ -212,17 +221,32 @@ def summarise(records: list[dict]) -> dict:
 def write_outputs(summary: dict, records: list[dict], args) -> None:
     RESULTS.mkdir(parents=True, exist_ok=True)
     with open(RESULTS / "movingai.json", "w") as f:
-        json.dump({"quick": args.quick, "summary": summary,
-                   "maps": [{k: v for k, v in r.items() if not k.endswith("_ms") and k != "peer_idx"} | {
-                       k.replace("_ms", "_median_ms"): statistics.median(v) for k, v in r.items()
-                       if k.endswith("_ms") and v} for r in records]}, f, indent=1)
+        json.dump(
+            {
+                "quick": args.quick,
+                "summary": summary,
+                "maps": [
+                    {k: v for k, v in r.items() if not k.endswith("_ms") and k != "peer_idx"}
+                    | {
+                        k.replace("_ms", "_median_ms"): statistics.median(v)
+                        for k, v in r.items()
+                        if k.endswith("_ms") and v
+                    }
+                    for r in records
+                ],
+            },
+            f,
+            indent=1,
+        )
     lines = [
-        "# MovingAI benchmark (2-D A*, 8-connected, octile, no corner cutting)", "",
+        "# MovingAI benchmark (2-D A*, 8-connected, octile, no corner cutting)",
+        "",
         f"Run: {'--quick' if args.quick else 'full'}; median time per query in ms; exact = path length equal to",
         "the scenario's optimal length (to one unit of its last printed digit, or 1e-6 relative when larger).",
         "pyastar2d allows corner cutting and costs",
         "diagonals 1, so its lengths are not the MovingAI ones. Peers' speed-ups are on their own query subset",
-        "(ours timed on the same queries, restricted to shorter queries: see --peer-max-length).", "",
+        "(ours timed on the same queries, restricted to shorter queries: see --peer-max-length).",
+        "",
         "| set | queries | ours exact | ours ms | pyastar2d ms | ours / pyastar2d | pyastar2d exact (cuts) "
         "| pathfinding ms (n) | vs pathfinding | pmp ms (n) | vs pmp |",
         "|---|---|---|---|---|---|---|---|---|---|---|",
@@ -234,7 +258,8 @@ def write_outputs(summary: dict, records: list[dict], args) -> None:
             f"({r['pyastar2d_corner_cuts']}) | {r.get('pathfinding_median_ms', math.nan):.1f} "
             f"({r.get('pathfinding_queries', 0)}) | {r.get('speedup_vs_pathfinding', math.nan):.0f}x | "
             f"{r.get('pmp_median_ms', math.nan):.1f} ({r.get('pmp_queries', 0)}) | "
-            f"{r.get('speedup_vs_pmp', math.nan):.0f}x |")
+            f"{r.get('speedup_vs_pmp', math.nan):.0f}x |"
+        )
     (RESULTS / "movingai.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
 
@@ -251,9 +276,12 @@ def plot(summary: dict, path: Path) -> None:
     names = list(summary)
     fig, ax = plt.subplots(figsize=(8, 4))
     width = 0.2
-    bars = [("ours_median_ms", "ours (JPS, numba), all queries"), ("pyastar2d_median_ms", "pyastar2d, all queries"),
-            ("pathfinding_median_ms", "pathfinding, short-query subset"),
-            ("pmp_median_ms", "python-motion-planning, short-query subset")]
+    bars = [
+        ("ours_median_ms", "ours (JPS, numba), all queries"),
+        ("pyastar2d_median_ms", "pyastar2d, all queries"),
+        ("pathfinding_median_ms", "pathfinding, short-query subset"),
+        ("pmp_median_ms", "python-motion-planning, short-query subset"),
+    ]
     for i, (key, label) in enumerate(bars):
         values = [summary[n].get(key, math.nan) for n in names]
         ax.bar(np.arange(len(names)) + (i - 1.5) * width, values, width, label=label)
@@ -261,8 +289,11 @@ def plot(summary: dict, path: Path) -> None:
     ax.set_xticks(np.arange(len(names)), names)
     ax.set_ylabel("median ms per query")
     total = summary.get("all", {})
-    ax.set_title(f"MovingAI: median time per query (log scale); our paths exact: "
-                 f"{total.get('ours_exact', 0)}/{total.get('queries', 0)}", fontsize=10)
+    ax.set_title(
+        f"MovingAI: median time per query (log scale); our paths exact: "
+        f"{total.get('ours_exact', 0)}/{total.get('queries', 0)}",
+        fontsize=10,
+    )
     ax.legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
@@ -276,9 +307,12 @@ def main(argv=None) -> int:
     parser.add_argument("--per-map", type=int, help="queries per map (default: all, 40 with --quick)")
     parser.add_argument("--peer-queries", type=int, help="queries per map for pathfinding / pmp (default 4 / 12)")
     parser.add_argument("--peers", nargs="*", default=["pathfinding", "pmp"])
-    parser.add_argument("--peer-max-length", type=float,
-                        help="peers only get queries up to this optimal length (default 150, 400 full): pure "
-                             "Python A* takes minutes on the longest maze queries")
+    parser.add_argument(
+        "--peer-max-length",
+        type=float,
+        help="peers only get queries up to this optimal length (default 150, 400 full): pure "
+        "Python A* takes minutes on the longest maze queries",
+    )
     parser.add_argument("--replot", action="store_true", help="only redraw the picture from the JSON")
     args = parser.parse_args(argv)
     if args.replot:
@@ -294,9 +328,12 @@ def main(argv=None) -> int:
         peer_max = args.peer_max_length or (150.0 if args.quick else 400.0)
         records.append(bench_map(map_path, per_map, peer_queries, args.peers, peer_max))
         r = records[-1]
-        print(f"[{i + 1}/{len(maps)}] {r['set']}/{r['map']}: {r['queries']} queries, exact {r['ours_exact']}, "
-              f"ours {statistics.median(r['ours_ms']):.3f} ms, pyastar2d {statistics.median(r['pyastar2d_ms']):.3f} ms "
-              f"({time.perf_counter() - t:.1f} s)", file=sys.stderr)
+        print(
+            f"[{i + 1}/{len(maps)}] {r['set']}/{r['map']}: {r['queries']} queries, exact {r['ours_exact']}, "
+            f"ours {statistics.median(r['ours_ms']):.3f} ms, pyastar2d {statistics.median(r['pyastar2d_ms']):.3f} ms "
+            f"({time.perf_counter() - t:.1f} s)",
+            file=sys.stderr,
+        )
     write_outputs(summarise(records), records, args)
     return 0
 

@@ -68,8 +68,14 @@ def problem_request(robot, name: str, planner_id: str, budget: float, seed: int)
     names = robot.groups[prob.group]
     start = dict(robot.named_states.get("home", {}))
     start.update(prob.start_dict(names))
-    return MotionRequest(group=prob.group, start=start, goal_joints=prob.goal_dict(names), planner_id=planner_id,
-                         time_budget=budget, seed=seed)
+    return MotionRequest(
+        group=prob.group,
+        start=start,
+        goal_joints=prob.goal_dict(names),
+        planner_id=planner_id,
+        time_budget=budget,
+        seed=seed,
+    )
 
 
 def summarize(runs: list[dict]) -> dict:
@@ -242,8 +248,10 @@ def targets(report: dict) -> list[str]:
         value = s.get(field, float("nan"))
         full = s["success"] == s["runs"]
         hit = bool(np.isfinite(value) and value <= limit and (full or not need_all))
-        out.append(f"{'MET ' if hit else 'MISSED'} {label}: {fmt(value)} s (limit {limit} s), "
-                   f"success {s['success']}/{s['runs']}")
+        out.append(
+            f"{'MET ' if hit else 'MISSED'} {label}: {fmt(value)} s (limit {limit} s), "
+            f"success {s['success']}/{s['runs']}"
+        )
 
     check(("maru13", "RRTConnect"), "13-DOF RRTConnect median <= 0.1 s, 100 %", 0.1)
     check(("maru13", "RCRRT"), "13-DOF RCRRT median <= 5 s, 100 %", 5.0)

@@ -43,14 +43,26 @@ def barn_world(index: int, ust10: bool = True) -> tuple[World, float]:
     start = np.array([-2.25, 3.0, math.pi / 2])
     goal = np.array([-2.25, 13.0, math.pi / 2])
     # the generator's A* path (field cells, cylinder-centre coordinates) between the challenge's start and goal
-    path = np.vstack([start[:2], np.stack([-4.425 + CELL * path_cells[:, 0], 5.175 + CELL * path_cells[:, 1]], 1),
-                      goal[:2]])
-    laser = (LaserSpec(x=0.12, fov_deg=270.0, resolution_deg=0.375, range_min=0.1, range_max=10.0, noise=0.001,
-                       rate=20.0) if ust10 else LaserSpec(x=0.12))
-    robot = RobotSpec(start=start, goal=goal, footprint=np.array(JACKAL_FOOTPRINT), max_linear=0.5,
-                      max_angular=1.57, laser=laser)
-    world = World(robot=robot, circles=circles, path=path, goal_tolerance=1.0, max_time=100.0,
-                  name=f"barn_{index}", bounds=(-5.0, 0.0, 0.5, 14.0))
+    path = np.vstack(
+        [start[:2], np.stack([-4.425 + CELL * path_cells[:, 0], 5.175 + CELL * path_cells[:, 1]], 1), goal[:2]]
+    )
+    laser = (
+        LaserSpec(x=0.12, fov_deg=270.0, resolution_deg=0.375, range_min=0.1, range_max=10.0, noise=0.001, rate=20.0)
+        if ust10
+        else LaserSpec(x=0.12)
+    )
+    robot = RobotSpec(
+        start=start, goal=goal, footprint=np.array(JACKAL_FOOTPRINT), max_linear=0.5, max_angular=1.57, laser=laser
+    )
+    world = World(
+        robot=robot,
+        circles=circles,
+        path=path,
+        goal_tolerance=1.0,
+        max_time=100.0,
+        name=f"barn_{index}",
+        bounds=(-5.0, 0.0, 0.5, 14.0),
+    )
     return world, barn_optimal_times()[index]
 
 
@@ -61,13 +73,22 @@ def barn_world_yaml(index: int) -> dict:
     return {
         "name": world.name,
         "description": f"BARN world {index} (full_grid_files), Jackal-sized robot; written by bench/paper001.py",
-        "obstacles": [{"type": "circle", "center": [round(float(x), 4), round(float(y), 4)], "radius": float(r)}
-                      for x, y, r in world.circles],
-        "robot": {"start": robot.start.tolist(), "goal": robot.goal.tolist(), "footprint": JACKAL_FOOTPRINT,
-                  "max_linear": robot.max_linear, "max_angular": robot.max_angular,
-                  "laser": {k: float(getattr(laser, k)) for k in laser.__dataclass_fields__}},
+        "obstacles": [
+            {"type": "circle", "center": [round(float(x), 4), round(float(y), 4)], "radius": float(r)}
+            for x, y, r in world.circles
+        ],
+        "robot": {
+            "start": robot.start.tolist(),
+            "goal": robot.goal.tolist(),
+            "footprint": JACKAL_FOOTPRINT,
+            "max_linear": robot.max_linear,
+            "max_angular": robot.max_angular,
+            "laser": {k: float(getattr(laser, k)) for k in laser.__dataclass_fields__},
+        },
         "path": [[round(float(x), 4), round(float(y), 4)] for x, y in world.path],
-        "goal_tolerance": world.goal_tolerance, "max_time": world.max_time, "bounds": list(world.bounds),
+        "goal_tolerance": world.goal_tolerance,
+        "max_time": world.max_time,
+        "bounds": list(world.bounds),
     }
 
 
@@ -90,8 +111,14 @@ class StraightLineController:
         err = wrap_angle(math.atan2(self.goal[1] - pose[1], self.goal[0] - pose[0]) - pose[2])
         v = self.max_linear * max(math.cos(err), 0.0) if abs(err) < math.pi / 2 else 0.0
         w = max(-self.max_angular, min(self.max_angular, 2.0 * err))
-        return ControlOutput(v=v, w=w, strip=np.zeros((0, 2)), target=(self.goal[0], self.goal[1]),
-                             reached_goal=False, obstacle_points=np.zeros((0, 2)))
+        return ControlOutput(
+            v=v,
+            w=w,
+            strip=np.zeros((0, 2)),
+            target=(self.goal[0], self.goal[1]),
+            reached_goal=False,
+            obstacle_points=np.zeros((0, 2)),
+        )
 
 
 def barn_controller(world: World, mode: str):
@@ -108,8 +135,15 @@ def barn_run(world: World, mode: str, seed: int = 0):
     sim = Simulator(world, seed=seed, start_jitter=0.0)
     ctrl = barn_controller(world, mode)
     if mode == "modified_straight":
-        world = World(robot=world.robot, circles=world.circles, path=None, goal_tolerance=world.goal_tolerance,
-                      max_time=world.max_time, name=world.name, bounds=world.bounds)
+        world = World(
+            robot=world.robot,
+            circles=world.circles,
+            path=None,
+            goal_tolerance=world.goal_tolerance,
+            max_time=world.max_time,
+            name=world.name,
+            bounds=world.bounds,
+        )
         sim = Simulator(world, seed=seed)
     return sim.run(ctrl)
 
@@ -132,8 +166,14 @@ def run_scenarios(seeds: int, arm: bool, log) -> dict:
             runs = []
             for seed in range(seeds):
                 extra = {"head_on_ratio": 0.0} if strip == ABLATION else {}
-                result = run_world(world, "modified" if strip == ABLATION else strip, seed=seed, arm_enabled=arm,
-                                   strip_every=10 if seed == 0 else 0, **extra)
+                result = run_world(
+                    world,
+                    "modified" if strip == ABLATION else strip,
+                    seed=seed,
+                    arm_enabled=arm,
+                    strip_every=10 if seed == 0 else 0,
+                    **extra,
+                )
                 runs.append(result)
                 log(f"{name:22s} {strip:8s} seed {seed:2d}: {result.outcome}")
             out[(name, strip)] = runs
@@ -162,9 +202,11 @@ def summarise(runs: list) -> dict:
 def corridor_scan_world() -> World:
     """Worst case for the forces: a 1.3 m corridor and a block ahead - every one of the 361 beams returns,
     most of them within d0 of some via."""
-    polygons = [np.array([[-1, 0.65], [12, 0.65], [12, 0.9], [-1, 0.9]]),
-                np.array([[-1, -0.65], [12, -0.65], [12, -0.9], [-1, -0.9]]),
-                np.array([[2.5, -0.3], [2.9, -0.3], [2.9, 0.3], [2.5, 0.3]])]
+    polygons = [
+        np.array([[-1, 0.65], [12, 0.65], [12, 0.9], [-1, 0.9]]),
+        np.array([[-1, -0.65], [12, -0.65], [12, -0.9], [-1, -0.9]]),
+        np.array([[2.5, -0.3], [2.9, -0.3], [2.9, 0.3], [2.5, 0.3]]),
+    ]
     robot = RobotSpec(start=np.array([0.0, 0.0, 0.0]), goal=np.array([10.0, 0.0, 0.0]))
     return World(robot=robot, polygons=polygons, name="corridor")
 
@@ -190,11 +232,17 @@ def measure_update_cost(updates: int, log) -> dict:
                 wall.append(time.perf_counter() - t0)
             key = f"{strip}{'+arm' if arm else ''}"
             w, c = np.array(wall) * 1e3, np.array(cpu) * 1e3
-            results[key] = {"beams": int(scan.ranges.size), "valid_points": int(len(out.obstacle_points)),
-                            "vias": int(len(out.strip)), "updates": updates,
-                            "wall_ms_median": float(np.median(w)), "wall_ms_p99": float(np.percentile(w, 99)),
-                            "cpu_ms_median": float(np.median(c)), "cpu_ms_p99": float(np.percentile(c, 99)),
-                            "pair_evaluations": int(out.work["pair_evaluations"])}
+            results[key] = {
+                "beams": int(scan.ranges.size),
+                "valid_points": int(len(out.obstacle_points)),
+                "vias": int(len(out.strip)),
+                "updates": updates,
+                "wall_ms_median": float(np.median(w)),
+                "wall_ms_p99": float(np.percentile(w, 99)),
+                "cpu_ms_median": float(np.median(c)),
+                "cpu_ms_p99": float(np.percentile(c, 99)),
+                "pair_evaluations": int(out.work["pair_evaluations"]),
+            }
             log(f"update cost {key}: median {np.median(w):.3f} ms, p99 {np.percentile(w, 99):.3f} ms (wall)")
     return results
 
@@ -216,67 +264,104 @@ def run_barn(worlds: list[int], log) -> dict:
         world, optimal = barn_world(i)
         for mode in BARN_MODES:
             r = barn_run(world, mode)
-            records[mode].append({"world": i, "outcome": r.outcome, "success": r.success,
-                                  "time": r.time_to_goal, "score": barn_score(r.success, r.time_to_goal, optimal),
-                                  "min_clearance": r.min_clearance, "update_ms_median": r.update_ms["median"]})
+            records[mode].append(
+                {
+                    "world": i,
+                    "outcome": r.outcome,
+                    "success": r.success,
+                    "time": r.time_to_goal,
+                    "score": barn_score(r.success, r.time_to_goal, optimal),
+                    "min_clearance": r.min_clearance,
+                    "update_ms_median": r.update_ms["median"],
+                }
+            )
             log(f"BARN world {i:3d} {mode:17s}: {r.outcome}")
     summary = {}
     for mode, recs in records.items():
         n = len(recs)
         times = [r["time"] for r in recs if r["success"]]
-        summary[mode] = {"worlds": n, "success_rate": sum(r["success"] for r in recs) / n,
-                         "collision_rate": sum(r["outcome"] == "collision" for r in recs) / n,
-                         "timeout_rate": sum(r["outcome"] == "timeout" for r in recs) / n,
-                         "avg_time_s": float(np.mean(times)) if times else None,
-                         "score": float(np.mean([r["score"] for r in recs]))}
+        summary[mode] = {
+            "worlds": n,
+            "success_rate": sum(r["success"] for r in recs) / n,
+            "collision_rate": sum(r["outcome"] == "collision" for r in recs) / n,
+            "timeout_rate": sum(r["outcome"] == "timeout" for r in recs) / n,
+            "avg_time_s": float(np.mean(times)) if times else None,
+            "score": float(np.mean([r["score"] for r in recs])),
+        }
     return {"summary": summary, "runs": records}
 
 
 # ---------------------------------------------------------------- report
 def markdown(meta, scen, cost, barn) -> str:
-    lines = ["# Paper 001 - reactive elastic strip: benchmark", "",
-             f"Command: `{meta['command']}`  ", f"Seeds per scenario and strip: {meta['seeds']}; "
-             f"arm update on: {meta['arm']}; kinematic 2-D simulator (not Gazebo), LMS200 scan 361 beams "
-             f"at {meta['laser_rate']} Hz; start jitter +-{meta['start_jitter']} m / +-{meta['heading_jitter']} rad, "
-             f"laser noise 0.01 m, mover timing +-{meta['mover_jitter']} s.", "",
-             "## Paper scenarios", "",
-             "| scenario | strip | success | collision runs | timeouts | time to goal (s) | path (m) "
-             "| min clearance min / median (m) | update median (ms) | update p99 max (ms) |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
+    lines = [
+        "# Paper 001 - reactive elastic strip: benchmark",
+        "",
+        f"Command: `{meta['command']}`  ",
+        f"Seeds per scenario and strip: {meta['seeds']}; "
+        f"arm update on: {meta['arm']}; kinematic 2-D simulator (not Gazebo), LMS200 scan 361 beams "
+        f"at {meta['laser_rate']} Hz; start jitter +-{meta['start_jitter']} m / +-{meta['heading_jitter']} rad, "
+        f"laser noise 0.01 m, mover timing +-{meta['mover_jitter']} s.",
+        "",
+        "## Paper scenarios",
+        "",
+        "| scenario | strip | success | collision runs | timeouts | time to goal (s) | path (m) "
+        "| min clearance min / median (m) | update median (ms) | update p99 max (ms) |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
     fmt = lambda v, f="{:.2f}": "-" if v is None else f.format(v)  # noqa: E731
     for name in SCENARIOS:
         for strip in (*STRIPS, ABLATION):
             s = scen[f"{name}/{strip}"]
-            lines.append(f"| {name} | {strip} | {s['success_rate']:.0%} | {s['runs_with_collision']} | {s['timeouts']} "
-                         f"| {fmt(s['time_to_goal_mean'])} | {fmt(s['path_length_mean'])} "
-                         f"| {s['min_clearance_min']:.2f} / {s['min_clearance_median']:.2f} "
-                         f"| {s['update_ms_median']:.3f} | {s['update_ms_p99_max']:.2f} |")
-    lines += ["", f"`{ABLATION}` = the modified strip with the head-on / slot rule switched off (eq. 41 alone, "
-              "`head_on_ratio=0`): an ablation showing what that documented choice adds.", "",
-              "## Update cost (361-beam scan, 20 vias, corridor: every beam returns)", "",
-              "| controller | valid points | vias | wall median (ms) | wall p99 (ms) | CPU median (ms) "
-              "| CPU p99 (ms) |",
-              "|---|---|---|---|---|---|---|"]
+            lines.append(
+                f"| {name} | {strip} | {s['success_rate']:.0%} | {s['runs_with_collision']} | {s['timeouts']} "
+                f"| {fmt(s['time_to_goal_mean'])} | {fmt(s['path_length_mean'])} "
+                f"| {s['min_clearance_min']:.2f} / {s['min_clearance_median']:.2f} "
+                f"| {s['update_ms_median']:.3f} | {s['update_ms_p99_max']:.2f} |"
+            )
+    lines += [
+        "",
+        f"`{ABLATION}` = the modified strip with the head-on / slot rule switched off (eq. 41 alone, "
+        "`head_on_ratio=0`): an ablation showing what that documented choice adds.",
+        "",
+        "## Update cost (361-beam scan, 20 vias, corridor: every beam returns)",
+        "",
+        "| controller | valid points | vias | wall median (ms) | wall p99 (ms) | CPU median (ms) | CPU p99 (ms) |",
+        "|---|---|---|---|---|---|---|",
+    ]
     for key, c in cost.items():
-        lines.append(f"| {key} | {c['valid_points']} | {c['vias']} | {c['wall_ms_median']:.3f} | "
-                     f"{c['wall_ms_p99']:.3f} | {c['cpu_ms_median']:.3f} | {c['cpu_ms_p99']:.3f} |")
+        lines.append(
+            f"| {key} | {c['valid_points']} | {c['vias']} | {c['wall_ms_median']:.3f} | "
+            f"{c['wall_ms_p99']:.3f} | {c['cpu_ms_median']:.3f} | {c['cpu_ms_p99']:.3f} |"
+        )
     if barn:
-        lines += ["", f"## BARN ({len(barn['runs']['modified'])} worlds: {meta['barn_worlds']}; 1 run each)", "",
-                  "Jackal-sized box robot 0.42 x 0.33 m, 0.5 m/s, 1.57 rad/s; 270 deg / 720-beam laser (ust10 "
-                  "geometry), 20 Hz; success = within 1 m of (-2.25, 13) without collision in 100 s. Score = "
-                  "success * OT / clip(AT, 2 OT, 8 OT) with OT from worlds.csv. **Our simulator is kinematic "
-                  "(perfect odometry, no dynamics, no Gazebo physics)**, so these numbers sit beside the published "
-                  "Gazebo figures, they are not a like-for-like comparison.", "",
-                  "| planner | success | collision | timeout | avg time (s) | score |", "|---|---|---|---|---|---|"]
-        labels = {"modified": "modified strip on the generator's A* path",
-                  "plain": "plain strip on the generator's A* path",
-                  "modified_straight": "modified strip on the straight line (no map)",
-                  "baseline": "straight line to the goal, no avoidance (baseline)"}
+        lines += [
+            "",
+            f"## BARN ({len(barn['runs']['modified'])} worlds: {meta['barn_worlds']}; 1 run each)",
+            "",
+            "Jackal-sized box robot 0.42 x 0.33 m, 0.5 m/s, 1.57 rad/s; 270 deg / 720-beam laser (ust10 "
+            "geometry), 20 Hz; success = within 1 m of (-2.25, 13) without collision in 100 s. Score = "
+            "success * OT / clip(AT, 2 OT, 8 OT) with OT from worlds.csv. **Our simulator is kinematic "
+            "(perfect odometry, no dynamics, no Gazebo physics)**, so these numbers sit beside the published "
+            "Gazebo figures, they are not a like-for-like comparison.",
+            "",
+            "| planner | success | collision | timeout | avg time (s) | score |",
+            "|---|---|---|---|---|---|",
+        ]
+        labels = {
+            "modified": "modified strip on the generator's A* path",
+            "plain": "plain strip on the generator's A* path",
+            "modified_straight": "modified strip on the straight line (no map)",
+            "baseline": "straight line to the goal, no avoidance (baseline)",
+        }
         for mode, s in barn["summary"].items():
-            lines.append(f"| {labels[mode]} | {s['success_rate']:.0%} | {s['collision_rate']:.0%} | "
-                         f"{s['timeout_rate']:.0%} | {fmt(s['avg_time_s'])} | {s['score']:.4f} |")
-        lines += ["| DWA, move_base in Gazebo (the-barn-challenge README, 50 x 10 runs) | 85-88% | 4.8-5.6% | "
-                  "7.2-9.4% | 33.5-39.5 | 0.1575-0.1693 (clip 4-8) |"]
+            lines.append(
+                f"| {labels[mode]} | {s['success_rate']:.0%} | {s['collision_rate']:.0%} | "
+                f"{s['timeout_rate']:.0%} | {fmt(s['avg_time_s'])} | {s['score']:.4f} |"
+            )
+        lines += [
+            "| DWA, move_base in Gazebo (the-barn-challenge README, 50 x 10 runs) | 85-88% | 4.8-5.6% | "
+            "7.2-9.4% | 33.5-39.5 | 0.1575-0.1693 (clip 4-8) |"
+        ]
     lines += ["", "Targets: see docs/reactive.md and the summary printed by the script.", ""]
     return "\n".join(lines)
 
@@ -362,14 +447,19 @@ def main(argv=None) -> int:
     parser.add_argument("--no-barn", action="store_true")
     parser.add_argument("--no-arm", action="store_true", help="skip the arm update in the scenario runs")
     parser.add_argument("--out", default=str(REPO / "bench" / "results"))
-    parser.add_argument("--export-barn", nargs=2, metavar=("INDEX", "YAML"),
-                        help="only write BARN world INDEX as a world file for maru-reactive-sim, then exit")
+    parser.add_argument(
+        "--export-barn",
+        nargs=2,
+        metavar=("INDEX", "YAML"),
+        help="only write BARN world INDEX as a world file for maru-reactive-sim, then exit",
+    )
     args = parser.parse_args(argv)
     if args.export_barn:
         import yaml
 
-        Path(args.export_barn[1]).write_text(yaml.safe_dump(barn_world_yaml(int(args.export_barn[0])),
-                                                            sort_keys=False, default_flow_style=None))
+        Path(args.export_barn[1]).write_text(
+            yaml.safe_dump(barn_world_yaml(int(args.export_barn[0])), sort_keys=False, default_flow_style=None)
+        )
         print(args.export_barn[1])
         return 0
     seeds = 3 if args.quick else args.seeds
@@ -391,19 +481,28 @@ def main(argv=None) -> int:
         barn_example = (world, {m: _barn_run_frames(world, m) for m in ("modified", "plain", "baseline")})
 
     targets = evaluate_targets(scen, cost, barn)
-    meta = {"command": "bench/paper001.py" + (" --quick" if args.quick else ""), "seeds": seeds,
-            "arm": not args.no_arm, "laser_rate": 20, "start_jitter": runner.START_JITTER,
-            "heading_jitter": runner.HEADING_JITTER, "mover_jitter": runner.MOVER_JITTER,
-            "barn_worlds": f"{barn_worlds[0]}, {barn_worlds[1] if len(barn_worlds) > 1 else ''}, ... "
-                           f"{barn_worlds[-1]}", "wall_time_s": round(time.time() - t_start, 1)}
+    meta = {
+        "command": "bench/paper001.py" + (" --quick" if args.quick else ""),
+        "seeds": seeds,
+        "arm": not args.no_arm,
+        "laser_rate": 20,
+        "start_jitter": runner.START_JITTER,
+        "heading_jitter": runner.HEADING_JITTER,
+        "mover_jitter": runner.MOVER_JITTER,
+        "barn_worlds": f"{barn_worlds[0]}, {barn_worlds[1] if len(barn_worlds) > 1 else ''}, ... {barn_worlds[-1]}",
+        "wall_time_s": round(time.time() - t_start, 1),
+    }
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    (out / "paper001.json").write_text(json.dumps({"meta": meta, "scenarios": scen, "update_cost": cost,
-                                                   "barn": barn, "targets": targets}, indent=2))
+    (out / "paper001.json").write_text(
+        json.dumps({"meta": meta, "scenarios": scen, "update_cost": cost, "barn": barn, "targets": targets}, indent=2)
+    )
     md = markdown(meta, scen, cost, barn)
-    md = md.replace("Targets: see docs/reactive.md and the summary printed by the script.",
-                    "## Targets\n\n" + "\n".join(f"- {'HIT' if t['hit'] else 'MISS'}: {t['target']} - {t['measured']}"
-                                                 for t in targets))
+    md = md.replace(
+        "Targets: see docs/reactive.md and the summary printed by the script.",
+        "## Targets\n\n"
+        + "\n".join(f"- {'HIT' if t['hit'] else 'MISS'}: {t['target']} - {t['measured']}" for t in targets),
+    )
     (out / "paper001.md").write_text(md)
     picture(out / "paper001.png", scen_runs, barn_example, scen, barn)
     print(md)
@@ -420,31 +519,53 @@ def _barn_run_frames(world: World, mode: str):
 
 def evaluate_targets(scen, cost, barn) -> list[dict]:
     t = []
-    mod_ok = all(scen[f"{n}/modified"]["success_rate"] == 1.0 and scen[f"{n}/modified"]["collisions"] == 0
-                 for n in SCENARIOS)
-    t.append({"target": "modified strip succeeds in every paper scenario with zero collisions", "hit": mod_ok,
-              "measured": ", ".join(f"{n} {scen[f'{n}/modified']['success_rate']:.0%} "
-                                    f"({scen[f'{n}/modified']['collisions']} collisions)" for n in SCENARIOS)})
+    mod_ok = all(
+        scen[f"{n}/modified"]["success_rate"] == 1.0 and scen[f"{n}/modified"]["collisions"] == 0 for n in SCENARIOS
+    )
+    t.append(
+        {
+            "target": "modified strip succeeds in every paper scenario with zero collisions",
+            "hit": mod_ok,
+            "measured": ", ".join(
+                f"{n} {scen[f'{n}/modified']['success_rate']:.0%} ({scen[f'{n}/modified']['collisions']} collisions)"
+                for n in SCENARIOS
+            ),
+        }
+    )
     for n in ("goal_behind_obstacle", "multiple_static"):
         m, p = scen[f"{n}/modified"]["success_rate"], scen[f"{n}/plain"]["success_rate"]
-        t.append({"target": f"modified strictly beats plain on {n}", "hit": m > p,
-                  "measured": f"modified {m:.0%} vs plain {p:.0%} "
-                              f"(plain collision runs {scen[f'{n}/plain']['runs_with_collision']})"})
+        t.append(
+            {
+                "target": f"modified strictly beats plain on {n}",
+                "hit": m > p,
+                "measured": f"modified {m:.0%} vs plain {p:.0%} "
+                f"(plain collision runs {scen[f'{n}/plain']['runs_with_collision']})",
+            }
+        )
     c = cost["modified"]
     wall_hit = c["wall_ms_median"] <= 1.0 and c["wall_ms_p99"] <= 5.0
     cpu_hit = c["cpu_ms_median"] <= 1.0 and c["cpu_ms_p99"] <= 5.0
-    t.append({"target": "per-update median <= 1 ms and p99 <= 5 ms (361 beams, 20 vias), judged on CPU time "
-                        f"(wall-clock {'also met' if wall_hit else 'p99 missed: 2 shared cores under load'})",
-              "hit": cpu_hit,
-              "measured": f"modified: wall median {c['wall_ms_median']:.3f} / p99 {c['wall_ms_p99']:.3f} ms, "
-                          f"CPU median {c['cpu_ms_median']:.3f} / p99 {c['cpu_ms_p99']:.3f} ms; with arm: wall "
-                          f"median {cost['modified+arm']['wall_ms_median']:.3f} / p99 "
-                          f"{cost['modified+arm']['wall_ms_p99']:.3f} ms"})
+    t.append(
+        {
+            "target": "per-update median <= 1 ms and p99 <= 5 ms (361 beams, 20 vias), judged on CPU time "
+            f"(wall-clock {'also met' if wall_hit else 'p99 missed: 2 shared cores under load'})",
+            "hit": cpu_hit,
+            "measured": f"modified: wall median {c['wall_ms_median']:.3f} / p99 {c['wall_ms_p99']:.3f} ms, "
+            f"CPU median {c['cpu_ms_median']:.3f} / p99 {c['cpu_ms_p99']:.3f} ms; with arm: wall "
+            f"median {cost['modified+arm']['wall_ms_median']:.3f} / p99 "
+            f"{cost['modified+arm']['wall_ms_p99']:.3f} ms",
+        }
+    )
     if barn:
         s = barn["summary"]["modified"]["success_rate"]
-        t.append({"target": "BARN success >= 90% with the modified strip (DWA in Gazebo: 85-88%)", "hit": s >= 0.9,
-                  "measured": f"{s:.0%} over {barn['summary']['modified']['worlds']} worlds "
-                              f"(score {barn['summary']['modified']['score']:.4f}); kinematic simulator, not Gazebo"})
+        t.append(
+            {
+                "target": "BARN success >= 90% with the modified strip (DWA in Gazebo: 85-88%)",
+                "hit": s >= 0.9,
+                "measured": f"{s:.0%} over {barn['summary']['modified']['worlds']} worlds "
+                f"(score {barn['summary']['modified']['score']:.4f}); kinematic simulator, not Gazebo",
+            }
+        )
     return t
 
 

@@ -34,8 +34,16 @@ TABLE1 = ("easy", "medium", "hard", "impossible")
 
 
 def stage_summary(result) -> list[dict]:
-    return [{"name": s.name, "time": s.time, "expansions": s.expansions, "collision_checks": s.collision_checks,
-             "decided": s.decided} for s in getattr(result.stats, "stages", [])]
+    return [
+        {
+            "name": s.name,
+            "time": s.time,
+            "expansions": s.expansions,
+            "collision_checks": s.collision_checks,
+            "decided": s.decided,
+        }
+        for s in getattr(result.stats, "stages", [])
+    ]
 
 
 def run(repeats: int) -> dict:
@@ -47,12 +55,15 @@ def run(repeats: int) -> dict:
     for name, (grid, prob) in scenes.items():
         fp = prob["footprint"]
         row = {"paper": prob["paper"], "grid": [grid.width, grid.height], "resolution": grid.resolution}
-        planners = {"mspp": MultiStagePlanner(fp), "mspp_local": LocalMultiStagePlanner(fp),
-                    "full": SE2AStarPlanner(fp)}
+        planners = {
+            "mspp": MultiStagePlanner(fp),
+            "mspp_local": LocalMultiStagePlanner(fp),
+            "full": SE2AStarPlanner(fp),
+        }
         times = {label: [] for label in planners}
         results, excess = {}, []
         for rep in range(repeats):  # interleaved, order alternating, so load and cache effects hit all alike
-            for label, planner in (list(planners.items()) if rep % 2 == 0 else list(planners.items())[::-1]):
+            for label, planner in list(planners.items()) if rep % 2 == 0 else list(planners.items())[::-1]:
                 t = time.perf_counter()
                 results[label] = planner.plan(grid, prob["start"], prob["goal"])
                 times[label].append(time.perf_counter() - t)
@@ -61,10 +72,16 @@ def run(repeats: int) -> dict:
         row["mspp_excess_median"] = statistics.median(excess)
         for label, result in results.items():
             row[label] = {
-                "time": statistics.median(times[label]), "time_min": min(times[label]), "status": result.status.value,
-                "message": result.message, "deciding_stage": result.stats.deciding_stage,
-                "expansions": result.stats.expansions, "collision_checks": result.stats.collision_checks,
-                "path_poses": len(result.path), "path_length": result.path_length(), "stages": stage_summary(result),
+                "time": statistics.median(times[label]),
+                "time_min": min(times[label]),
+                "status": result.status.value,
+                "message": result.message,
+                "deciding_stage": result.stats.deciding_stage,
+                "expansions": result.stats.expansions,
+                "collision_checks": result.stats.collision_checks,
+                "path_poses": len(result.path),
+                "path_length": result.path_length(),
+                "stages": stage_summary(result),
                 "_result": result,
             }
         m = row["mspp"]
@@ -73,18 +90,22 @@ def run(repeats: int) -> dict:
         # paired per repeat: MSPP time - full A* time - MSPP's ECA+BAA time, median over repeats
         row["mspp_overhead_ok"] = row["mspp_excess_median"] <= 0.5e-3  # 0.5 ms timer/bookkeeping allowance
         out[name] = row
-        print(f"{name}: mspp {m['time'] * 1e3:.2f} ms ({m['deciding_stage']}), "
-              f"local {row['mspp_local']['time'] * 1e3:.2f} ms, full {row['full']['time'] * 1e3:.2f} ms",
-              file=sys.stderr)
+        print(
+            f"{name}: mspp {m['time'] * 1e3:.2f} ms ({m['deciding_stage']}), "
+            f"local {row['mspp_local']['time'] * 1e3:.2f} ms, full {row['full']['time'] * 1e3:.2f} ms",
+            file=sys.stderr,
+        )
     return out
 
 
 def write_markdown(rows: dict) -> str:
     lines = [
-        "# Paper 002: MSPP vs full SE(2) A* (Table I + house)", "",
+        "# Paper 002: MSPP vs full SE(2) A* (Table I + house)",
+        "",
         "Ours: 0.1 m cells, 32 headings, median of repeated interleaved runs (machine shared with other jobs).",
         "Collision checks = C-space look-ups during the",
-        "searches + one per cell for the ECA labelling + 8 per 2-D A* expansion. Paper: 60x40x31 grid, 2007 PC.", "",
+        "searches + one per cell for the ECA labelling + 8 per 2-D A* expansion. Paper: 60x40x31 grid, 2007 PC.",
+        "",
         "| problem | decided by (ours / paper) | MSPP ms | MSPP checks | MSPP-local ms | full A* ms | full checks "
         "| paper MSPP s | paper full A* s | paper checks MSPP / full |",
         "|---|---|---|---|---|---|---|---|---|---|",
@@ -95,31 +116,40 @@ def write_markdown(rows: dict) -> str:
             f"| {name} | {m['deciding_stage']} / {p.get('by', 'full A*')} | {m['time'] * 1e3:.2f} | "
             f"{m['collision_checks']} | {loc['time'] * 1e3:.2f} ({loc['deciding_stage']}) | "
             f"{full['time'] * 1e3:.2f} | {full['collision_checks']} | {p.get('mspp_s', '-')} | "
-            f"{p.get('full_s', '-')} | {p.get('mspp_checks', '-')} / {p.get('full_checks', '-')} |")
+            f"{p.get('full_s', '-')} | {p.get('mspp_checks', '-')} / {p.get('full_checks', '-')} |"
+        )
     lines += ["", "Per-stage MSPP times (ms):", ""]
     for name, r in rows.items():
-        stages = ", ".join(f"{s['name']} {s['time'] * 1e3:.2f} ({s['collision_checks']} checks)"
-                           for s in r["mspp"]["stages"])
+        stages = ", ".join(
+            f"{s['name']} {s['time'] * 1e3:.2f} ({s['collision_checks']} checks)" for s in r["mspp"]["stages"]
+        )
         lines.append(f"- {name}: {stages}")
     lines += ["", "Targets:", ""]
     t1 = {n: rows[n]["mspp"]["time"] for n in TABLE1 if n in rows}
-    lines.append(f"- every Table I problem decided in <= 1 s: {'met' if max(t1.values()) <= 1.0 else 'MISSED'} "
-                 f"(max {max(t1.values()) * 1e3:.2f} ms)")
+    lines.append(
+        f"- every Table I problem decided in <= 1 s: {'met' if max(t1.values()) <= 1.0 else 'MISSED'} "
+        f"(max {max(t1.values()) * 1e3:.2f} ms)"
+    )
     if "impossible" in rows:
         imp = rows["impossible"]["mspp"]["time"]
         lines.append(f"- impossible decided in <= 50 ms: {'met' if imp <= 0.05 else 'MISSED'} ({imp * 1e3:.2f} ms)")
     ok = all(r["mspp_overhead_ok"] for r in rows.values())
-    lines.append(f"- MSPP never slower than full A* by more than ECA+BAA: {'met' if ok else 'MISSED'} (median over "
-                 "interleaved repeats of MSPP - full - (ECA+BAA), ms: "
-                 + ", ".join(f"{n}: {r['mspp_excess_median'] * 1e3:+.2f}" for n, r in rows.items()) + ")")
+    lines.append(
+        f"- MSPP never slower than full A* by more than ECA+BAA: {'met' if ok else 'MISSED'} (median over "
+        "interleaved repeats of MSPP - full - (ECA+BAA), ms: "
+        + ", ".join(f"{n}: {r['mspp_excess_median'] * 1e3:+.2f}" for n, r in rows.items())
+        + ")"
+    )
     lines += ["", "Beyond the paper (full search only around the narrow passages, BAA elsewhere):", ""]
     for name in ("medium", "hard", "house"):
         if name in rows:
             r = rows[name]
-            lines.append(f"- {name}: MSPP {r['mspp']['time'] * 1e3:.2f} ms / {r['mspp']['expansions']} expansions "
-                         f"-> local {r['mspp_local']['time'] * 1e3:.2f} ms / {r['mspp_local']['expansions']} "
-                         f"expansions (speed-up x{r['mspp']['time'] / r['mspp_local']['time']:.1f}, path "
-                         f"{r['mspp']['path_length']:.2f} m -> {r['mspp_local']['path_length']:.2f} m)")
+            lines.append(
+                f"- {name}: MSPP {r['mspp']['time'] * 1e3:.2f} ms / {r['mspp']['expansions']} expansions "
+                f"-> local {r['mspp_local']['time'] * 1e3:.2f} ms / {r['mspp_local']['expansions']} "
+                f"expansions (speed-up x{r['mspp']['time'] / r['mspp_local']['time']:.1f}, path "
+                f"{r['mspp']['path_length']:.2f} m -> {r['mspp_local']['path_length']:.2f} m)"
+            )
     return "\n".join(lines) + "\n"
 
 
@@ -137,9 +167,15 @@ def picture(rows: dict, path: Path):
         grid, prob = scenes[name]
         for j, label in enumerate(("mspp", "mspp_local", "full")):
             res = r[label]["_result"]
-            plot_plan(grid, res, prob["start"], prob["goal"], prob["footprint"],
-                      f"{name} / {label}: {res.status}, {r[label]['deciding_stage']}, {r[label]['time'] * 1e3:.1f} ms",
-                      ax=axes[i, j])
+            plot_plan(
+                grid,
+                res,
+                prob["start"],
+                prob["goal"],
+                prob["footprint"],
+                f"{name} / {label}: {res.status}, {r[label]['deciding_stage']}, {r[label]['time'] * 1e3:.1f} ms",
+                ax=axes[i, j],
+            )
     fig.tight_layout()
     fig.savefig(path, dpi=90)
     plt.close(fig)
@@ -156,8 +192,12 @@ def main(argv=None) -> int:
     (RESULTS / "paper002.md").write_text(md)
     print(md)
     picture(rows, RESULTS / "paper002.png")
-    clean = {n: {k: ({kk: vv for kk, vv in v.items() if kk != "_result"} if isinstance(v, dict) else v)
-                 for k, v in r.items()} for n, r in rows.items()}
+    clean = {
+        n: {
+            k: ({kk: vv for kk, vv in v.items() if kk != "_result"} if isinstance(v, dict) else v) for k, v in r.items()
+        }
+        for n, r in rows.items()
+    }
     (RESULTS / "paper002.json").write_text(json.dumps(clean, indent=1, default=float))
     return 0
 

@@ -39,8 +39,15 @@ from maru_planner.paths import benchmarks_dir  # noqa: E402
 
 RESULTS = ROOT / "bench" / "results"
 MOVINGAI = benchmarks_dir() / "movingai"
-MOVINGAI_MAPS = ["dao/arena.map", "dao/den312d.map", "dao/ost003d.map", "room/16room_000.map",
-                 "maze/maze512-4-0.map", "random/random512-20-0.map", "street/Berlin_0_256.map"]
+MOVINGAI_MAPS = [
+    "dao/arena.map",
+    "dao/den312d.map",
+    "dao/ost003d.map",
+    "room/16room_000.map",
+    "maze/maze512-4-0.map",
+    "random/random512-20-0.map",
+    "street/Berlin_0_256.map",
+]
 
 
 def log(msg: str) -> None:
@@ -66,9 +73,15 @@ def run_tunnel(occ, s, g, memory: bool) -> dict:
     t0 = time.perf_counter()
     plan = planner.plan_cells(occ, s, g)
     elapsed = time.perf_counter() - t0
-    row = {"planner": "tunnel", "success": plan.error is None, "time": elapsed,
-           "expanded": plan.stats.expansions, "length": polyline_length(plan.waypoints),
-           "attempts": plan.stats.attempts, "big_cell": plan.attempts[-1].big_cell_size if plan.attempts else None}
+    row = {
+        "planner": "tunnel",
+        "success": plan.error is None,
+        "time": elapsed,
+        "expanded": plan.stats.expansions,
+        "length": polyline_length(plan.waypoints),
+        "attempts": plan.stats.attempts,
+        "big_cell": plan.attempts[-1].big_cell_size if plan.attempts else None,
+    }
     if memory:
         row["peak_bytes"] = peak_memory(lambda: TunnelPlanner().plan_cells(occ, s, g))
     return row, plan
@@ -83,8 +96,10 @@ def python_astar(blocked: np.ndarray, start, goal) -> AStarResult:
         dr, dc = abs(dr), abs(dc)
         return max(dr, dc) + (math.sqrt(2.0) - 1.0) * min(dr, dc)
 
-    moves = [(dr, dc, math.sqrt(2.0) if dr and dc else 1.0)
-             for dr, dc in ((0, 1), (1, 0), (0, -1), (-1, 0), (1, 1), (1, -1), (-1, 1), (-1, -1))]
+    moves = [
+        (dr, dc, math.sqrt(2.0) if dr and dc else 1.0)
+        for dr, dc in ((0, 1), (1, 0), (0, -1), (-1, 0), (1, 1), (1, -1), (-1, 1), (-1, -1))
+    ]
     g_best, parent, closed = {(sr, sc): 0.0}, {}, set()
     heap = [(octile(sr - gr, sc - gc), 0.0, (sr, sc))]
     expansions = 0
@@ -118,8 +133,13 @@ def run_astar(occ, s, g, use_numba: bool, memory: bool) -> dict:
     t0 = time.perf_counter()
     out = search()
     elapsed = time.perf_counter() - t0
-    row = {"planner": "astar_numba" if use_numba else "astar_python", "success": len(out.path) > 0,
-           "time": elapsed, "expanded": int(out.expansions), "length": float(out.cost) if len(out.path) else None}
+    row = {
+        "planner": "astar_numba" if use_numba else "astar_python",
+        "success": len(out.path) > 0,
+        "time": elapsed,
+        "expanded": int(out.expansions),
+        "length": float(out.cost) if len(out.path) else None,
+    }
     if memory and not use_numba:
         row["peak_bytes"] = peak_memory(search)
     return row
@@ -147,8 +167,17 @@ def house(results: list) -> None:
     results.extend(dict(r, group="house") for r in rows)
     from maru_planner.viz.tunnel import save_stages_png
 
-    save_stages_png(RESULTS / "paper003_house.png", grid.occupied, grown, plan.attempts, plan.raw_cells,
-                    plan.waypoints, s, g, "paper 003 house, 250×250 cells of 10 cm, robot radius 25 cm")
+    save_stages_png(
+        RESULTS / "paper003_house.png",
+        grid.occupied,
+        grown,
+        plan.attempts,
+        plan.raw_cells,
+        plan.waypoints,
+        s,
+        g,
+        "paper 003 house, 250×250 cells of 10 cm, robot radius 25 cm",
+    )
 
 
 def generated(results: list, sizes: list[int], python_limit: int) -> None:
@@ -205,7 +234,8 @@ def summarise(results: list) -> dict:
         rows = [r for r in mai if r["planner"] == planner]
         ratios = [r["ratio"] for r in rows if r["ratio"]]
         summary[f"movingai_{planner}"] = {
-            "queries": len(rows), "solved": sum(r["success"] for r in rows),
+            "queries": len(rows),
+            "solved": sum(r["success"] for r in rows),
             "mean_ratio": float(np.mean(ratios)) if ratios else None,
             "max_ratio": float(np.max(ratios)) if ratios else None,
             "mean_time": float(np.mean([r["time"] for r in rows])) if rows else None,
@@ -260,16 +290,20 @@ def claims(results: list, summary: dict) -> list[str]:
     if t["time_slope"] is not None:
         verdict = "consistent with" if t["time_slope"] <= 1.15 else "worse than"
         astar_slope = fmt(summary["astar_python"]["time_slope"], ".2f")
-        out.append(f"- Time: the tunnel planner's log-log slope of time vs N is {t['time_slope']:.2f} "
-                   f"(N log N over this range ≈ 1.05–1.1; plain A* in Python {astar_slope}): "
-                   f"{verdict} O(N log N) on these maps.")
+        out.append(
+            f"- Time: the tunnel planner's log-log slope of time vs N is {t['time_slope']:.2f} "
+            f"(N log N over this range ≈ 1.05–1.1; plain A* in Python {astar_slope}): "
+            f"{verdict} O(N log N) on these maps."
+        )
     tunnel_gen = sorted((r for r in gen if r["planner"] == "tunnel"), key=lambda r: r["cells"])
     if tunnel_gen and t["expanded_slope"] is not None:
         big = tunnel_gen[-1]
-        out.append(f"- But the expanded cells grow with slope {t['expanded_slope']:.2f}: on {big['map']} the tunnel "
-                   f"needed big cells of {big['big_cell']} and expanded {big['expanded']} cells "
-                   f"({100 * big['expanded'] / big['cells']:.0f} % of the map). The time slope stays near 1 only "
-                   "because fixed costs dominate the small maps; the paper's bound assumes the tunnel stays thin.")
+        out.append(
+            f"- But the expanded cells grow with slope {t['expanded_slope']:.2f}: on {big['map']} the tunnel "
+            f"needed big cells of {big['big_cell']} and expanded {big['expanded']} cells "
+            f"({100 * big['expanded'] / big['cells']:.0f} % of the map). The time slope stays near 1 only "
+            "because fixed costs dominate the small maps; the paper's bound assumes the tunnel stays thin."
+        )
     pairs = []
     for r in gen:
         if r["planner"] != "tunnel" or not r.get("peak_bytes"):
@@ -283,23 +317,32 @@ def claims(results: list, summary: dict) -> list[str]:
     house = {r["planner"]: r for r in results if r["group"] == "house"}
     if "tunnel" in house and "astar_python" in house:
         h, a = house["tunnel"], house["astar_python"]
-        out.append(f"- House (the paper's map): tunnel {h['time']:.3f} s, {h['expanded']} cells, "
-                   f"{fmt(h.get('peak_bytes', 0) / 1024, '.0f')} kB, length ratio {fmt(h['ratio'], '.3f')} vs plain A* "
-                   f"{a['time']:.3f} s, {a['expanded']} cells, {fmt(a.get('peak_bytes', 0) / 1024, '.0f')} kB; "
-                   f"the compiled A* takes {house['astar_numba']['time']:.4f} s.")
+        out.append(
+            f"- House (the paper's map): tunnel {h['time']:.3f} s, {h['expanded']} cells, "
+            f"{fmt(h.get('peak_bytes', 0) / 1024, '.0f')} kB, length ratio {fmt(h['ratio'], '.3f')} vs plain A* "
+            f"{a['time']:.3f} s, {a['expanded']} cells, {fmt(a.get('peak_bytes', 0) / 1024, '.0f')} kB; "
+            f"the compiled A* takes {house['astar_numba']['time']:.4f} s."
+        )
     mai = summary.get("movingai_tunnel", {})
     if mai.get("queries"):
         fast = summary["movingai_astar_numba"]
-        out.append(f"- MovingAI ({mai['queries']} queries, 7 maps, point robot): tunnel solved {mai['solved']}, "
-                   f"length / optimum mean {fmt(mai['mean_ratio'], '.3f')} (max {fmt(mai['max_ratio'], '.3f')}), "
-                   f"mean {fmt(mai['mean_time'], '.3f')} s and {fmt(mai['mean_expanded'], '.0f')} expanded cells vs "
-                   f"the compiled A* {fmt(fast['mean_time'], '.4f')} s, {fmt(fast['mean_expanded'], '.0f')} "
-                   "(its expansions count jump points if it runs JPS).")
-    retries = [r for r in gen + [r for r in results if r["group"] == "movingai"] if r["planner"] == "tunnel"
-               and (r.get("attempts") or 1) > 1]
-    out.append(f"- Big cells had to shrink (β 3 → 2 → 1) in {len(retries)} tunnel runs: where walls are thinner "
-               "than a big cell, a β straddles the wall, TFP passes through it and PFP fails; the last round on "
-               "single cells then explores like a depth-first search and the cost and memory advantages go away.")
+        out.append(
+            f"- MovingAI ({mai['queries']} queries, 7 maps, point robot): tunnel solved {mai['solved']}, "
+            f"length / optimum mean {fmt(mai['mean_ratio'], '.3f')} (max {fmt(mai['max_ratio'], '.3f')}), "
+            f"mean {fmt(mai['mean_time'], '.3f')} s and {fmt(mai['mean_expanded'], '.0f')} expanded cells vs "
+            f"the compiled A* {fmt(fast['mean_time'], '.4f')} s, {fmt(fast['mean_expanded'], '.0f')} "
+            "(its expansions count jump points if it runs JPS)."
+        )
+    retries = [
+        r
+        for r in gen + [r for r in results if r["group"] == "movingai"]
+        if r["planner"] == "tunnel" and (r.get("attempts") or 1) > 1
+    ]
+    out.append(
+        f"- Big cells had to shrink (β 3 → 2 → 1) in {len(retries)} tunnel runs: where walls are thinner "
+        "than a big cell, a β straddles the wall, TFP passes through it and PFP fails; the last round on "
+        "single cells then explores like a depth-first search and the cost and memory advantages go away."
+    )
     return out
 
 
@@ -312,9 +355,11 @@ def table(results: list) -> str:
     lines = [head, "|" + "---|" * 9]
     for r in results:
         mem = r.get("peak_bytes")
-        lines.append(f"| {r['group']} | {r['map']} | {r['cells']} | {r['planner']} | {'yes' if r['success'] else 'NO'} "
-                     f"| {r['time']:.4f} | {r['expanded']} | {fmt(mem / 1024 if mem else None, '.0f')} "
-                     f"| {fmt(r['ratio'], '.3f')} |")
+        lines.append(
+            f"| {r['group']} | {r['map']} | {r['cells']} | {r['planner']} | {'yes' if r['success'] else 'NO'} "
+            f"| {r['time']:.4f} | {r['expanded']} | {fmt(mem / 1024 if mem else None, '.0f')} "
+            f"| {fmt(r['ratio'], '.3f')} |"
+        )
     return "\n".join(lines)
 
 
@@ -347,11 +392,29 @@ def main(argv=None) -> int:
 def write_reports(results: list, quick: bool) -> None:
     summary = summarise(results)
     plot(results, RESULTS / "paper003.png")
-    (RESULTS / "paper003.json").write_text(json.dumps({"quick": quick, "summary": summary, "results": results},
-                                                      indent=1, default=float))
-    md = ["# paper 003: tunnel planner vs 2-D A*", "", f"quick: {quick}", "", "## the paper's claims", "",
-          *claims(results, summary), "", "## summary (log-log slopes vs N)",
-          "", "```", json.dumps(summary, indent=1), "```", "", "## all runs", "", table(results), ""]
+    (RESULTS / "paper003.json").write_text(
+        json.dumps({"quick": quick, "summary": summary, "results": results}, indent=1, default=float)
+    )
+    md = [
+        "# paper 003: tunnel planner vs 2-D A*",
+        "",
+        f"quick: {quick}",
+        "",
+        "## the paper's claims",
+        "",
+        *claims(results, summary),
+        "",
+        "## summary (log-log slopes vs N)",
+        "",
+        "```",
+        json.dumps(summary, indent=1),
+        "```",
+        "",
+        "## all runs",
+        "",
+        table(results),
+        "",
+    ]
     (RESULTS / "paper003.md").write_text("\n".join(md))
     print(table(results))
     print(json.dumps(summary, indent=1))

@@ -35,8 +35,10 @@ from maru_planner.base.grid import OccupancyGrid  # noqa: E402
 
 RESULTS = ROOT / "bench" / "results"
 WORLDS = ROOT / "config" / "worlds" / "biped"
-PAPER = {"biped_track": {"time": 0.01, "K<L": True, "K>L": False},
-         "biped_wall": {"time": 0.901, "K<L": True, "K>L": True}}
+PAPER = {
+    "biped_track": {"time": 0.01, "K<L": True, "K>L": False},
+    "biped_wall": {"time": 0.901, "K<L": True, "K>L": True},
+}
 
 
 def log(msg: str) -> None:
@@ -60,25 +62,44 @@ def run_scene(path: Path, repeats: int) -> tuple[list, dict]:
     for name, cls in (("biped_track", TrackFollowingPlanner), ("biped_wall", VirtualWallPlanner)):
         plan, elapsed = timed(lambda cls=cls: cls(world.robot).plan(m, world.start, world.goal), repeats)
         plans[name] = plan
-        rows.append({"scene": world.name, "planner": name, "success": plan.success, "time": elapsed,
-                     "map_time": map_time, "length": plan.path_length(), "steps": len(plan.path),
-                     "collision_checks": plan.stats.collision_checks, "message": plan.message})
+        rows.append(
+            {
+                "scene": world.name,
+                "planner": name,
+                "success": plan.success,
+                "time": elapsed,
+                "map_time": map_time,
+                "length": plan.path_length(),
+                "steps": len(plan.path),
+                "collision_checks": plan.stats.collision_checks,
+                "message": plan.message,
+            }
+        )
     grid = OccupancyGrid(wheeled_map(world), world.resolution, (world.bounds[0], world.bounds[1], 0.0))
     grown = grid.inflate(world.robot.body_width / 2).occupied
     s, g = grid.world_to_cell(*world.start[:2]), grid.world_to_cell(*world.goal[:2])
     free_ends = not grown[s] and not grown[g]
     out, elapsed = timed(lambda: astar_2d(grown, s, g) if free_ends else None, repeats)
-    rows.append({"scene": world.name, "planner": "wheeled_astar", "success": bool(out is not None and len(out.path)),
-                 "time": elapsed, "map_time": 0.0, "length": float(out.cost * world.resolution) if out is not None
-                 and len(out.path) else 0.0, "steps": int(len(out.path)) if out is not None else 0,
-                 "collision_checks": None,
-                 "message": "disc of radius w_r/2 among all obstacles" + ("" if free_ends else "; start/goal blocked")})
+    rows.append(
+        {
+            "scene": world.name,
+            "planner": "wheeled_astar",
+            "success": bool(out is not None and len(out.path)),
+            "time": elapsed,
+            "map_time": 0.0,
+            "length": float(out.cost * world.resolution) if out is not None and len(out.path) else 0.0,
+            "steps": int(len(out.path)) if out is not None else 0,
+            "collision_checks": None,
+            "message": "disc of radius w_r/2 among all obstacles" + ("" if free_ends else "; start/goal blocked"),
+        }
+    )
     half = min(np.max(m.clearance()), 9.9)
     info = {"K": k, "description": world.meta.get("description", ""), "max_clearance": float(half)}
     from maru_planner.viz.biped import save_scene_png
 
-    save_scene_png(RESULTS / f"paper004_{world.name}.png", world, m, plans,
-                   f"{world.name}: K = {k:.3f} m — {info['description']}")
+    save_scene_png(
+        RESULTS / f"paper004_{world.name}.png", world, m, plans, f"{world.name}: K = {k:.3f} m — {info['description']}"
+    )
     return rows, info
 
 
@@ -86,9 +107,11 @@ def table(rows: list) -> str:
     lines = ["| scene | planner | ok | time [s] | paper time [s] | path [m] | poses | note |", "|" + "---|" * 8]
     for r in rows:
         paper = PAPER.get(r["planner"], {}).get("time")
-        lines.append(f"| {r['scene']} | {r['planner']} | {'yes' if r['success'] else 'NO'} | {r['time']:.4f} | "
-                     f"{paper if paper is not None else '—'} | {r['length']:.2f} | {r['steps']} | "
-                     f"{r['message'][:80]} |")
+        lines.append(
+            f"| {r['scene']} | {r['planner']} | {'yes' if r['success'] else 'NO'} | {r['time']:.4f} | "
+            f"{paper if paper is not None else '—'} | {r['length']:.2f} | {r['steps']} | "
+            f"{r['message'][:80]} |"
+        )
     return "\n".join(lines)
 
 
@@ -105,11 +128,20 @@ def main(argv=None) -> int:
         scene_rows, info = run_scene(path, repeats)
         rows += scene_rows
         scenes[path.stem] = info
-    (RESULTS / "paper004.json").write_text(json.dumps({"quick": args.quick, "paper_table1": PAPER,
-                                                      "scenes": scenes, "results": rows}, indent=1, default=float))
-    md = ["# paper 004: biped planners vs the paper's Table 1", "",
-          "Paper (Pentium 133 MHz): track following 0.01 s, virtual wall 0.901 s; K < L: both find a path; "
-          "K > L: only the virtual wall.", "", table(rows), ""]
+    (RESULTS / "paper004.json").write_text(
+        json.dumps(
+            {"quick": args.quick, "paper_table1": PAPER, "scenes": scenes, "results": rows}, indent=1, default=float
+        )
+    )
+    md = [
+        "# paper 004: biped planners vs the paper's Table 1",
+        "",
+        "Paper (Pentium 133 MHz): track following 0.01 s, virtual wall 0.901 s; K < L: both find a path; "
+        "K > L: only the virtual wall.",
+        "",
+        table(rows),
+        "",
+    ]
     (RESULTS / "paper004.md").write_text("\n".join(md))
     _summary_png(rows)
     print(table(rows))
@@ -131,8 +163,14 @@ def _summary_png(rows: list) -> None:
         ok = [next((r["success"] for r in rows if r["scene"] == s and r["planner"] == planner), False) for s in scenes]
         bars = ax.bar(np.arange(len(scenes)) + (i - 1) * width, vals, width, label=planner)
         for bar, success in zip(bars, ok):
-            ax.text(bar.get_x() + bar.get_width() / 2, bar.get_height(), "ok" if success else "fail",
-                    ha="center", va="bottom", fontsize=8)
+            ax.text(
+                bar.get_x() + bar.get_width() / 2,
+                bar.get_height(),
+                "ok" if success else "fail",
+                ha="center",
+                va="bottom",
+                fontsize=8,
+            )
     for planner, style in (("biped_track", "g--"), ("biped_wall", "r--")):
         ax.axhline(PAPER[planner]["time"], color=style[0], ls="--", lw=0.8, label=f"paper {planner}")
     ax.set_yscale("log")

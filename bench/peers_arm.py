@@ -73,8 +73,15 @@ class Case:
 def maru13_case(robot) -> Case:
     problem = PROBLEMS["maru13"]
     names = robot.groups[problem.group]
-    return Case("maru13", "maru13", robot, Scene.from_yaml(problem.scene_path), problem.group,
-                problem.start_dict(names), problem.goal_dict(names))
+    return Case(
+        "maru13",
+        "maru13",
+        robot,
+        Scene.from_yaml(problem.scene_path),
+        problem.group,
+        problem.start_dict(names),
+        problem.goal_dict(names),
+    )
 
 
 def mbm_cases(robot, per_set: int | None) -> list[Case]:
@@ -113,11 +120,17 @@ class Ours:
         # the exact proof: a certified sphere plan reports it in verify_time (with its blends when the whole curve was
         # proven in one pass, MotionResult.curve_proof), an exact one in certify_time
         verify_time = st.verify_time if st.verified else st.certify_time
-        return {"success": res.success, "time": st.total_time, "status": res.status.value,
-                "fallback": st.replans + st.repairs > 0, "verify_time": verify_time,
-                "plan_time": st.total_time - verify_time, "checks": st.collision_checks,
-                "exact_pair_checks": getattr(checker, "exact_pair_checks", 0),
-                "trajectory_s": res.trajectory.duration if res.success else None}
+        return {
+            "success": res.success,
+            "time": st.total_time,
+            "status": res.status.value,
+            "fallback": st.replans + st.repairs > 0,
+            "verify_time": verify_time,
+            "plan_time": st.total_time - verify_time,
+            "checks": st.collision_checks,
+            "exact_pair_checks": getattr(checker, "exact_pair_checks", 0),
+            "trajectory_s": res.trajectory.duration if res.success else None,
+        }
 
 
 class OursDefault(Ours):
@@ -212,14 +225,19 @@ class Pyroboplan:
         names = [model.names[j] for j in range(1, model.njoints)]
         q_start = np.array([case.start.get(n, 0.0) for n in names])
         q_goal = np.array([case.goal.get(n, case.start.get(n, 0.0)) for n in names])
-        options = RRTPlannerOptions(rrt_connect=True, bidirectional_rrt=True, max_planning_time=budget,
-                                    rng_seed=seed, fast_return=True)
+        options = RRTPlannerOptions(
+            rrt_connect=True, bidirectional_rrt=True, max_planning_time=budget, rng_seed=seed, fast_return=True
+        )
         planner = RRTPlanner(model, geom, options)
         t0 = time.perf_counter()
         path = _quiet(planner.plan, q_start, q_goal)
         elapsed = time.perf_counter() - t0
-        return {"success": bool(path) and len(path) > 0, "time": elapsed, "status": "" if path else "timed out",
-                "checks": None}
+        return {
+            "success": bool(path) and len(path) > 0,
+            "time": elapsed,
+            "status": "" if path else "timed out",
+            "checks": None,
+        }
 
 
 def _stub_meshcat() -> None:
@@ -261,12 +279,17 @@ def summarise(runs: list[dict], budget: float) -> dict:
         "p95_s": float(np.percentile(times, 95)),
         "mean_s": float(times.mean()),
         "median_solved_s": float(np.median(times[ok])) if ok.any() else None,
-        **({"median_verify_s": float(np.median([r.get("verify_time", 0.0) for r in runs])),
-            "median_plan_s": float(np.median([r.get("plan_time", r["time"]) for r in runs])),
-            "fallbacks": int(sum(r.get("fallback", False) for r in runs)),
-            "median_exact_pair_checks": float(np.median([r.get("exact_pair_checks", 0) for r in runs])),
-            "median_trajectory_s": _median_of(r.get("trajectory_s") for r in runs)}
-           if runs and "verify_time" in runs[0] else {}),
+        **(
+            {
+                "median_verify_s": float(np.median([r.get("verify_time", 0.0) for r in runs])),
+                "median_plan_s": float(np.median([r.get("plan_time", r["time"]) for r in runs])),
+                "fallbacks": int(sum(r.get("fallback", False) for r in runs)),
+                "median_exact_pair_checks": float(np.median([r.get("exact_pair_checks", 0) for r in runs])),
+                "median_trajectory_s": _median_of(r.get("trajectory_s") for r in runs),
+            }
+            if runs and "verify_time" in runs[0]
+            else {}
+        ),
         "failures": sorted({f"{r['problem']}: {r['status']}" for r in runs if not r["success"]})[:40],
     }
 
@@ -313,11 +336,19 @@ def main(argv=None) -> int:
     ap.add_argument("--pyroboplan-per-set", type=int, default=5, help="MBM problems per set given to pyroboplan")
     ap.add_argument("--maru-seeds", type=int, default=10)
     ap.add_argument("--resolution", type=float, default=0.05, help="our motion-check step (rad, L-inf)")
-    ap.add_argument("--safety-margin", type=float, default=PlannerConfig().safety_margin,
-                    help="clearance (m) our certified paths keep (default: PlannerConfig's; peers keep none)")
+    ap.add_argument(
+        "--safety-margin",
+        type=float,
+        default=PlannerConfig().safety_margin,
+        help="clearance (m) our certified paths keep (default: PlannerConfig's; peers keep none)",
+    )
     ap.add_argument("--out", type=Path, default=RESULTS / "peers_arm")
-    ap.add_argument("--solvers", type=lambda text: text.split(","), default=list(SOLVERS),
-                    help=f"comma-separated solvers to run (default: all of {', '.join(SOLVERS)})")
+    ap.add_argument(
+        "--solvers",
+        type=lambda text: text.split(","),
+        default=list(SOLVERS),
+        help=f"comma-separated solvers to run (default: all of {', '.join(SOLVERS)})",
+    )
     args = ap.parse_args(argv)
     unknown = sorted(set(args.solvers) - set(SOLVERS))
     if unknown:
@@ -341,20 +372,34 @@ def main(argv=None) -> int:
     step, margin = args.resolution, args.safety_margin
     results: dict = {"config": vars(args) | {"out": str(args.out)}, "vamp_published": VAMP_PUBLISHED, "runs": {}}
     solvers = {
-        "maru13": (Ours(maru, step, margin), Ours(maru, step, margin, "CompiledRRTConnect", COMPILED),
-                   OursDefault(maru), NaiveOmpl(None), NaiveOmpl(None, args.resolution), Pyroboplan(None)),
-        "mbm": (Ours(panda, step, margin), Ours(panda, step, margin, "CompiledRRTConnect", COMPILED),
-                OursDefault(panda), NaiveOmpl(PANDA_FINGERS_OPEN), NaiveOmpl(PANDA_FINGERS_OPEN, args.resolution),
-                Pyroboplan(PANDA_FINGERS_OPEN)),
+        "maru13": (
+            Ours(maru, step, margin),
+            Ours(maru, step, margin, "CompiledRRTConnect", COMPILED),
+            OursDefault(maru),
+            NaiveOmpl(None),
+            NaiveOmpl(None, args.resolution),
+            Pyroboplan(None),
+        ),
+        "mbm": (
+            Ours(panda, step, margin),
+            Ours(panda, step, margin, "CompiledRRTConnect", COMPILED),
+            OursDefault(panda),
+            NaiveOmpl(PANDA_FINGERS_OPEN),
+            NaiveOmpl(PANDA_FINGERS_OPEN, args.resolution),
+            Pyroboplan(PANDA_FINGERS_OPEN),
+        ),
     }
     for family, cases, seeds in (("maru13", maru_cases, maru_seeds), ("mbm", panda_cases, [0])):
         ours, compiled, default, naive, naive_res, pyro = solvers[family]
         subset = cases if family == "maru13" else [c for c in cases if c.name in pyro_names]
-        plan = {"ours": (ours, cases, args.budget, seeds), COMPILED: (compiled, cases, args.budget, seeds),
-                DEFAULT: (default, cases, args.budget, seeds),
-                "naive OMPL": (naive, cases, args.peer_budget, seeds),
-                NAIVE_RES: (naive_res, subset, args.peer_budget, seeds),
-                "pyroboplan": (pyro, subset, args.peer_budget, seeds[:3] if family == "maru13" else seeds)}
+        plan = {
+            "ours": (ours, cases, args.budget, seeds),
+            COMPILED: (compiled, cases, args.budget, seeds),
+            DEFAULT: (default, cases, args.budget, seeds),
+            "naive OMPL": (naive, cases, args.peer_budget, seeds),
+            NAIVE_RES: (naive_res, subset, args.peer_budget, seeds),
+            "pyroboplan": (pyro, subset, args.peer_budget, seeds[:3] if family == "maru13" else seeds),
+        }
         results["runs"][family] = {}
         for name, (solver, chosen, budget, solver_seeds) in plan.items():
             log(f"[{family}] {name}")
@@ -383,19 +428,26 @@ def _json_default(o):
 def build_summary(results, args) -> dict:
     out = {}
     for family, by_solver in results["runs"].items():
-        fam = {name: summarise(runs, args.budget if name.startswith("ours") else args.peer_budget)
-               for name, runs in by_solver.items()}
+        fam = {
+            name: summarise(runs, args.budget if name.startswith("ours") else args.peer_budget)
+            for name, runs in by_solver.items()
+        }
         # ratios on the problems every solver attempted (pyroboplan ran on a subset)
         common = {r["problem"] for r in by_solver["pyroboplan"]}
-        sub = {name: summarise([r for r in runs if r["problem"] in common],
-                               args.budget if name.startswith("ours") else args.peer_budget)
-               for name, runs in by_solver.items()}
+        sub = {
+            name: summarise(
+                [r for r in runs if r["problem"] in common],
+                args.budget if name.startswith("ours") else args.peer_budget,
+            )
+            for name, runs in by_solver.items()
+        }
         fam["ratios"] = {
             "naive_over_ours_median": ratio(fam["ours"].get("median_s"), fam["naive OMPL"].get("median_s")),
             "naive_over_ours_mean": ratio(fam["ours"].get("mean_s"), fam["naive OMPL"].get("mean_s")),
             "pyroboplan_over_ours_median_common": ratio(sub["ours"].get("median_s"), sub["pyroboplan"].get("median_s")),
-            "naive_same_resolution_over_ours_median_common": ratio(sub["ours"].get("median_s"),
-                                                                   sub[NAIVE_RES].get("median_s")),
+            "naive_same_resolution_over_ours_median_common": ratio(
+                sub["ours"].get("median_s"), sub[NAIVE_RES].get("median_s")
+            ),
             "naive_over_compiled_median": ratio(fam[COMPILED].get("median_s"), fam["naive OMPL"].get("median_s")),
             "common_subset": sub,
         }
@@ -414,10 +466,12 @@ def build_summary(results, args) -> dict:
         "mbm_median_le_10ms": (mbm.get("median_s") or 1e9) <= 0.010,
         "ours_3x_naive_mbm": (out.get("mbm", {}).get("ratios", {}).get("naive_over_ours_median") or 0) >= 3,
         "ours_3x_naive_maru13": (out.get("maru13", {}).get("ratios", {}).get("naive_over_ours_median") or 0) >= 3,
-        "ours_10x_pyroboplan_mbm":
-            (out.get("mbm", {}).get("ratios", {}).get("pyroboplan_over_ours_median_common") or 0) >= 10,
-        "ours_10x_pyroboplan_maru13":
-            (out.get("maru13", {}).get("ratios", {}).get("pyroboplan_over_ours_median_common") or 0) >= 10,
+        "ours_10x_pyroboplan_mbm": (out.get("mbm", {}).get("ratios", {}).get("pyroboplan_over_ours_median_common") or 0)
+        >= 10,
+        "ours_10x_pyroboplan_maru13": (
+            out.get("maru13", {}).get("ratios", {}).get("pyroboplan_over_ours_median_common") or 0
+        )
+        >= 10,
     }
     return out
 
@@ -447,28 +501,42 @@ def markdown(summary, args) -> str:
             if not s.get("n"):
                 continue
             trajectory = s.get("median_trajectory_s")
-            lines.append(f"| {family} | {name} | {s['n']} | {100 * s['success_rate']:.1f} % | {_ms(s['median_s'])} | "
-                         f"{_ms(s['p95_s'])} | {_ms(s['mean_s'])} | "
-                         f"{'—' if trajectory is None else f'{trajectory:.2f}'} |")
+            lines.append(
+                f"| {family} | {name} | {s['n']} | {100 * s['success_rate']:.1f} % | {_ms(s['median_s'])} | "
+                f"{_ms(s['p95_s'])} | {_ms(s['mean_s'])} | "
+                f"{'—' if trajectory is None else f'{trajectory:.2f}'} |"
+            )
     lines.append(f"| mbm | VAMP (published) | 700 | — | {1e3 * VAMP_PUBLISHED['mbm_panda_median_s']:.3f} | — | — | — |")
-    lines += ["", "| problems | naive/ours (median) | naive/ours (mean) | naive at our resolution/ours (median, "
-              "subset) | pyroboplan/ours (median, subset) |", "|---|---|---|---|---|"]
+    lines += [
+        "",
+        "| problems | naive/ours (median) | naive/ours (mean) | naive at our resolution/ours (median, "
+        "subset) | pyroboplan/ours (median, subset) |",
+        "|---|---|---|---|---|",
+    ]
     for family in ("maru13", "mbm"):
         r = summary[family]["ratios"]
-        lines.append(f"| {family} | {_x(r['naive_over_ours_median'])} | {_x(r['naive_over_ours_mean'])} | "
-                     f"{_x(r['naive_same_resolution_over_ours_median_common'])} | "
-                     f"{_x(r['pyroboplan_over_ours_median_common'])} |")
-    lines += ["", "Targets: " + ", ".join(f"{k}: {'met' if v else 'MISSED'}" for k, v in summary["targets"].items()),
-              f"Re-plans at a finer resolution after a failed verification: maru13 {summary['maru13']['fallbacks']}, "
-              f"mbm {summary['mbm']['fallbacks']}.", ""]
+        lines.append(
+            f"| {family} | {_x(r['naive_over_ours_median'])} | {_x(r['naive_over_ours_mean'])} | "
+            f"{_x(r['naive_same_resolution_over_ours_median_common'])} | "
+            f"{_x(r['pyroboplan_over_ours_median_common'])} |"
+        )
+    lines += [
+        "",
+        "Targets: " + ", ".join(f"{k}: {'met' if v else 'MISSED'}" for k, v in summary["targets"].items()),
+        f"Re-plans at a finer resolution after a failed verification: maru13 {summary['maru13']['fallbacks']}, "
+        f"mbm {summary['mbm']['fallbacks']}.",
+        "",
+    ]
     for family in ("maru13", "mbm"):
         for name in OURS:
             o = summary[family][name]
             if not o.get("n"):
                 continue
-            lines.append(f"{name}, {family}: median search+post-processing {_ms(o.get('median_plan_s'))} ms, median "
-                         f"exact certification {_ms(o.get('median_verify_s'))} ms, median coal pair checks "
-                         f"{o.get('median_exact_pair_checks', 0):.0f}; failures: {', '.join(o['failures']) or 'none'}")
+            lines.append(
+                f"{name}, {family}: median search+post-processing {_ms(o.get('median_plan_s'))} ms, median "
+                f"exact certification {_ms(o.get('median_verify_s'))} ms, median coal pair checks "
+                f"{o.get('median_exact_pair_checks', 0):.0f}; failures: {', '.join(o['failures']) or 'none'}"
+            )
     lines.append("")
     return "\n".join(lines)
 
@@ -486,9 +554,14 @@ def plot(results, path: Path, args) -> None:
 
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
     for ax, family in zip(axes, ("maru13", "mbm")):
-        for name, color in (("ours", "tab:green"), (COMPILED, "tab:olive"), (DEFAULT, "tab:purple"),
-                            ("naive OMPL", "tab:blue"),
-                            (NAIVE_RES, "tab:cyan"), ("pyroboplan", "tab:red")):
+        for name, color in (
+            ("ours", "tab:green"),
+            (COMPILED, "tab:olive"),
+            (DEFAULT, "tab:purple"),
+            ("naive OMPL", "tab:blue"),
+            (NAIVE_RES, "tab:cyan"),
+            ("pyroboplan", "tab:red"),
+        ):
             runs = results["runs"][family][name]
             if not runs:
                 continue

@@ -242,8 +242,10 @@ def run_burst(bench: Bench) -> tuple[dict, list[float]]:
         spinning.destroy()
         node_alive = stopped_alive(process)
     result = {**burst.summary(), "node_alive": node_alive}
-    log(f"  answered {result['answered']}/{BURST_CLIENTS} (plans {result['success']}, BUSY {result['busy']}), "
-        f"lost {result['lost']}; p50 {result['p50_s']:.2f} s, p95 {result['p95_s']:.2f} s, max {result['max_s']:.2f} s")
+    log(
+        f"  answered {result['answered']}/{BURST_CLIENTS} (plans {result['success']}, BUSY {result['busy']}), "
+        f"lost {result['lost']}; p50 {result['p50_s']:.2f} s, p95 {result['p95_s']:.2f} s, max {result['max_s']:.2f} s"
+    )
     return result, burst.latencies
 
 

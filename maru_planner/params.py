@@ -161,4 +161,3 @@ def check_params(specs: dict[str, ParamSpec], values: dict[str, Any], owner: str
 
 def _bound(value: float | None, infinite: str = "inf") -> str:
     return infinite if value is None else f"{value:g}"
-

@@ -77,14 +77,25 @@ def _wire(msg) -> tuple[bytes, object]:
 
 
 def _tf(pose, stamp_s: float, laser_pose) -> object:
-    return tf_message([
-        planar_transform(ODOM, BASE, _ns(stamp_s), *pose),
-        planar_transform(BASE, LASER, _ns(stamp_s), *laser_pose),
-    ])
+    return tf_message(
+        [
+            planar_transform(ODOM, BASE, _ns(stamp_s), *pose),
+            planar_transform(BASE, LASER, _ns(stamp_s), *laser_pose),
+        ]
+    )
 
 
-def record_world(world_path: Path, out: Path, *, seed: int = 0, skip: float = 0.0, duration: float = 4.0,
-                 rate: float | None = None, storage: str = "sqlite3", params_file: Path | None = None) -> dict:
+def record_world(
+    world_path: Path,
+    out: Path,
+    *,
+    seed: int = 0,
+    skip: float = 0.0,
+    duration: float = 4.0,
+    rate: float | None = None,
+    storage: str = "sqlite3",
+    params_file: Path | None = None,
+) -> dict:
     """Record one window of a run in ``world_path`` to the bag directory ``out``; returns a summary.
 
     Receive timestamps are the header stamps plus 0..3 ns, so that readers order the messages of one
@@ -133,9 +144,18 @@ def record_world(world_path: Path, out: Path, *, seed: int = 0, skip: float = 0.
                 break
     summary = summarize(out)
     size = sum(f.stat().st_size for f in out.iterdir())
-    return {"world": world.name, "bag": str(out), "storage": storage, "ticks": ticks, "outcome": outcome,
-            "duration_s": round(summary.duration_s, 3), "bytes": size, "counts": summary.counts,
-            "world_obj": world, "strips": strips}
+    return {
+        "world": world.name,
+        "bag": str(out),
+        "storage": storage,
+        "ticks": ticks,
+        "outcome": outcome,
+        "duration_s": round(summary.duration_s, 3),
+        "bytes": size,
+        "counts": summary.counts,
+        "world_obj": world,
+        "strips": strips,
+    }
 
 
 def save_picture(path: Path, recordings: list[dict]) -> None:
@@ -151,7 +171,7 @@ def save_picture(path: Path, recordings: list[dict]) -> None:
     cols = 2 if len(recordings) > 1 else 1
     rows = -(-len(recordings) // cols)
     fig, axes = plt.subplots(rows, cols, figsize=(6.5 * cols, 3.6 * rows), squeeze=False)
-    for ax in axes.flat[len(recordings):]:
+    for ax in axes.flat[len(recordings) :]:
         ax.axis("off")
     for ax, rec in zip(axes.flat, recordings):
         draw_world(ax, rec["world_obj"], show_movers=False)
@@ -169,8 +189,16 @@ def save_picture(path: Path, recordings: list[dict]) -> None:
             cloud = np.vstack(points)
             ax.plot(cloud[:, 0], cloud[:, 1], ".", ms=1.5, color="tab:red", label="/scan points")
         for i, strip in enumerate(rec["strips"]):
-            ax.plot(strip[:, 0], strip[:, 1], "-o", ms=2, lw=0.8, color="tab:blue", alpha=0.6,
-                    label="strip (core)" if i == 0 else None)
+            ax.plot(
+                strip[:, 0],
+                strip[:, 1],
+                "-o",
+                ms=2,
+                lw=0.8,
+                color="tab:blue",
+                alpha=0.6,
+                label="strip (core)" if i == 0 else None,
+            )
         path_xy = np.array(poses)
         ax.plot(path_xy[:, 0], path_xy[:, 1], "-", lw=2, color="k", label="/odom")
         ax.set_title(f"{rec['world']}: {rec['ticks']} ticks, {rec['storage']}, {rec['bytes'] / 1024:.0f} KiB")
@@ -211,8 +239,16 @@ def main(argv: list[str] | None = None) -> int:
                 f.unlink()
             out.rmdir()
         print(f"recording {world_path} ...", file=sys.stderr)
-        s = record_world(Path(world_path), out, seed=args.seed, skip=skip, duration=duration, rate=args.rate,
-                         storage=storage, params_file=args.params)
+        s = record_world(
+            Path(world_path),
+            out,
+            seed=args.seed,
+            skip=skip,
+            duration=duration,
+            rate=args.rate,
+            storage=storage,
+            params_file=args.params,
+        )
         print(f"{s['world']:<24}{s['storage']:<9}{s['ticks']:>6}{s['outcome']:>11}{s['bytes'] / 1024:>8.0f}  {out}")
         recordings.append(s)
     if args.png is not None:

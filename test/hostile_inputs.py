@@ -152,8 +152,9 @@ def answer_outcome(code_ok: bool, internal: bool, message: str, elapsed: float, 
     late = elapsed > budget + LATE_MARGIN
     problem = "" if code_ok else message_problem(message)
     detail = f"{what}: answered in {elapsed:.2f} s (budget {budget:g} s); {message[:200]!r} {problem}"
-    return Outcome(accepted=code_ok, proper_error=not code_ok and not problem, internal=internal, late=late,
-                   detail=detail)
+    return Outcome(
+        accepted=code_ok, proper_error=not code_ok and not problem, internal=internal, late=late, detail=detail
+    )
 
 
 # ---------------------------------------------------------------- running batches
@@ -287,8 +288,12 @@ def _state_fields(state: dict[str, float]) -> tuple[list[str], list[float]]:
 def plan_motion_requests(draw, joints: list[str], start: dict[str, float], groups: list[str], links: list[str]):
     """PlanMotion requests: a plausible plan with up to three hostile fields (names, counts, NaN/inf,
     huge values and arrays, quaternions, frames, budgets, scalings)."""
-    req = PlanMotion.Request(group="upper_body", planner_id=draw(st.sampled_from(PLANNER_IDS)),
-                             allowed_planning_time=draw(st.floats(0.05, 0.5)), seed=draw(st.integers(0, 100)))
+    req = PlanMotion.Request(
+        group="upper_body",
+        planner_id=draw(st.sampled_from(PLANNER_IDS)),
+        allowed_planning_time=draw(st.floats(0.05, 0.5)),
+        seed=draw(st.integers(0, 100)),
+    )
     req.start_state.name, req.start_state.position = _state_fields(start)
     goal = {name: value + draw(st.sampled_from([0.0, 0.1, -0.2, 0.3])) for name, value in start.items()}
     req.goal_joint_names, req.goal_positions = _state_fields(goal)
@@ -390,10 +395,17 @@ class BurstResult:
 
     def summary(self) -> dict:
         latencies = sorted(self.latencies) or [math.nan]
-        return {"clients": self.clients, "answered": len(self.codes), "success": self.count(PlanningError.SUCCESS),
-                "busy": self.count(PlanningError.BUSY), "lost": self.lost,
-                "other": len(self.codes) - self.count(PlanningError.SUCCESS) - self.count(PlanningError.BUSY),
-                "p50_s": _percentile(latencies, 50), "p95_s": _percentile(latencies, 95), "max_s": latencies[-1]}
+        return {
+            "clients": self.clients,
+            "answered": len(self.codes),
+            "success": self.count(PlanningError.SUCCESS),
+            "busy": self.count(PlanningError.BUSY),
+            "lost": self.lost,
+            "other": len(self.codes) - self.count(PlanningError.SUCCESS) - self.count(PlanningError.BUSY),
+            "p50_s": _percentile(latencies, 50),
+            "p95_s": _percentile(latencies, 95),
+            "max_s": latencies[-1],
+        }
 
 
 def _percentile(values: list[float], q: float) -> float:
@@ -530,8 +542,10 @@ def scene_documents(draw):
         return {"obstacles": draw(ANY_YAML_VALUE)}
     obstacles = []
     for i in range(draw(st.integers(0, 4))):
-        entry = {"name": draw(st.one_of(st.just(f"o{i}"), HOSTILE_TEXT, ANY_YAML_VALUE)),
-                 "type": draw(st.one_of(st.sampled_from(SHAPE_TYPES), ANY_YAML_VALUE))}
+        entry = {
+            "name": draw(st.one_of(st.just(f"o{i}"), HOSTILE_TEXT, ANY_YAML_VALUE)),
+            "type": draw(st.one_of(st.sampled_from(SHAPE_TYPES), ANY_YAML_VALUE)),
+        }
         for key in draw(st.lists(st.sampled_from(["size", "radius", "length", "file", "scale"]), max_size=3)):
             entry[key] = draw(st.one_of(st.lists(st.floats(0.01, 1.0), min_size=1, max_size=3),
                                         st.floats(0.01, 1.0), ANY_YAML_VALUE))  # fmt: skip
@@ -558,11 +572,17 @@ def map_files(draw):
     kind = draw(st.sampled_from(["structured", "structured", "structured", "junk"]))
     if kind == "junk":
         return draw(YAML_JUNK), None
-    doc = {"image": draw(st.one_of(st.just("m.pgm"), st.just("missing.pgm"), ANY_YAML_VALUE)),
-           "resolution": _num(draw, st.floats(0.01, 1.0)),
-           "origin": draw(st.one_of(st.lists(st.floats(-10, 10), min_size=3, max_size=3), ANY_YAML_VALUE))}
-    for key, valid in (("occupied_thresh", st.floats(0, 1)), ("free_thresh", st.floats(0, 1)),
-                       ("negate", st.integers(0, 1)), ("mode", st.sampled_from(["trinary", "scale", "raw"]))):
+    doc = {
+        "image": draw(st.one_of(st.just("m.pgm"), st.just("missing.pgm"), ANY_YAML_VALUE)),
+        "resolution": _num(draw, st.floats(0.01, 1.0)),
+        "origin": draw(st.one_of(st.lists(st.floats(-10, 10), min_size=3, max_size=3), ANY_YAML_VALUE)),
+    }
+    for key, valid in (
+        ("occupied_thresh", st.floats(0, 1)),
+        ("free_thresh", st.floats(0, 1)),
+        ("negate", st.integers(0, 1)),
+        ("mode", st.sampled_from(["trinary", "scale", "raw"])),
+    ):
         if draw(st.booleans()):
             doc[key] = _num(draw, valid)
     if draw(st.booleans()):
@@ -595,26 +615,47 @@ def sim_worlds(draw):
     obstacles = []
     for _ in range(draw(st.integers(0, 3))):
         kind = draw(st.one_of(st.sampled_from(["circle", "box", "polygon"]), ANY_YAML_VALUE))
-        entry = {"type": kind, "center": _xy(draw), "radius": _num(draw, st.floats(0.05, 1)),
-                 "size": _xy(draw, 0.1, 1), "points": draw(st.one_of(
-                     st.lists(st.lists(st.floats(-3, 3), min_size=2, max_size=2), max_size=5), ANY_YAML_VALUE))}
+        entry = {
+            "type": kind,
+            "center": _xy(draw),
+            "radius": _num(draw, st.floats(0.05, 1)),
+            "size": _xy(draw, 0.1, 1),
+            "points": draw(
+                st.one_of(st.lists(st.lists(st.floats(-3, 3), min_size=2, max_size=2), max_size=5), ANY_YAML_VALUE)
+            ),
+        }
         obstacles.append({k: v for k, v in entry.items() if draw(st.booleans()) or k == "type"})
     laser = {k: _num(draw, v) for k, v in (("fov_deg", st.floats(1, 360)), ("resolution_deg", st.floats(1e-6, 10)),
                                            ("range_min", st.floats(0, 1)), ("range_max", st.floats(0, 30)),
                                            ("noise", st.floats(0, 0.1)), ("rate", st.floats(0.1, 300)))
              if draw(st.booleans())}  # fmt: skip
-    robot = {"start": draw(st.one_of(st.just([0, 0, 0]), ANY_YAML_VALUE)),
-             "goal": draw(st.one_of(st.just([2, 0, 0]), ANY_YAML_VALUE)),
-             "radius": _num(draw, st.floats(0.05, 0.5)), "laser": laser}
+    robot = {
+        "start": draw(st.one_of(st.just([0, 0, 0]), ANY_YAML_VALUE)),
+        "goal": draw(st.one_of(st.just([2, 0, 0]), ANY_YAML_VALUE)),
+        "radius": _num(draw, st.floats(0.05, 0.5)),
+        "laser": laser,
+    }
     if draw(st.booleans()):
         robot["footprint"] = draw(st.one_of(st.lists(st.lists(HOSTILE_FLOAT, max_size=3), max_size=5),
                                             ANY_YAML_VALUE))  # fmt: skip
     doc = {"obstacles": obstacles, "robot": robot, "max_time": _num(draw, st.floats(0.1, 2.0))}
     if draw(st.booleans()):
-        doc["movers"] = draw(st.one_of(st.lists(st.fixed_dictionaries({
-            "radius": st.floats(0.05, 0.5), "speed": HOSTILE_FLOAT,
-            "waypoints": st.lists(st.lists(HOSTILE_FLOAT, min_size=2, max_size=2), max_size=3),
-            "mode": st.sampled_from(["stop", "loop", "pingpong", "bounce"])}), max_size=2), ANY_YAML_VALUE))
+        doc["movers"] = draw(
+            st.one_of(
+                st.lists(
+                    st.fixed_dictionaries(
+                        {
+                            "radius": st.floats(0.05, 0.5),
+                            "speed": HOSTILE_FLOAT,
+                            "waypoints": st.lists(st.lists(HOSTILE_FLOAT, min_size=2, max_size=2), max_size=3),
+                            "mode": st.sampled_from(["stop", "loop", "pingpong", "bounce"]),
+                        }
+                    ),
+                    max_size=2,
+                ),
+                ANY_YAML_VALUE,
+            )
+        )
     for key in draw(st.lists(st.sampled_from(["path", "bounds", "goal_tolerance", "map", "junk_key"]), max_size=2)):
         doc[key] = draw(ANY_YAML_VALUE)
     return doc
@@ -663,8 +704,15 @@ def loader_outcome(load: Callable[[], object], what: str, error_types: tuple[typ
 CLI_LATE_MARGIN = 10.0  # s beyond a CLI's planning budget (loading the robot, scene or map is outside it)
 
 
-def cli_outcome(main: Callable[[list[str]], int], argv: list[str], prog: str, codes: set[int], bad_input: int,
-                internal: int | None = None, budget: float = 0.0) -> Outcome:
+def cli_outcome(
+    main: Callable[[list[str]], int],
+    argv: list[str],
+    prog: str,
+    codes: set[int],
+    bad_input: int,
+    internal: int | None = None,
+    budget: float = 0.0,
+) -> Outcome:
     """Run a CLI's ``main(argv)`` in this process: a documented exit code, on bad input exactly one
     stderr line naming the program, on other failures a proper last line; never an exception."""
     out, err = io.StringIO(), io.StringIO()
@@ -755,8 +803,19 @@ def maru_plan_argv(tmp: FilePath) -> st.SearchStrategy:
 
     files = Files(tmp)
     base = {"--quiet": None, "--problem": ["maru6"], "--time": ["0.3"], "--seed": ["1"]}
-    numbers = {f"--{name}": NUMBER_TEXT for name in ("time", "max-time", "seed", "attempts", "resolution",
-                                                    "velocity-scaling", "acceleration-scaling", "jerk-scaling")}
+    numbers = {
+        f"--{name}": NUMBER_TEXT
+        for name in (
+            "time",
+            "max-time",
+            "seed",
+            "attempts",
+            "resolution",
+            "velocity-scaling",
+            "acceleration-scaling",
+            "jerk-scaling",
+        )
+    }
     return argv_from(base, {
         **numbers,
         "--problem": names_from(sorted(PROBLEMS)),
@@ -872,16 +931,27 @@ def timed_call(spinning, client, request, budget: float) -> tuple[object | None,
     return future.result(), time.monotonic() - started
 
 
-def service_outcome(process, watch: LogWatch, response, elapsed: float, budget: float, what: str,
-                    success_code: int, internal_code: int, code_of: Callable, message_of: Callable) -> Outcome:
+def service_outcome(
+    process,
+    watch: LogWatch,
+    response,
+    elapsed: float,
+    budget: float,
+    what: str,
+    success_code: int,
+    internal_code: int,
+    code_of: Callable,
+    message_of: Callable,
+) -> Outcome:
     """Outcome of one call to a node: lost, crashed, traceback in its log, or the answer's own outcome."""
     alive = process.alive()
     traceback = "Traceback" in watch.new_text()
     if response is None:
         return Outcome(lost=True, crash=not alive, traceback=traceback, detail=f"{what}: no answer ({elapsed:.1f} s)")
     code = code_of(response)
-    outcome = answer_outcome(code == success_code, code == internal_code, message_of(response), elapsed, budget,
-                             f"{what} -> code {code}")
+    outcome = answer_outcome(
+        code == success_code, code == internal_code, message_of(response), elapsed, budget, f"{what} -> code {code}"
+    )
     outcome.crash, outcome.traceback = not alive, traceback
     return outcome
 
@@ -936,8 +1006,18 @@ class PlanningNodeTarget:
 
     # ------------------------------------------------------------ senders
     def _outcome(self, response, elapsed: float, budget: float, what: str) -> Outcome:
-        return service_outcome(self.process, self.watch, response, elapsed, budget, what, PlanningError.SUCCESS,
-                               PlanningError.INTERNAL_ERROR, lambda r: r.error.code, lambda r: r.error.message)
+        return service_outcome(
+            self.process,
+            self.watch,
+            response,
+            elapsed,
+            budget,
+            what,
+            PlanningError.SUCCESS,
+            PlanningError.INTERNAL_ERROR,
+            lambda r: r.error.code,
+            lambda r: r.error.message,
+        )
 
     def send_plan(self, request) -> Outcome:
         budget = plan_motion_budget(request, PLANNING_LIMITS["max_planning_time"])

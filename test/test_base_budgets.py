@@ -32,8 +32,9 @@ def test_a_100_m_footprint_is_answered_not_computed_for_a_minute(planner_id):
 
 
 def test_a_100_m_footprint_on_a_big_map_is_refused_with_an_estimate():
-    result = registry.plan("se2", random_grid(2000, 0.001), (10.0, 10.0, 0.0), (90.0, 90.0, 0.0), HUGE,
-                           time_limit=5.0, headings=64)
+    result = registry.plan(
+        "se2", random_grid(2000, 0.001), (10.0, 10.0, 0.0), (90.0, 90.0, 0.0), HUGE, time_limit=5.0, headings=64
+    )
     assert result.status == PlanStatus.INVALID_REQUEST
     assert "rasterising the footprint" in result.message and "GB, over the 2 GB limit" in result.message
 
@@ -108,10 +109,14 @@ def test_strip_inflation_is_exact():
 def test_whole_plans_time_out_in_every_planner():
     grid = random_grid(1200, 0.02, seed=5)
     for planner_id in registry.planner_ids():
-        result = registry.plan(planner_id, grid, (2.0, 2.0, 0.0), (58.0, 58.0, 0.0), rectangle(0.3, 0.2),
-                               time_limit=1e-3)
-        assert result.status in (PlanStatus.TIMED_OUT, PlanStatus.START_OCCUPIED, PlanStatus.GOAL_OCCUPIED), \
-            (planner_id, result.status, result.message)
+        result = registry.plan(
+            planner_id, grid, (2.0, 2.0, 0.0), (58.0, 58.0, 0.0), rectangle(0.3, 0.2), time_limit=1e-3
+        )
+        assert result.status in (PlanStatus.TIMED_OUT, PlanStatus.START_OCCUPIED, PlanStatus.GOAL_OCCUPIED), (
+            planner_id,
+            result.status,
+            result.message,
+        )
 
 
 def test_map_size_limit():

@@ -21,8 +21,14 @@ POSES = ["--start", "1", "2", "0", "--goal", "5", "2", "0"]
 
 
 def run_cli(*args: str, env: dict | None = None) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "maru_planner.base.cli", *args], capture_output=True, text=True,
-                          cwd=REPO, timeout=120, env=env)
+    return subprocess.run(
+        [sys.executable, "-m", "maru_planner.base.cli", *args],
+        capture_output=True,
+        text=True,
+        cwd=REPO,
+        timeout=120,
+        env=env,
+    )
 
 
 def assert_one_line_error(out: subprocess.CompletedProcess, code: int, needle: str) -> None:
@@ -96,8 +102,10 @@ def test_an_image_that_is_not_an_image(tmp_path):
         (["--start", "0", "0", "0", "--goal", "1", "1", "0"], "--map is required"),
         (["--map", MEDIUM, *POSES, "--json", "/no/such/dir/out.json"], "does not exist"),
         (["--map", MEDIUM, *POSES, "--png", "/"], "is a directory"),
-        (["--map", MEDIUM, "--world", str(config_path("worlds", "biped", "corridor_wide.yaml")), *POSES],
-         "--world needs a world_3d planner"),
+        (
+            ["--map", MEDIUM, "--world", str(config_path("worlds", "biped", "corridor_wide.yaml")), *POSES],
+            "--world needs a world_3d planner",
+        ),
     ],
 )
 def test_bad_arguments_and_files(args, needle):
@@ -134,8 +142,22 @@ def test_outcomes_have_their_exit_codes(tmp_path):
     assert json.loads(out.read_text())["status"] == "solved"
     blocked = run_cli("--map", MEDIUM, *POSES, "--planner", "astar")
     assert blocked.returncode == EXIT_NO_PATH and "Traceback" not in blocked.stderr
-    timed_out = run_cli("--map", str(config_path("maps", "house_250.yaml")), "--planner", "se2",
-                        "--start", "2.5", "21", "0", "--goal", "22", "3", "0", "--time-limit", "0.001")
+    timed_out = run_cli(
+        "--map",
+        str(config_path("maps", "house_250.yaml")),
+        "--planner",
+        "se2",
+        "--start",
+        "2.5",
+        "21",
+        "0",
+        "--goal",
+        "22",
+        "3",
+        "0",
+        "--time-limit",
+        "0.001",
+    )
     assert timed_out.returncode == EXIT_NO_PATH and "timed out" in timed_out.stderr
 
 

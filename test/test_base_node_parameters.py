@@ -156,8 +156,9 @@ def test_bad_changes_are_rejected_with_a_reason_and_later_requests_work(client, 
     ],
 )
 def test_wrong_start_up_parameters_are_one_line(args, needle):
-    out = subprocess.run([sys.executable, "-m", NODE_MODULE, "--ros-args", *args], capture_output=True, text=True,
-                         timeout=60)
+    out = subprocess.run(
+        [sys.executable, "-m", NODE_MODULE, "--ros-args", *args], capture_output=True, text=True, timeout=60
+    )
     assert out.returncode == 2, out.stderr
     text = out.stderr + out.stdout
     assert "Traceback" not in text and needle in text, text

@@ -186,8 +186,9 @@ def test_budgets_hold_for_huge_footprints_maps_and_searches(client):
         assert response.planning_time <= 5.5
     big = OccupancyGrid(np.random.default_rng(0).random((2000, 2000)) < 0.001, 0.05)
     client.publish_map(map_msg(big), "map 2000 x 2000 cells")
-    refused = client.request(start=(10.0, 10.0, 0.0), goal=(90.0, 90.0, 0.0), planner_id="se2", footprint=huge,
-                             time_limit=5.0)
+    refused = client.request(
+        start=(10.0, 10.0, 0.0), goal=(90.0, 90.0, 0.0), planner_id="se2", footprint=huge, time_limit=5.0
+    )
     assert refused.error_code in (E.INVALID_REQUEST, E.START_OCCUPIED, E.TIMEOUT), refused.error_msg
     assert refused.planning_time <= 5.5
     too_big = client.request(start=(10.0, 10.0, 0.0), goal=(90.0, 90.0, 0.0), planner_id="se2", time_limit=1.0)

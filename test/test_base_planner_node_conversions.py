@@ -61,8 +61,16 @@ def test_every_status_has_an_error_code_and_stats_are_json():
     assert jsonable(value) == {"a": 3, "b": [1.5], "c": None, "d": [{"e": 2.0}]}
     stats = TunnelStats(expansions=np.int64(4), planning_time=0.5, deciding_stage="tunnel b=3", attempts=2)
     assert json.loads(conv.stats_json(stats)) == {
-        "expansions": 4, "collision_checks": 0, "planning_time": 0.5, "deciding_stage": "tunnel b=3",
-        "tfp_expansions": 0, "lcrp_cells": 0, "pfp_expansions": 0, "attempts": 2, "virtual_obstacles": 0}
+        "expansions": 4,
+        "collision_checks": 0,
+        "planning_time": 0.5,
+        "deciding_stage": "tunnel b=3",
+        "tfp_expansions": 0,
+        "lcrp_cells": 0,
+        "pfp_expansions": 0,
+        "attempts": 2,
+        "virtual_obstacles": 0,
+    }
     assert "cost" not in json.loads(conv.stats_json(PlanStats()))  # None fields are left out
     assert conv.footprint_from_param([1, 2, 3, 4, 5, 6]).shape == (3, 2)
     with pytest.raises(InvalidRequest, match="pairs"):

@@ -222,17 +222,50 @@ def test_timeout_is_reported():
 def test_cli_writes_json_and_png(tmp_path):
 
     out, png = tmp_path / "o.json", tmp_path / "o.png"
-    code = main(["--map", str(config_path("maps", "paper002_medium.yaml")), "--planner", "mspp",
-                 "--start", "1", "2", "0", "--goal", "5", "2", "0", "--footprint",
-                 "0.45,0.15 -0.45,0.15 -0.45,-0.15 0.45,-0.15", "--json", str(out), "--png", str(png)])
+    code = main(
+        [
+            "--map",
+            str(config_path("maps", "paper002_medium.yaml")),
+            "--planner",
+            "mspp",
+            "--start",
+            "1",
+            "2",
+            "0",
+            "--goal",
+            "5",
+            "2",
+            "0",
+            "--footprint",
+            "0.45,0.15 -0.45,0.15 -0.45,-0.15 0.45,-0.15",
+            "--json",
+            str(out),
+            "--png",
+            str(png),
+        ]
+    )
     assert code == 0
     data = json.loads(out.read_text())
     assert set(data) == {"success", "status", "message", "path", "stats", "clearance"}
     assert 0.0 < data["clearance"]["min_m"] <= data["clearance"]["mean_m"]
     assert data["success"] and data["status"] == "solved" and data["stats"]["deciding_stage"] == "full"
     assert len(data["path"][0]) == 3 and png.stat().st_size > 1000
-    code = main(["--map", str(config_path("maps", "paper002_impossible.yaml")), "--start", "1", "2", "0",
-                 "--goal", "5", "2", "0", "--json", str(out)])
+    code = main(
+        [
+            "--map",
+            str(config_path("maps", "paper002_impossible.yaml")),
+            "--start",
+            "1",
+            "2",
+            "0",
+            "--goal",
+            "5",
+            "2",
+            "0",
+            "--json",
+            str(out),
+        ]
+    )
     assert code == 1 and json.loads(out.read_text())["status"] == "no_path_proven"
     assert main(["--map", str(tmp_path / "missing.yaml"), "--start", "1", "2", "0", "--goal", "5", "2", "0"]) == 2
 

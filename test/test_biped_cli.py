@@ -25,8 +25,24 @@ def test_world_option(tmp_path, planner, expected):
 
 def test_world_picture_and_explicit_poses(tmp_path):
     png = tmp_path / "wall.png"
-    code = cli.main(["--world", NARROW, "--planner", "biped-wall", "--start", "0.4", "1.0", "0", "--goal", "2.5",
-                     "1.0", "0", "--png", str(png)])
+    code = cli.main(
+        [
+            "--world",
+            NARROW,
+            "--planner",
+            "biped-wall",
+            "--start",
+            "0.4",
+            "1.0",
+            "0",
+            "--goal",
+            "2.5",
+            "1.0",
+            "0",
+            "--png",
+            str(png),
+        ]
+    )
     assert code == 0 and png.stat().st_size > 1000
 
 

@@ -31,8 +31,9 @@ from maru_planner.base.result import PlanStatus as res
 from maru_planner.errors import InvalidRequest, InvalidScene, TooLarge
 from maru_planner.paths import config_path
 
-ROBOT = BipedRobot(gait_length=0.4, gait_width=0.36, body_left=0.25, body_right=0.25, step_height=0.06,
-                   body_bottom=0.45, height=1.2)
+ROBOT = BipedRobot(
+    gait_length=0.4, gait_width=0.36, body_left=0.25, body_right=0.25, step_height=0.06, body_bottom=0.45, height=1.2
+)
 
 
 def world(name):
@@ -41,17 +42,27 @@ def world(name):
 
 @pytest.mark.parametrize(
     "z,kind",
-    [((0.0, 0.04), "steppable"), ((0.0, 0.3), "line"), ((0.6, 0.8), "virtual"), ((0.0, 2.0), "line+virtual"),
-     ((1.5, 2.0), "overhead")],
+    [
+        ((0.0, 0.04), "steppable"),
+        ((0.0, 0.3), "line"),
+        ((0.6, 0.8), "virtual"),
+        ((0.0, 2.0), "line+virtual"),
+        ((1.5, 2.0), "overhead"),
+    ],
 )
 def test_classify_by_height_bands(z, kind):
     assert classify(Box3D("b", (0, 0), (1, 1), z), ROBOT) == kind
 
 
 def _one_box_world(z, robot=None, center=(1.0, 1.0)):
-    data = {"resolution": 0.01, "bounds": [0, 0, 2, 2], "start": [0.2, 1.0, 0.0], "goal": [1.8, 1.0, 0.0],
-            "obstacles": [{"name": "box", "center": list(center), "size": [0.2, 0.2], "z": list(z)}],
-            "robot": robot or {"gait_length": 0.4, "gait_width": 0.36, "body_width": 0.5}}
+    data = {
+        "resolution": 0.01,
+        "bounds": [0, 0, 2, 2],
+        "start": [0.2, 1.0, 0.0],
+        "goal": [1.8, 1.0, 0.0],
+        "obstacles": [{"name": "box", "center": list(center), "size": [0.2, 0.2], "z": list(z)}],
+        "robot": robot or {"gait_length": 0.4, "gait_width": 0.36, "body_width": 0.5},
+    }
     return world_from_dict(data)
 
 
@@ -85,8 +96,9 @@ def test_asymmetric_clearance_eq2_eq3_depends_on_the_side_of_line_s():
 
 def test_side_of_line():
     line = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]])
-    np.testing.assert_array_equal(side_of_line(np.array([[0.5, 0.3], [0.5, -0.3], [0.7, 0.5], [1.3, 0.5]]), line),
-                                  [1, -1, 1, -1])
+    np.testing.assert_array_equal(
+        side_of_line(np.array([[0.5, 0.3], [0.5, -0.3], [0.7, 0.5], [1.3, 0.5]]), line), [1, -1, 1, -1]
+    )
 
 
 def test_turning_rule_eq4():
@@ -169,9 +181,12 @@ def test_start_in_obstacle_and_unknown_parameters():
 
 @pytest.mark.parametrize(
     "patch,needle",
-    [({"bounds": [0, 0, -1, 1]}, "bounds"), ({"obstacles": [{"name": "x", "center": [0, 0], "size": [1, 1],
-                                                                 "z": [1, 0]}]}, "z"),
-     ({"robot": {"gait_width": -1}}, "gait_width"), ({"robot": {"wheels": 4}}, "wheels")],
+    [
+        ({"bounds": [0, 0, -1, 1]}, "bounds"),
+        ({"obstacles": [{"name": "x", "center": [0, 0], "size": [1, 1], "z": [1, 0]}]}, "z"),
+        ({"robot": {"gait_width": -1}}, "gait_width"),
+        ({"robot": {"wheels": 4}}, "wheels"),
+    ],
 )
 def test_world_loader_names_what_is_wrong(patch, needle):
     data = {"bounds": [0, 0, 1, 1], "obstacles": []}

@@ -145,8 +145,16 @@ def test_start_and_goal_checks():
 
 @pytest.mark.parametrize(
     "bad",
-    [{"k1": 0.0}, {"k2": 0.1}, {"k3": -1.0}, {"k4": -1.0}, {"k5": 0.0}, {"big_cell_size": 0},
-     {"min_big_cell_size": 4}, {"no_such": 1}],
+    [
+        {"k1": 0.0},
+        {"k2": 0.1},
+        {"k3": -1.0},
+        {"k4": -1.0},
+        {"k5": 0.0},
+        {"big_cell_size": 0},
+        {"min_big_cell_size": 4},
+        {"no_such": 1},
+    ],
 )
 def test_parameter_signs_follow_the_paper(bad):
     with pytest.raises(ValueError):

@@ -43,10 +43,14 @@ class StraightLinePlanner(DiscPlanner):
         return path
 
 
-registry.register(registry.BasePlannerSpec(
-    TOY_ID, "toy: a point robot on the straight segment", StraightLinePlanner,
-    {"samples_per_cell": ParamSpec("samples_per_cell", 2, "samples per cell along the segment", lower=1, upper=10)},
-))
+registry.register(
+    registry.BasePlannerSpec(
+        TOY_ID,
+        "toy: a point robot on the straight segment",
+        StraightLinePlanner,
+        {"samples_per_cell": ParamSpec("samples_per_cell", 2, "samples per cell along the segment", lower=1, upper=10)},
+    )
+)
 
 
 def main(argv: list[str]) -> int:

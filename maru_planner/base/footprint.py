@@ -145,7 +145,10 @@ def dilate(occupied: np.ndarray, offsets: np.ndarray) -> np.ndarray:
 
 
 def heading_offsets(
-    footprint, resolution: float, headings: int, map_shape: tuple[int, int] | None = None,
+    footprint,
+    resolution: float,
+    headings: int,
+    map_shape: tuple[int, int] | None = None,
     deadline: Deadline | None = None,
 ) -> list[np.ndarray]:
     """footprint_cells for each heading k * 2 pi / K, clipped to what a map of ``map_shape`` can use.
@@ -158,10 +161,12 @@ def heading_offsets(
     side = 2 * min(reach, max_reach if max_reach is not None else reach) + 1
     area = abs(0.5 * np.sum(poly[:, 0] * np.roll(poly[:, 1], -1) - np.roll(poly[:, 0], -1) * poly[:, 1]))
     cells = min(area / resolution**2 + 4 * reach, side * side)
-    check_bytes(headings * cells * 16.0, f"rasterising the footprint ({cells:.0f} cells) at {headings} headings",
-                "use a smaller footprint, a coarser map or fewer headings")
-    return [footprint_cells(poly, 2 * math.pi * k / headings, resolution, max_reach, deadline)
-            for k in range(headings)]
+    check_bytes(
+        headings * cells * 16.0,
+        f"rasterising the footprint ({cells:.0f} cells) at {headings} headings",
+        "use a smaller footprint, a coarser map or fewer headings",
+    )
+    return [footprint_cells(poly, 2 * math.pi * k / headings, resolution, max_reach, deadline) for k in range(headings)]
 
 
 def heading_index(theta: float, headings: int) -> int:

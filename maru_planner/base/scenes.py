@@ -100,14 +100,24 @@ def problems() -> dict:
     t1 = {"start": list(TABLE1_START), "goal": list(TABLE1_GOAL), "footprint": TABLE1_ROBOT.tolist()}
     return {
         "easy": {**t1, "paper": {"mspp_s": 0.6, "mspp_checks": 6657, "by": "BAA", "full_s": 445, "full_checks": 25865}},
-        "medium": {**t1, "paper": {"mspp_s": 254.3, "mspp_checks": 40318, "by": "full A*", "full_s": 253,
-                                   "full_checks": 24646}},
-        "hard": {**t1, "paper": {"mspp_s": 192.3, "mspp_checks": 42782, "by": "full A*", "full_s": 191,
-                                 "full_checks": 27732}},
-        "impossible": {**t1, "paper": {"mspp_s": 0.7, "mspp_checks": 7134, "by": "ECA", "full_s": 133,
-                                       "full_checks": 20824}},
-        "house": {"start": list(HOUSE_START), "goal": list(HOUSE_GOAL), "footprint": HOUSE_ROBOT.tolist(),
-                  "paper": {"full_s": 55, "local_s": 10}},
+        "medium": {
+            **t1,
+            "paper": {"mspp_s": 254.3, "mspp_checks": 40318, "by": "full A*", "full_s": 253, "full_checks": 24646},
+        },
+        "hard": {
+            **t1,
+            "paper": {"mspp_s": 192.3, "mspp_checks": 42782, "by": "full A*", "full_s": 191, "full_checks": 27732},
+        },
+        "impossible": {
+            **t1,
+            "paper": {"mspp_s": 0.7, "mspp_checks": 7134, "by": "ECA", "full_s": 133, "full_checks": 20824},
+        },
+        "house": {
+            "start": list(HOUSE_START),
+            "goal": list(HOUSE_GOAL),
+            "footprint": HOUSE_ROBOT.tolist(),
+            "paper": {"full_s": 55, "local_s": 10},
+        },
     }
 
 
@@ -124,13 +134,19 @@ def write_maps(directory) -> list[Path]:
     written = []
     for name, (grid, _) in build_all().items():
         written.append(grid.save_yaml(directory / f"paper002_{name}.yaml"))
+
     class NoAliases(yaml.SafeDumper):
         def ignore_aliases(self, data):
             return True
 
     with open(directory / "paper002_problems.yaml", "w") as f:
-        yaml.dump({f"paper002_{k}": v for k, v in problems().items()}, f, Dumper=NoAliases, sort_keys=False,
-                  default_flow_style=None)
+        yaml.dump(
+            {f"paper002_{k}": v for k, v in problems().items()},
+            f,
+            Dumper=NoAliases,
+            sort_keys=False,
+            default_flow_style=None,
+        )
     return written
 
 

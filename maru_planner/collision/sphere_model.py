@@ -182,8 +182,9 @@ def first_fit_notice(name: str, collision_model, options: SphereFitOptions | Non
     path = cached_path(collision_model, options)
     if path.is_file():
         return None
-    return (f"fitting the sphere model of {name} (first use of its geometry, ~20 s for a 7-link arm; "
-            f"kept in {path.parent})")
+    return (
+        f"fitting the sphere model of {name} (first use of its geometry, ~20 s for a 7-link arm; kept in {path.parent})"
+    )
 
 
 def load_or_fit(model, collision_model, options: SphereFitOptions | None = None, use_cache: bool = True):

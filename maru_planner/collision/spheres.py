@@ -105,7 +105,6 @@ class ScenePrimitives:
             obstacles=tuple(o for o, _ in ordered),
         )
 
-
     def boxes(self) -> tuple[np.ndarray, np.ndarray]:
         """World axis-aligned boxes (lo, hi), each (n, 3), of the primitives in kernel order."""
         box_half = np.einsum("kab,kb->ka", np.abs(self.box_rot), self.box_half)
@@ -174,9 +173,11 @@ class SphereCollisionChecker:
         self._robot_geoms = list(robot.collision_model.geometryObjects)
         self._exact_shapes = [obj.geometry for obj in self._robot_geoms]  # the exact checker's own shapes
         # each geometry's joint and placement in it, and its world placement at the last _exact_hit's state
-        self._geom_frames = (np.array([obj.parentJoint for obj in self._robot_geoms], dtype=np.int64),
-                             np.array([obj.placement.rotation for obj in self._robot_geoms]).reshape(-1, 3, 3),
-                             np.array([obj.placement.translation for obj in self._robot_geoms]).reshape(-1, 3))
+        self._geom_frames = (
+            np.array([obj.parentJoint for obj in self._robot_geoms], dtype=np.int64),
+            np.array([obj.placement.rotation for obj in self._robot_geoms]).reshape(-1, 3, 3),
+            np.array([obj.placement.translation for obj in self._robot_geoms]).reshape(-1, 3),
+        )
         n_geoms = len(self._robot_geoms)
         self._geom_rot, self._geom_pos = np.empty((n_geoms, 3, 3)), np.empty((n_geoms, 3))
         self._rot = np.empty((self.tree.njoints, 3, 3))
@@ -200,8 +201,9 @@ class SphereCollisionChecker:
         self._grid = self._build_grid()
         self._mark = np.zeros((2, len(self.primitives.names) + 1), dtype=np.int64)
         self._scene_version = getattr(scene, "version", None)
-        self._amb = np.zeros((self.spheres.n_groups * max(1, len(self.primitives.names)) + len(self.self_pairs), 3),
-                             dtype=np.int64)
+        self._amb = np.zeros(
+            (self.spheres.n_groups * max(1, len(self.primitives.names)) + len(self.self_pairs), 3), dtype=np.int64
+        )
         self._request: coal.CollisionRequest | None = None
 
     @property
@@ -323,9 +325,7 @@ class SphereCollisionChecker:
         """First row >= start that is not clearly valid: (row, status, number of ambiguous pairs)."""
         if self.use_numba:
             ri, rf, scene = self._packed()
-            row, status, n_amb = scan_nb(
-                Q, start, ri, rf, scene, *self._grid, self._amb, self._mark, self.confirm
-            )
+            row, status, n_amb = scan_nb(Q, start, ri, rf, scene, *self._grid, self._amb, self._mark, self.confirm)
             return int(row), int(status), int(n_amb)
         for row in range(start, len(Q)):
             status, pairs = self._classify_np(Q[row])
@@ -439,8 +439,10 @@ class SphereCollisionChecker:
         env_outer, env_inner, self_outer, self_inner = self._sphere_gaps_np(q)
         if (env_inner < 0.0).any() or (self_inner < 0.0).any():
             return COLLIDING, np.zeros((0, 3), dtype=np.int64)
-        pairs = [(0, g, k) for g, k in sorted({(int(self.spheres.geom[s]), int(k))
-                                                for s, k in zip(*np.nonzero(env_outer < 0.0))})]
+        pairs = [
+            (0, g, k)
+            for g, k in sorted({(int(self.spheres.geom[s]), int(k)) for s, k in zip(*np.nonzero(env_outer < 0.0))})
+        ]
         pairs += [(1, *self.self_pairs[p]) for p in sorted(set(self._sphere_pairs[self_outer < 0.0, 2].tolist()))]
         if not pairs:
             return VALID, np.zeros((0, 3), dtype=np.int64)

@@ -61,8 +61,21 @@ DUAL_CARRY = DualArmProblem(
     scene_file="maru13_desk_box.yaml",
     group="upper_body",
     start=(-0.5, 0.3141, 1.769, 0.2167, 0.9715, -0.523, -1.2391, 0.0156, 2.6995, 2.3236, 1.2897, -2.8949, -0.4105),
-    goal=(0.5, 0.52521189, 1.70682564, 0.06152298, 1.07621425, -0.2792433, -1.33254688, 0.18268811, 2.73834052,
-          2.46982802, 1.31932287, -2.99810625, -0.38257917),  # fmt: skip
+    goal=(
+        0.5,
+        0.52521189,
+        1.70682564,
+        0.06152298,
+        1.07621425,
+        -0.2792433,
+        -1.33254688,
+        0.18268811,
+        2.73834052,
+        2.46982802,
+        1.31932287,
+        -2.99810625,
+        -0.38257917,
+    ),  # fmt: skip
     position_tolerance=1e-3,
     orientation_tolerance=1e-2,
     description="13-DOF: both hands carry one object (relative pose held to 1 mm / 0.01 rad) while the waist "

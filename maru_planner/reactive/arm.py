@@ -31,8 +31,16 @@ NOMINAL = {
 class ArmReactive:
     """Both 7-DOF arms in the base frame (a fixed-base Pinocchio model with the wheels locked)."""
 
-    def __init__(self, urdf: str | None = None, k_c: float = 0.3, k_r: float = 0.5, d0: float = 0.2,
-                 alpha: float = 1.0, max_joint_step: float = 0.05, strip: str = "modified"):
+    def __init__(
+        self,
+        urdf: str | None = None,
+        k_c: float = 0.3,
+        k_r: float = 0.5,
+        d0: float = 0.2,
+        alpha: float = 1.0,
+        max_joint_step: float = 0.05,
+        strip: str = "modified",
+    ):
         full = pin.buildModelFromUrdf(str(urdf or urdf_path("mobile_manipulator.urdf")))
         wheels = [full.getJointId(n) for n in ("left_wheel_joint", "right_wheel_joint") if full.existJointName(n)]
         self.model = pin.buildReducedModel(full, wheels, pin.neutral(full)) if wheels else full
@@ -50,8 +58,7 @@ class ArmReactive:
         reach = np.max(np.linalg.norm(self._p_nominal[:, :2], axis=1))
         self.reach = float(reach + 0.7)  # generous bound on how far an arm point can get from the base centre
 
-    def configure(self, *, k_c: float, k_r: float, d0: float, alpha: float, max_joint_step: float,
-                  strip: str) -> None:
+    def configure(self, *, k_c: float, k_r: float, d0: float, alpha: float, max_joint_step: float, strip: str) -> None:
         """Gains, margin, step size and strip kind of the arm update (the joint state is kept)."""
         self.k_c, self.k_r, self.d0 = k_c, k_r, d0
         self.alpha, self.max_joint_step, self.strip = alpha, max_joint_step, strip

@@ -30,15 +30,18 @@ class StripParams:
 
     k_r: float = param(0.5, "repulsion gain (paper)", lower=1e-3, upper=100.0)
     k_c: float = param(0.3, "contraction gain (paper)", lower=1e-3, upper=10.0)
-    d_safe: float = param(0.45, "m, safety margin added to the robot radius: d_0 = d_safe + robot_radius",
-                          lower=0.0, upper=5.0)
+    d_safe: float = param(
+        0.45, "m, safety margin added to the robot radius: d_0 = d_safe + robot_radius", lower=0.0, upper=5.0
+    )
     robot_radius: float = param(0.30, "m, d_r: the base's radius", lower=0.01, upper=5.0)
     num_vias: int = param(20, "via points in the strip", lower=3, upper=1000)
     via_spacing: float = param(0.30, "m between vias on the reference path", lower=0.05, upper=5.0)
-    strip: str = param("modified", "modified (eq. 41-42) or plain (eq. 39) external force",
-                       choices=("modified", "plain"))
-    head_on_ratio: float = param(0.25, "modified strip: head-on rule threshold, 0 = off (see forces.py)",
-                                 lower=0.0, upper=10.0)
+    strip: str = param(
+        "modified", "modified (eq. 41-42) or plain (eq. 39) external force", choices=("modified", "plain")
+    )
+    head_on_ratio: float = param(
+        0.25, "modified strip: head-on rule threshold, 0 = off (see forces.py)", lower=0.0, upper=10.0
+    )
     suppress_tangential: bool = param(True, "drop the along-strip part of external forces on vias (elastic bands)")
     iterations: int = param(2, "force steps per update", lower=1, upper=100)
     max_via_step: float = param(0.2, "m a via moves at most per iteration", lower=1e-3, upper=5.0)
@@ -46,22 +49,25 @@ class StripParams:
     max_angular: float = param(1.0, "rad/s, turn rate limit", lower=1e-3, upper=10.0)
     k_angular: float = param(2.0, "turn rate per rad of heading error", lower=1e-3, upper=100.0)
     lookahead: float = param(0.6, "m along the strip to the base target", lower=0.01, upper=20.0)
-    target_margin: float = param(0.05, "m: the drive to the target must clear scan points by robot_radius + this",
-                                 lower=0.0, upper=2.0)
+    target_margin: float = param(
+        0.05, "m: the drive to the target must clear scan points by robot_radius + this", lower=0.0, upper=2.0
+    )
     beam_window: tuple[int, int] | None = param(
-        (31, 331), "beams [lo, hi) of obstacle_check (the paper's central 150 deg of a 361-beam LMS200)")
+        (31, 331), "beams [lo, hi) of obstacle_check (the paper's central 150 deg of a 361-beam LMS200)"
+    )
     avoidance_range: float = param(1.5, "m, obstacle_check threshold (AVOIDANCE_RANGE)", lower=0.01, upper=100.0)
     force_range: float = param(8.0, "m: scan points farther than this exert no force", lower=0.01, upper=1000.0)
     is_sort_radius: float = param(0.5, "m per axis, IsSort filter of inserted vias", lower=0.0, upper=10.0)
-    is_sort_rule: str = param("either_axis", "IsSort rule: the paper's code (either_axis) or both_axes",
-                              choices=("either_axis", "both_axes"))
+    is_sort_rule: str = param(
+        "either_axis", "IsSort rule: the paper's code (either_axis) or both_axes", choices=("either_axis", "both_axes")
+    )
     use_via_events: bool = param(True, "insert the paper's avoidance via (SortPosition / IsSort)")
     via_reach: float = param(0.35, "m: an inserted via counts as reached", lower=0.0, upper=10.0)
     goal_tolerance: float = param(0.25, "m: the goal counts as reached", lower=0.01, upper=10.0)
-    slow_radius: float = param(0.8, "m: linear speed ramps down inside this distance of the goal (0 = off)",
-                               lower=0.0, upper=100.0)
-    stop_distance: float = param(0.0, "m: stop if a scan point is this close in front (0 = off)",
-                                 lower=0.0, upper=10.0)
+    slow_radius: float = param(
+        0.8, "m: linear speed ramps down inside this distance of the goal (0 = off)", lower=0.0, upper=100.0
+    )
+    stop_distance: float = param(0.0, "m: stop if a scan point is this close in front (0 = off)", lower=0.0, upper=10.0)
     laser_pose: tuple[float, float, float] = param((0.22, 0.0, 0.0), "laser in base_link: x (m), y (m), yaw (rad)")
     arm_enabled: bool = param(True, "run the arm update (eq. 46-49)")
     arm_d_safe: float = param(0.10, "m, the arms' safety margin", lower=0.0, upper=2.0)
@@ -214,18 +220,32 @@ class ElasticStripController:
             arm_q = self.arm.q.copy()
         pairs_before = self._pairs_seen
         self._pairs_seen = self.strip.pair_evaluations
-        work = {"beams": int(scan.ranges.size), "points": int(len(points_world)), "vias": int(len(strip)),
-                "force_evaluations": self.strip.iterations,
-                "pair_evaluations": self.strip.pair_evaluations - pairs_before}
+        work = {
+            "beams": int(scan.ranges.size),
+            "points": int(len(points_world)),
+            "vias": int(len(strip)),
+            "force_evaluations": self.strip.iterations,
+            "pair_evaluations": self.strip.pair_evaluations - pairs_before,
+        }
         return ControlOutput(
-            v=v, w=w, strip=strip, target=(float(target[0]), float(target[1])), reached_goal=reached,
-            obstacle_points=points_world, arm_joint_steps=arm_steps, arm_joint_positions=arm_q,
-            update_time=time.perf_counter() - t0, obstacle_event=event, via_active=self.via.active,
-            robot_force=(float(robot_force[0]), float(robot_force[1])), work=work,
+            v=v,
+            w=w,
+            strip=strip,
+            target=(float(target[0]), float(target[1])),
+            reached_goal=reached,
+            obstacle_points=points_world,
+            arm_joint_steps=arm_steps,
+            arm_joint_positions=arm_q,
+            update_time=time.perf_counter() - t0,
+            obstacle_event=event,
+            via_active=self.via.active,
+            robot_force=(float(robot_force[0]), float(robot_force[1])),
+            work=work,
         )
 
-    def _choose_target(self, position, strip, points_world, event: bool, dist_goal: float,
-                       goal: np.ndarray) -> np.ndarray:
+    def _choose_target(
+        self, position, strip, points_world, event: bool, dist_goal: float, goal: np.ndarray
+    ) -> np.ndarray:
         """The inserted avoidance via if one is active (sec. 4-5), else the clear lookahead via of the strip."""
         p = self.params
         look_idx, look_point = self.strip.lookahead(p.lookahead)
@@ -272,8 +292,16 @@ class ElasticStripController:
         norm = np.hypot(*direction)
         tangent = direction / norm if norm > 1e-9 else np.array([1.0, 0.0])
         p = self.params
-        return external_forces(position[None, :], tangent[None, :], points, p.d0, p.k_r, p.strip,
-                               p.head_on_ratio, min_gap=2.0 * p.robot_radius)[0]
+        return external_forces(
+            position[None, :],
+            tangent[None, :],
+            points,
+            p.d0,
+            p.k_r,
+            p.strip,
+            p.head_on_ratio,
+            min_gap=2.0 * p.robot_radius,
+        )[0]
 
     def _command(self, pose, target, robot_force, dist_goal, points_robot):
         """Eq. 43-45: Δ = (target - current) + F, heading atan2(Δ); then a unicycle law within limits."""
@@ -297,11 +325,28 @@ class ElasticStripController:
 
 
 def _make_strip(p: StripParams) -> ElasticStrip:
-    return ElasticStrip(p.num_vias, p.via_spacing, p.k_c, p.k_r, p.d0, p.strip, p.iterations, p.max_via_step,
-                        p.head_on_ratio, p.suppress_tangential, min_gap=2.0 * p.robot_radius)
+    return ElasticStrip(
+        p.num_vias,
+        p.via_spacing,
+        p.k_c,
+        p.k_r,
+        p.d0,
+        p.strip,
+        p.iterations,
+        p.max_via_step,
+        p.head_on_ratio,
+        p.suppress_tangential,
+        min_gap=2.0 * p.robot_radius,
+    )
 
 
 def _arm_settings(p: StripParams) -> dict[str, Any]:
     """The keywords of ``ArmReactive`` / ``ArmReactive.configure`` (gains, margin, step, strip kind)."""
-    return {"k_c": p.k_c, "k_r": p.k_r, "d0": p.arm_d_safe + p.arm_link_radius, "alpha": p.arm_alpha,
-            "max_joint_step": p.arm_max_joint_step, "strip": p.strip}
+    return {
+        "k_c": p.k_c,
+        "k_r": p.k_r,
+        "d0": p.arm_d_safe + p.arm_link_radius,
+        "alpha": p.arm_alpha,
+        "max_joint_step": p.arm_max_joint_step,
+        "strip": p.strip,
+    }

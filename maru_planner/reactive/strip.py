@@ -48,9 +48,20 @@ class ElasticStrip:
     O(num_vias * obstacle points) however long the robot has been running.
     """
 
-    def __init__(self, num_vias: int, spacing: float, k_c: float, k_r: float, d0: float,
-                 strip: str = "modified", iterations: int = 2, max_step: float = 0.2,
-                 head_on_ratio: float = 0.25, suppress_tangential: bool = True, min_gap: float = 0.0):
+    def __init__(
+        self,
+        num_vias: int,
+        spacing: float,
+        k_c: float,
+        k_r: float,
+        d0: float,
+        strip: str = "modified",
+        iterations: int = 2,
+        max_step: float = 0.2,
+        head_on_ratio: float = 0.25,
+        suppress_tangential: bool = True,
+        min_gap: float = 0.0,
+    ):
         if num_vias < 3:
             raise ValueError(f"num_vias must be >= 3, got {num_vias}")
         self.num_vias = num_vias
@@ -147,8 +158,9 @@ class ElasticStrip:
             if len(points):
                 tangents = unit_tangents(vias)
                 prefer = side_preference(vias, self._ref[self._ref_index[:k]], tangents, self.side_lock)
-                ext = external_forces(vias, tangents, points, self.d0, self.k_r, self.strip, self.head_on_ratio,
-                                      prefer, self.min_gap)
+                ext = external_forces(
+                    vias, tangents, points, self.d0, self.k_r, self.strip, self.head_on_ratio, prefer, self.min_gap
+                )
                 if self.suppress_tangential:
                     ext = remove_tangential(ext, tangents)
                 forces += ext

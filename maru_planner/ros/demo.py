@@ -44,8 +44,14 @@ def parse_args(argv=None) -> argparse.Namespace:
 def start_node(out_dir: Path) -> tuple[subprocess.Popen, Path]:
     log_path = out_dir / "planning_node.log"
     log = open(log_path, "w")  # noqa: SIM115 - closed with the process
-    cmd = [sys.executable, "-m", "maru_planner.ros.planning_node", "--ros-args", "--params-file",
-           str(config_path("planner.yaml"))]
+    cmd = [
+        sys.executable,
+        "-m",
+        "maru_planner.ros.planning_node",
+        "--ros-args",
+        "--params-file",
+        str(config_path("planner.yaml")),
+    ]
     return subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL), log_path
 
 
@@ -57,36 +63,42 @@ def run_planners(client, problem, joint_names, planners, time_budget, seed) -> l
     for planner_id in planners:
         print(f"[demo] planning with {planner_id} (budget {time_budget:.0f} s) ...", flush=True)
         t0 = time.perf_counter()
-        response = client.plan(goal, start=start, group=problem.group, planner_id=planner_id,
-                               time_budget=time_budget, seed=seed)
+        response = client.plan(
+            goal, start=start, group=problem.group, planner_id=planner_id, time_budget=time_budget, seed=seed
+        )
         round_trip = time.perf_counter() - t0
         ok = response.error.code == PlanningError.SUCCESS
-        rows.append({
-            "planner": planner_id,
-            "success": ok,
-            "status_code": response.error.code,
-            "message": response.error.message,
-            "planning_time": response.planning_time,
-            "round_trip": round_trip,
-            "nodes": response.stats.nodes,
-            "collision_checks": response.stats.collision_checks,
-            "path_length": response.stats.path_length if ok else None,
-            "waypoints": response.stats.waypoints,
-            "response": response,
-        })
+        rows.append(
+            {
+                "planner": planner_id,
+                "success": ok,
+                "status_code": response.error.code,
+                "message": response.error.message,
+                "planning_time": response.planning_time,
+                "round_trip": round_trip,
+                "nodes": response.stats.nodes,
+                "collision_checks": response.stats.collision_checks,
+                "path_length": response.stats.path_length if ok else None,
+                "waypoints": response.stats.waypoints,
+                "response": response,
+            }
+        )
     return rows
 
 
 def format_table(rows: list[dict]) -> list[str]:
-    cells = [[
-        r["planner"],
-        "yes" if r["success"] else f"no ({r['message'][:40]})",
-        f"{r['planning_time']:.3f}",
-        f"{r['round_trip']:.3f}",
-        str(r["nodes"]),
-        str(r["collision_checks"]),
-        f"{r['path_length']:.2f}" if r["path_length"] is not None else "-",
-    ] for r in rows]
+    cells = [
+        [
+            r["planner"],
+            "yes" if r["success"] else f"no ({r['message'][:40]})",
+            f"{r['planning_time']:.3f}",
+            f"{r['round_trip']:.3f}",
+            str(r["nodes"]),
+            str(r["collision_checks"]),
+            f"{r['path_length']:.2f}" if r["path_length"] is not None else "-",
+        ]
+        for r in rows
+    ]
     widths = [max(len(h), *(len(c[i]) for c in cells)) for i, h in enumerate(COLUMNS)]
     line = "| " + " | ".join(h.ljust(w) for h, w in zip(COLUMNS, widths)) + " |"
     sep = "|" + "|".join("-" * (w + 2) for w in widths) + "|"
@@ -112,8 +124,13 @@ def draw_plan(rows, client, out_dir: Path) -> Path | None:
         return None
     best = next((r for r in solved if r["planner"] == PlannerConfig.default_planner), solved[0])
     scene = Scene.from_yaml(client.get_scene().scene_yaml)
-    return plot_plan(RobotModel.maru1(), scene, trajectory_as_result(best["response"]), out_dir / "plan_13dof.png",
-                     title=f"Maru-1 13-DOF, {best['planner']} via plan_motion")
+    return plot_plan(
+        RobotModel.maru1(),
+        scene,
+        trajectory_as_result(best["response"]),
+        out_dir / "plan_13dof.png",
+        title=f"Maru-1 13-DOF, {best['planner']} via plan_motion",
+    )
 
 
 def write_results(rows, out_dir: Path, table: list[str]) -> None:

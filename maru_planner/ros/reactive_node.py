@@ -70,23 +70,32 @@ from maru_planner.ros.lifecycle import ManagedNode, run_node
 class NodeSettings:
     """reactive_node's own parameters (the controller's are :class:`StripParams`)."""
 
-    stale_scan_timeout: float = param(0.5, "s: a scan older than this on the node's clock stops the base",
-                                      lower=0.01, upper=60.0)
-    scan_timeout: float = param(0.5, "s of wall time without a valid scan before the watchdog stops the base",
-                                lower=0.05, upper=3600.0)
-    future_tolerance: float = param(0.5, "s: a scan or odometry stamped further ahead of the node's clock is dropped",
-                                    lower=0.0, upper=60.0)
+    stale_scan_timeout: float = param(
+        0.5, "s: a scan older than this on the node's clock stops the base", lower=0.01, upper=60.0
+    )
+    scan_timeout: float = param(
+        0.5, "s of wall time without a valid scan before the watchdog stops the base", lower=0.05, upper=3600.0
+    )
+    future_tolerance: float = param(
+        0.5, "s: a scan or odometry stamped further ahead of the node's clock is dropped", lower=0.0, upper=60.0
+    )
     odom_sync: bool = param(True, "hold a scan until odometry stamped at or after it arrives (at most one scan)")
     odom_frame: str = param("odom", "frame of the strip and markers")
     base_frame: str = param("base_link", "frame of the stamped command")
-    scan_reliability: str = param("best_effort", "QoS of the scan subscription (reliable for lock-step replays)",
-                                  choices=("best_effort", "reliable"), read_only=True)
+    scan_reliability: str = param(
+        "best_effort",
+        "QoS of the scan subscription (reliable for lock-step replays)",
+        choices=("best_effort", "reliable"),
+        read_only=True,
+    )
     publish_arm: bool = param(True, "publish ~/arm_command")
     warn_throttle_period: float = param(2.0, "s between repeats of one kind of warning", lower=0.0, upper=3600.0)
-    goal_path_tolerance: float = param(0.25, "m: a /plan ending this close to a new /goal_pose stays the initial path",
-                                       lower=0.0, upper=100.0)
-    status_period: float = param(30.0, "s of wall time between status lines in the log (0 = off)",
-                                 lower=0.0, upper=86400.0)
+    goal_path_tolerance: float = param(
+        0.25, "m: a /plan ending this close to a new /goal_pose stays the initial path", lower=0.0, upper=100.0
+    )
+    status_period: float = param(
+        30.0, "s of wall time between status lines in the log (0 = off)", lower=0.0, upper=86400.0
+    )
 
 
 NODE_SPECS = dataclass_params(NodeSettings)
@@ -267,8 +276,9 @@ class ReactiveNode(ManagedNode):
                 callback(*args)
             except Exception as exc:  # noqa: BLE001 - no message may kill the node; it keeps serving
                 self.counts["errors"] += 1
-                self.warnings.error(f"error:{name}", f"{name} callback failed, stopping the base: "
-                                                     f"{type(exc).__name__}: {one_line(exc)}")
+                self.warnings.error(
+                    f"error:{name}", f"{name} callback failed, stopping the base: {type(exc).__name__}: {one_line(exc)}"
+                )
                 self._stop_base()
 
         return guarded
@@ -282,8 +292,10 @@ class ReactiveNode(ManagedNode):
         if self.update_ms:
             ms = np.array(self.update_ms)
             parts.append(f"update median {np.median(ms):.2f} ms, max {ms.max():.2f} ms (last {len(ms)})")
-        parts.append("future {future}, rejected goals {bad_goals}, plans {bad_plans}, odometry {bad_odometry}, "
-                     "callback errors {errors}".format(**c))
+        parts.append(
+            "future {future}, rejected goals {bad_goals}, plans {bad_plans}, odometry {bad_odometry}, "
+            "callback errors {errors}".format(**c)
+        )
         return "; ".join(parts)
 
     # ------------------------------------------------------------ time
@@ -298,8 +310,11 @@ class ReactiveNode(ManagedNode):
             return True
         self.counts["future"] += 1
         hint = " (no /clock received yet?)" if now == 0.0 else ""
-        self.warnings.warn(f"future:{what}", f"dropped {what} stamped {ahead:.3f} s ahead of the clock "
-                                             f"(future_tolerance {self.settings.future_tolerance} s){hint}")
+        self.warnings.warn(
+            f"future:{what}",
+            f"dropped {what} stamped {ahead:.3f} s ahead of the clock "
+            f"(future_tolerance {self.settings.future_tolerance} s){hint}",
+        )
         return False
 
     def on_time_jump(self, jump: TimeJump) -> None:
@@ -444,15 +459,17 @@ class ReactiveNode(ManagedNode):
         """Wall clock, both clock modes: stop the base once when no valid scan arrived for scan_timeout."""
         silent = time.monotonic() - self.last_valid_scan
         if not self.base_stopped and silent > self.settings.scan_timeout:
-            self.warnings.warn("silent", f"no scan for {silent:.2f} s (none valid within scan_timeout "
-                                         f"{self.settings.scan_timeout} s): stopping the base")
+            self.warnings.warn(
+                "silent",
+                f"no scan for {silent:.2f} s (none valid within scan_timeout "
+                f"{self.settings.scan_timeout} s): stopping the base",
+            )
             self._stop_base()
 
 
 def main(args: list[str] | None = None) -> int:
     """Entry point of ``ros2 run maru_planner reactive_node``; exit code 2 on bad start-up input."""
     return run_node("reactive_node", ReactiveNode, args, farewell=lambda node: node.status())
-
 
 
 if __name__ == "__main__":

@@ -38,19 +38,29 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog=PROG, description=__doc__.splitlines()[0], epilog=EXIT_CODES,
-                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = _Parser(
+        prog=PROG,
+        description=__doc__.splitlines()[0],
+        epilog=EXIT_CODES,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     parser.add_argument("--world", required=True, help="world YAML (see docs/reactive.md)")
     parser.add_argument("--strip", choices=("modified", "plain"), default="modified")
     parser.add_argument("--seed", type=int, default=0, help="seeds start jitter, laser noise and mover timing (>= 0)")
     parser.add_argument("--json", help="write the result JSON here")
     parser.add_argument("--png", help="write a picture of the run here")
     parser.add_argument("--gif", help="write an animation of the run here")
-    parser.add_argument("--max-time", type=float,
-                        help=f"simulated seconds before a time-out, at most {MAX_SIM_TIME:g} (default: world's)")
+    parser.add_argument(
+        "--max-time",
+        type=float,
+        help=f"simulated seconds before a time-out, at most {MAX_SIM_TIME:g} (default: world's)",
+    )
     parser.add_argument("--no-jitter", action="store_true", help="exact start pose and mover timing")
-    parser.add_argument("--continue-after-collision", action="store_true",
-                        help="count collisions (bumper stop) instead of ending the run at the first one")
+    parser.add_argument(
+        "--continue-after-collision",
+        action="store_true",
+        help="count collisions (bumper stop) instead of ending the run at the first one",
+    )
     parser.add_argument("--no-arm", action="store_true", help="skip the arm update (eq. 46-49)")
     parser.add_argument("--quiet", action="store_true", help="no progress on stderr")
     return parser
@@ -89,9 +99,16 @@ def run(args: argparse.Namespace) -> None:
         print(f"[{PROG}] {world.name}: strip={args.strip} seed={args.seed} ...", file=sys.stderr)
     want_frames = bool(args.png or args.gif)
     frame_every = max(1, int(world.robot.laser.rate // 2)) if want_frames else 0
-    result = run_world(world, args.strip, seed=args.seed, jitter=not args.no_jitter, strip_every=frame_every,
-                       stop_on_collision=not args.continue_after_collision, max_time=args.max_time,
-                       arm_enabled=not args.no_arm)
+    result = run_world(
+        world,
+        args.strip,
+        seed=args.seed,
+        jitter=not args.no_jitter,
+        strip_every=frame_every,
+        stop_on_collision=not args.continue_after_collision,
+        max_time=args.max_time,
+        arm_enabled=not args.no_arm,
+    )
     payload = {"world": world.name, "strip": args.strip, "seed": args.seed, **result.to_json()}
     text = json.dumps(payload, indent=2)
     if args.json:

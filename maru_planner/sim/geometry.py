@@ -33,8 +33,9 @@ def rays_vs_circles(origin: np.ndarray, dirs: np.ndarray, circles: np.ndarray, m
     return np.minimum(out, t.min(axis=1))
 
 
-def fan_vs_circles(origin: np.ndarray, angle0: float, increment: float, count: int, circles: np.ndarray,
-                   max_range: float) -> np.ndarray:
+def fan_vs_circles(
+    origin: np.ndarray, angle0: float, increment: float, count: int, circles: np.ndarray, max_range: float
+) -> np.ndarray:
     """Like :func:`rays_vs_circles` for a fan of ``count`` rays at ``angle0 + k * increment`` (fan < 360 deg).
 
     Only the beams inside each circle's angular extent are tested, so the

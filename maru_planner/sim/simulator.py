@@ -38,16 +38,30 @@ class RunResult:
     strips: list = field(default_factory=list)  # (time, pose, strip (k, 2), obstacle points (m, 2))
 
     def to_json(self) -> dict:
-        return {"success": self.success, "outcome": self.outcome, "collisions": self.collisions,
-                "time_to_goal": self.time_to_goal, "path_length": round(self.path_length, 4),
-                "min_clearance": round(self.min_clearance, 4), "update_ms": self.update_ms, "updates": self.updates}
+        return {
+            "success": self.success,
+            "outcome": self.outcome,
+            "collisions": self.collisions,
+            "time_to_goal": self.time_to_goal,
+            "path_length": round(self.path_length, 4),
+            "min_clearance": round(self.min_clearance, 4),
+            "update_ms": self.update_ms,
+            "updates": self.updates,
+        }
 
 
 class Simulator:
     """A world, a robot pose and a clock. ``seed`` drives start jitter, laser noise and mover timing."""
 
-    def __init__(self, world: World, seed: int = 0, start_jitter: float = 0.0, heading_jitter: float = 0.0,
-                 mover_jitter: float = 0.0, noise: float | None = None):
+    def __init__(
+        self,
+        world: World,
+        seed: int = 0,
+        start_jitter: float = 0.0,
+        heading_jitter: float = 0.0,
+        mover_jitter: float = 0.0,
+        noise: float | None = None,
+    ):
         self.world = world
         self.rng = np.random.default_rng(seed)
         start = world.robot.start.astype(float).copy()
@@ -61,7 +75,8 @@ class Simulator:
         laser = world.robot.laser
         self.noise = laser.noise if noise is None else noise
         self._beam_angles = math.radians(-laser.fov_deg / 2) + math.radians(laser.resolution_deg) * np.arange(
-            laser.beams)
+            laser.beams
+        )
         self.collided = False
         self._distance_field = world.occupancy.distance_field() if world.occupancy is not None else None
 
@@ -79,8 +94,14 @@ class Simulator:
         origin = np.array([lx, ly])
         a = lth + self._beam_angles
         dirs = np.stack([np.cos(a), np.sin(a)], axis=1)
-        r = fan_vs_circles(origin, lth + self._beam_angles[0], math.radians(laser.resolution_deg), laser.beams,
-                           self.world.circles_at(self.time, self.mover_offset), laser.range_max)
+        r = fan_vs_circles(
+            origin,
+            lth + self._beam_angles[0],
+            math.radians(laser.resolution_deg),
+            laser.beams,
+            self.world.circles_at(self.time, self.mover_offset),
+            laser.range_max,
+        )
         r = np.minimum(r, rays_vs_segments(origin, dirs, self.world.segments))
         if self.world.occupancy is not None:
             r = np.minimum(r, _rays_vs_map(self.world.occupancy, origin, dirs, laser.range_max))
@@ -95,8 +116,14 @@ class Simulator:
             finite = np.isfinite(r)
             r[finite] = r[finite] + self.rng.normal(0.0, self.noise, int(finite.sum()))
             r[finite] = np.clip(r[finite], laser.range_min, laser.range_max)
-        return LaserScanData(angle_min=math.radians(-laser.fov_deg / 2), angle_increment=math.radians(
-            laser.resolution_deg), ranges=r, range_min=laser.range_min, range_max=laser.range_max, stamp=self.time)
+        return LaserScanData(
+            angle_min=math.radians(-laser.fov_deg / 2),
+            angle_increment=math.radians(laser.resolution_deg),
+            ranges=r,
+            range_min=laser.range_min,
+            range_max=laser.range_max,
+            stamp=self.time,
+        )
 
     # -- geometry --------------------------------------------------------------------------------------
     def _footprint_world(self, pose) -> np.ndarray | None:
@@ -128,11 +155,15 @@ class Simulator:
             best = min(best, float(np.min(np.where(inside, -circles[:, 2], d))))
         for poly in self.world.polygons:
             poly_edges = polygon_segments(poly)
-            if segments_intersect(edges, poly_edges) or point_in_polygon(fp[:1], poly)[0] or \
-                    point_in_polygon(poly[:1], fp)[0]:
+            if (
+                segments_intersect(edges, poly_edges)
+                or point_in_polygon(fp[:1], poly)[0]
+                or point_in_polygon(poly[:1], fp)[0]
+            ):
                 return -1e-3 if best > 0 else best
-            best = min(best, float(points_to_segments(fp, poly_edges).min()),
-                       float(points_to_segments(poly, edges).min()))
+            best = min(
+                best, float(points_to_segments(fp, poly_edges).min()), float(points_to_segments(poly, edges).min())
+            )
         if self._distance_field is not None:
             samples = np.vstack([fp, 0.5 * (fp + np.roll(fp, -1, axis=0)), centre[None]])
             best = min(best, self._map_distance(samples))
@@ -179,8 +210,14 @@ class Simulator:
         return math.hypot(self.robot_pose[0] - g[0], self.robot_pose[1] - g[1])
 
     # -- closed loop -----------------------------------------------------------------------------------
-    def run(self, controller, max_time: float | None = None, stop_on_collision: bool = True,
-            strip_every: int = 0, progress=None) -> RunResult:
+    def run(
+        self,
+        controller,
+        max_time: float | None = None,
+        stop_on_collision: bool = True,
+        strip_every: int = 0,
+        progress=None,
+    ) -> RunResult:
         """Run ``controller`` (ElasticStripController-like: update(pose, scan) -> (v, w)) at the laser rate."""
         max_time = self.world.max_time if max_time is None else max_time
         dt = 1.0 / self.world.robot.laser.rate
@@ -198,8 +235,9 @@ class Simulator:
             out = controller.update(self.robot_pose, scan)
             update_times.append(time.perf_counter() - t0)
             if strip_every and tick % strip_every == 0:
-                strips.append((self.time, self.robot_pose, np.asarray(out.strip).copy(),
-                               np.asarray(out.obstacle_points).copy()))
+                strips.append(
+                    (self.time, self.robot_pose, np.asarray(out.strip).copy(), np.asarray(out.obstacle_points).copy())
+                )
             before = self.robot_pose
             hit, clearance = self._step(out.v, out.w, dt)
             length += math.hypot(self.robot_pose[0] - before[0], self.robot_pose[1] - before[1])
@@ -219,12 +257,18 @@ class Simulator:
                 break
         ms = np.array(update_times) * 1e3 if update_times else np.zeros(1)
         success = outcome == "goal" and collisions == 0
-        return RunResult(success=success, outcome=outcome, collisions=collisions,
-                         time_to_goal=round(self.time, 3) if outcome == "goal" else None, path_length=length,
-                         min_clearance=float(min_clear),
-                         update_ms={"median": round(float(np.median(ms)), 4),
-                                    "p99": round(float(np.percentile(ms, 99)), 4)},
-                         trajectory=np.array(traj), updates=len(update_times), strips=strips)
+        return RunResult(
+            success=success,
+            outcome=outcome,
+            collisions=collisions,
+            time_to_goal=round(self.time, 3) if outcome == "goal" else None,
+            path_length=length,
+            min_clearance=float(min_clear),
+            update_ms={"median": round(float(np.median(ms)), 4), "p99": round(float(np.percentile(ms, 99)), 4)},
+            trajectory=np.array(traj),
+            updates=len(update_times),
+            strips=strips,
+        )
 
 
 def _rays_vs_map(occ: OccupancyMap, origin: np.ndarray, dirs: np.ndarray, max_range: float) -> np.ndarray:

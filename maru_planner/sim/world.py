@@ -189,8 +189,18 @@ class World:
     def from_dict(cls, data, base_dir: Path | None = None, name: str = "world") -> World:
         if not isinstance(data, dict):
             raise WorldError("world: expected a mapping at the top level")
-        unknown = set(data) - {"name", "description", "map", "obstacles", "movers", "robot", "path",
-                               "goal_tolerance", "max_time", "bounds"}
+        unknown = set(data) - {
+            "name",
+            "description",
+            "map",
+            "obstacles",
+            "movers",
+            "robot",
+            "path",
+            "goal_tolerance",
+            "max_time",
+            "bounds",
+        }
         if unknown:
             raise WorldError(f"world: unknown field(s) {sorted(unknown)}")
         if "robot" not in data:
@@ -213,11 +223,18 @@ class World:
         if data.get("path") is not None:
             path = _array(data["path"], "path", cols=(2, 3))
         bounds = tuple(_array(data["bounds"], "bounds", size=4)) if data.get("bounds") is not None else None
-        return cls(robot=_parse_robot(data["robot"]), circles=np.array(circles).reshape(-1, 3), polygons=polygons,
-                   movers=movers, occupancy=occupancy, path=path,
-                   goal_tolerance=_positive(data.get("goal_tolerance", 0.3), "goal_tolerance"),
-                   max_time=_positive(data.get("max_time", 60.0), "max_time", upper=MAX_SIM_TIME),
-                   name=str(data.get("name", name)), bounds=bounds)
+        return cls(
+            robot=_parse_robot(data["robot"]),
+            circles=np.array(circles).reshape(-1, 3),
+            polygons=polygons,
+            movers=movers,
+            occupancy=occupancy,
+            path=path,
+            goal_tolerance=_positive(data.get("goal_tolerance", 0.3), "goal_tolerance"),
+            max_time=_positive(data.get("max_time", 60.0), "max_time", upper=MAX_SIM_TIME),
+            name=str(data.get("name", name)),
+            bounds=bounds,
+        )
 
     def circles_at(self, t: float, time_offset: float = 0.0) -> np.ndarray:
         """Static circles plus the movers' circles at time ``t``."""
@@ -299,9 +316,13 @@ def _parse_mover(entry, what: str) -> Mover:
     mode = entry.get("mode", "stop")
     if mode not in ("stop", "loop", "pingpong"):
         raise WorldError(f"{what}.mode: must be stop, loop or pingpong, got {mode!r}")
-    return Mover(radius=_positive(entry.get("radius", 0.25), f"{what}.radius"),
-                 speed=_positive(entry.get("speed", 1.2), f"{what}.speed"), waypoints=pts,
-                 start_time=_number(entry.get("start_time", 0.0), f"{what}.start_time"), mode=mode)
+    return Mover(
+        radius=_positive(entry.get("radius", 0.25), f"{what}.radius"),
+        speed=_positive(entry.get("speed", 1.2), f"{what}.speed"),
+        waypoints=pts,
+        start_time=_number(entry.get("start_time", 0.0), f"{what}.start_time"),
+        mode=mode,
+    )
 
 
 def _parse_robot(entry) -> RobotSpec:
@@ -325,10 +346,15 @@ def _parse_robot(entry) -> RobotSpec:
     if unknown:
         raise WorldError(f"robot.laser: unknown field(s) {sorted(unknown)}")
     laser = _parse_laser(laser_entry)
-    return RobotSpec(start=start, goal=goal, radius=_positive(entry.get("radius", 0.30), "robot.radius"),
-                     footprint=footprint,
-                     max_linear=_positive(entry.get("max_linear", 0.5), "robot.max_linear"),
-                     max_angular=_positive(entry.get("max_angular", 1.0), "robot.max_angular"), laser=laser)
+    return RobotSpec(
+        start=start,
+        goal=goal,
+        radius=_positive(entry.get("radius", 0.30), "robot.radius"),
+        footprint=footprint,
+        max_linear=_positive(entry.get("max_linear", 0.5), "robot.max_linear"),
+        max_angular=_positive(entry.get("max_angular", 1.0), "robot.max_angular"),
+        laser=laser,
+    )
 
 
 def _parse_laser(entry: dict) -> LaserSpec:

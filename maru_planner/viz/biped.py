@@ -13,8 +13,13 @@ from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
 from maru_planner.base.biped.mapping import LINE, LINE_AND_VIRTUAL, OVERHEAD, STEPPABLE, VIRTUAL, classify  # noqa: E402
 
-CLASS_COLOURS = {STEPPABLE: "#9ccc65", LINE: "#ffb74d", VIRTUAL: "#64b5f6", LINE_AND_VIRTUAL: "#78909c",
-                 OVERHEAD: "#e0e0e0"}
+CLASS_COLOURS = {
+    STEPPABLE: "#9ccc65",
+    LINE: "#ffb74d",
+    VIRTUAL: "#64b5f6",
+    LINE_AND_VIRTUAL: "#78909c",
+    OVERHEAD: "#e0e0e0",
+}
 
 
 def draw_scene_3d(ax, world) -> None:
@@ -41,16 +46,27 @@ def draw_map_2d(ax, m) -> None:
     img = np.ones(m.shape + (3,))
     img[m.virtual] = (0.55, 0.75, 0.95)
     img[m.line] = (0.95, 0.6, 0.2)
-    extent = (m.origin[0], m.origin[0] + m.shape[1] * m.resolution, m.origin[1],
-              m.origin[1] + m.shape[0] * m.resolution)
+    extent = (
+        m.origin[0],
+        m.origin[0] + m.shape[1] * m.resolution,
+        m.origin[1],
+        m.origin[1] + m.shape[0] * m.resolution,
+    )
     ax.imshow(img, origin="lower", extent=extent, interpolation="nearest")
     ax.set_aspect("equal")
 
 
 def draw_rectangle(ax, pose, length, width, **style) -> None:
     c, s = math.cos(pose[2]), math.sin(pose[2])
-    local = np.array([[-length / 2, -width / 2], [length / 2, -width / 2], [length / 2, width / 2],
-                      [-length / 2, width / 2], [-length / 2, -width / 2]])
+    local = np.array(
+        [
+            [-length / 2, -width / 2],
+            [length / 2, -width / 2],
+            [length / 2, width / 2],
+            [-length / 2, width / 2],
+            [-length / 2, -width / 2],
+        ]
+    )
     pts = local @ np.array([[c, s], [-s, c]]) + pose[:2]
     ax.plot(pts[:, 0], pts[:, 1], **style)
 
@@ -85,8 +101,7 @@ def draw_scene_figure(world, m, plans: dict, title: str = ""):
         if world.start is not None:
             ax.plot(*world.start[:2], "bo")
             ax.plot(*world.goal[:2], "o", color="limegreen")
-        ax.set_title(f"{name}: {plan.status.value} ({plan.stats.planning_time:.3f} s)\n{plan.message[:70]}",
-                     fontsize=8)
+        ax.set_title(f"{name}: {plan.status.value} ({plan.stats.planning_time:.3f} s)\n{plan.message[:70]}", fontsize=8)
     if title:
         fig.suptitle(title)
     fig.tight_layout()

@@ -61,8 +61,17 @@ def draw_path(ax, grid, path, footprint=None, every: int | None = None, color="t
 def draw_windows(ax, grid, windows):
     for r0, c0, r1, c1 in np.asarray(windows).reshape(-1, 4):
         x0, y0 = grid.origin[0] + c0 * grid.resolution, grid.origin[1] + r0 * grid.resolution
-        ax.add_patch(Rectangle((x0, y0), (c1 - c0) * grid.resolution, (r1 - r0) * grid.resolution, fill=False,
-                               edgecolor="tab:green", lw=1.0, ls="--"))
+        ax.add_patch(
+            Rectangle(
+                (x0, y0),
+                (c1 - c0) * grid.resolution,
+                (r1 - r0) * grid.resolution,
+                fill=False,
+                edgecolor="tab:green",
+                lw=1.0,
+                ls="--",
+            )
+        )
 
 
 def plot_plan(grid, result, start=None, goal=None, footprint=None, title: str = "", ax=None):

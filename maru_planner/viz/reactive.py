@@ -11,8 +11,13 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
 from matplotlib.patches import Circle, Polygon  # noqa: E402
 from PIL import Image  # noqa: E402
 
-STRIP_COLOURS = {"modified": "tab:blue", "plain": "tab:red", "baseline": "tab:gray", "modified_literal": "tab:purple",
-                 "modified_straight": "tab:cyan"}
+STRIP_COLOURS = {
+    "modified": "tab:blue",
+    "plain": "tab:red",
+    "baseline": "tab:gray",
+    "modified_literal": "tab:purple",
+    "modified_straight": "tab:cyan",
+}
 
 
 def draw_world(ax, world, t: float = 0.0, mover_offset: float = 0.0, show_movers: bool = True) -> None:
@@ -20,9 +25,18 @@ def draw_world(ax, world, t: float = 0.0, mover_offset: float = 0.0, show_movers
     if world.occupancy is not None:
         occ = world.occupancy
         h, w = occ.occupied.shape
-        ax.imshow(occ.occupied, origin="lower", cmap="Greys", alpha=0.6,
-                  extent=(occ.origin[0], occ.origin[0] + w * occ.resolution,
-                          occ.origin[1], occ.origin[1] + h * occ.resolution))
+        ax.imshow(
+            occ.occupied,
+            origin="lower",
+            cmap="Greys",
+            alpha=0.6,
+            extent=(
+                occ.origin[0],
+                occ.origin[0] + w * occ.resolution,
+                occ.origin[1],
+                occ.origin[1] + h * occ.resolution,
+            ),
+        )
     for x, y, r in world.circles:
         ax.add_patch(Circle((x, y), r, color="0.45"))
     for poly in world.polygons:
@@ -41,8 +55,14 @@ def draw_world(ax, world, t: float = 0.0, mover_offset: float = 0.0, show_movers
     ax.set_aspect("equal")
 
 
-def draw_run(ax, result, colour: str = "tab:blue", label: str | None = None, strips: bool = True,
-             robot_radius: float | None = None) -> None:
+def draw_run(
+    ax,
+    result,
+    colour: str = "tab:blue",
+    label: str | None = None,
+    strips: bool = True,
+    robot_radius: float | None = None,
+) -> None:
     """A run's trajectory, the strip snapshots it recorded, and where it ended."""
     traj = np.asarray(result.trajectory)
     ax.plot(traj[:, 0], traj[:, 1], "-", color=colour, lw=1.5, label=label)
@@ -71,8 +91,13 @@ def save_run_picture(path, world, results: dict, title: str = "") -> None:
     fig, ax = plt.subplots(figsize=(8, 5))
     draw_world(ax, world, show_movers=False)
     for label, result in results.items():
-        draw_run(ax, result, STRIP_COLOURS.get(label, "tab:purple"), f"{label}: {result.outcome}",
-                 robot_radius=world.robot.bounding_radius)
+        draw_run(
+            ax,
+            result,
+            STRIP_COLOURS.get(label, "tab:purple"),
+            f"{label}: {result.outcome}",
+            robot_radius=world.robot.bounding_radius,
+        )
     ax.legend(loc="upper left", fontsize=8)
     ax.set_title(title or world.name)
     ax.set_xlabel("x [m]")

@@ -34,8 +34,16 @@ def _overlay(ax, mask, color, alpha=0.45):
     ax.imshow(rgba, origin="lower", interpolation="nearest")
 
 
-def draw_stages(occupied: np.ndarray, grown: np.ndarray, attempts: list, raw_cells: np.ndarray,
-                waypoints: np.ndarray, start_cell, goal_cell, title: str = ""):
+def draw_stages(
+    occupied: np.ndarray,
+    grown: np.ndarray,
+    attempts: list,
+    raw_cells: np.ndarray,
+    waypoints: np.ndarray,
+    start_cell,
+    goal_cell,
+    title: str = "",
+):
     """A 1 × 4 figure: tunnel T with lumped cells, thin tunnel B, PFP cell path, final path."""
     fig, axes = plt.subplots(1, 4, figsize=(16, 4.4))
     last = attempts[-1] if attempts else None

@@ -28,8 +28,10 @@ class RectangleChecker:
         nu = max(2, int(math.ceil(length / step)) + 1)
         nv = max(2, int(math.ceil(width / step)) + 1)
         if nu * nv > MAX_RECTANGLE_SAMPLES:
-            raise TooLarge(f"a {length:g} x {width:g} m gait rectangle on {resolution:g} m cells needs {nu * nv} "
-                           f"samples per check, over the limit of {MAX_RECTANGLE_SAMPLES}")
+            raise TooLarge(
+                f"a {length:g} x {width:g} m gait rectangle on {resolution:g} m cells needs {nu * nv} "
+                f"samples per check, over the limit of {MAX_RECTANGLE_SAMPLES}"
+            )
         u, v = np.meshgrid(np.linspace(-length / 2, length / 2, nu), np.linspace(-width / 2, width / 2, nv))
         self.local = np.column_stack([u.ravel(), v.ravel()])
         self.checks = 0

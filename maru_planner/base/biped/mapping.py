@@ -67,7 +67,8 @@ class BipedMap2D:
 
     def world_to_cell(self, x: float, y: float) -> tuple[int, int]:
         return int(math.floor((y - self.origin[1]) / self.resolution)), int(
-            math.floor((x - self.origin[0]) / self.resolution))
+            math.floor((x - self.origin[0]) / self.resolution)
+        )
 
     def cell_to_world(self, row: float, col: float) -> tuple[float, float]:
         return self.origin[0] + (col + 0.5) * self.resolution, self.origin[1] + (row + 0.5) * self.resolution

@@ -113,8 +113,10 @@ def build_track_graph(m: BipedMap2D, robot: BipedRobot, clearance: ClearanceLook
     if len(pts) < 4:
         return np.zeros((0, 2)), {}
     if len(pts) > MAX_VORONOI_POINTS:
-        raise TooLarge(f"the map has {len(pts)} obstacle-boundary points, over the track planner's limit of "
-                       f"{MAX_VORONOI_POINTS}: use a coarser map")
+        raise TooLarge(
+            f"the map has {len(pts)} obstacle-boundary points, over the track planner's limit of "
+            f"{MAX_VORONOI_POINTS}: use a coarser map"
+        )
     # Qhull cannot be interrupted: start it only with time to finish
     deadline.reserve(len(pts) * _VORONOI_SECONDS_PER_POINT, f"the Voronoi diagram of {len(pts)} points")
     vor = Voronoi(pts)
@@ -209,8 +211,11 @@ class TrackFollowingPlanner(BipedPlanner):
         layers["track_vertices"], layers["track_edges"] = verts, _edge_array(verts, adjacency)
         half = robot.gait_width / 2
         s_id, g_id = len(verts), len(verts) + 1
-        nodes = np.vstack([verts, np.asarray(start[:2], float), np.asarray(goal[:2], float)]) if len(verts) else \
-            np.array([start[:2], goal[:2]], dtype=float)
+        nodes = (
+            np.vstack([verts, np.asarray(start[:2], float), np.asarray(goal[:2], float)])
+            if len(verts)
+            else np.array([start[:2], goal[:2]], dtype=float)
+        )
         if not len(verts):
             s_id, g_id = 0, 1
         graph = {k: dict(v) for k, v in adjacency.items()}
@@ -275,8 +280,9 @@ class TrackFollowingPlanner(BipedPlanner):
 
     def _check_turns(self, track, start, goal, clearance):
         """Index and message of the first segment point where the turn is not allowed, or None."""
-        headings = [math.atan2(b[1] - a[1], b[0] - a[0]) for a, b in zip(track[:-1], track[1:])
-                    if np.linalg.norm(b - a) > 1e-9]
+        headings = [
+            math.atan2(b[1] - a[1], b[0] - a[0]) for a, b in zip(track[:-1], track[1:]) if np.linalg.norm(b - a) > 1e-9
+        ]
         if not headings:
             headings = [start[2]]
         turns = [(0, wrap_angle(headings[0] - start[2]))]
@@ -289,8 +295,10 @@ class TrackFollowingPlanner(BipedPlanner):
             ok, need = turn_allowed(phi, self.robot, half_width)
             if not ok:
                 x, y = track[index]
-                return index, (f"turn of {math.degrees(abs(phi)):.0f} deg at ({x:.2f}, {y:.2f}) needs "
-                               f"{need:.3f} m <= L = {half_width:.3f} m (K = {self.robot.corner_distance:.3f} m)")
+                return index, (
+                    f"turn of {math.degrees(abs(phi)):.0f} deg at ({x:.2f}, {y:.2f}) needs "
+                    f"{need:.3f} m <= L = {half_width:.3f} m (K = {self.robot.corner_distance:.3f} m)"
+                )
         return None
 
 

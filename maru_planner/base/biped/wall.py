@@ -47,8 +47,9 @@ from maru_planner.params import param
 @dataclass
 class WallParams:
     step: float = param(0.04, "metres walked per step", lower=1e-4, upper=10.0)
-    pivot: float = param(0.5, "pivot O along the axis, in gait lengths from the centre (0.5 = front edge)",
-                         lower=-0.5, upper=0.5)
+    pivot: float = param(
+        0.5, "pivot O along the axis, in gait lengths from the centre (0.5 = front edge)", lower=-0.5, upper=0.5
+    )
     max_turn: float = param(math.radians(12), "largest rotation per step (rad)", lower=1e-4, upper=math.pi)
     safety: float = param(0.8, "xi <= safety * theta (eq. 6-7 need xi < theta)", lower=1e-3, upper=0.999)
     angle_step: float = param(math.radians(2), "resolution of theta1, theta2 (rad)", lower=1e-4, upper=math.pi)
@@ -56,10 +57,10 @@ class WallParams:
     lookahead: float = param(0.35, "metres along the cost-to-go descent", lower=1e-3, upper=100.0)
     goal_tolerance: float = param(0.05, "distance to the goal that counts as arrived (m)", lower=1e-4, upper=10.0)
     max_steps: int = param(2000, "steps before giving up", lower=1, upper=10_000_000)
-    patience: int = param(150, "steps without getting closer to the goal before giving up", lower=1,
-                          upper=10_000_000)
-    oscillation_tolerance: float = param(math.radians(1), "limit change that counts as oscillating (rad)",
-                                         lower=0.0, upper=math.pi)
+    patience: int = param(150, "steps without getting closer to the goal before giving up", lower=1, upper=10_000_000)
+    oscillation_tolerance: float = param(
+        math.radians(1), "limit change that counts as oscillating (rad)", lower=0.0, upper=math.pi
+    )
     centering: float = param(2.0, "extra cost-to-go per cell of clearance missing to K", lower=0.0, upper=1000.0)
 
     def validate(self) -> None:
@@ -84,8 +85,9 @@ class WallStats(BipedStats):
     jammed_steps: int = 0
 
 
-def cost_to_go(passable: np.ndarray, goal_cell, cell_cost: np.ndarray | None = None,
-               deadline: Deadline | None = None) -> np.ndarray:
+def cost_to_go(
+    passable: np.ndarray, goal_cell, cell_cost: np.ndarray | None = None, deadline: Deadline | None = None
+) -> np.ndarray:
     """Octile wavefront cost from ``goal_cell`` over ``passable`` cells (inf elsewhere), 8-connected, no corner cutting.
 
     A move costs its length times the mean ``cell_cost`` of its two cells (1 by default).

@@ -116,8 +116,10 @@ def grid_shape(bounds: tuple, resolution: float) -> tuple[int, int]:
     xmin, ymin, xmax, ymax = bounds
     rows, cols = (ymax - ymin) / resolution, (xmax - xmin) / resolution
     if not rows * cols <= MAX_MAP_CELLS:  # also catches inf and nan before they become integers
-        raise TooLarge(f"world bounds {[round(b, 3) for b in bounds]} at {resolution:.3g} m: about "
-                       f"{rows * cols:.3g} cells, over the limit of {MAX_MAP_CELLS} cells")
+        raise TooLarge(
+            f"world bounds {[round(b, 3) for b in bounds]} at {resolution:.3g} m: about "
+            f"{rows * cols:.3g} cells, over the limit of {MAX_MAP_CELLS} cells"
+        )
     return int(math.ceil(rows - 1e-9)), int(math.ceil(cols - 1e-9))
 
 
@@ -133,8 +135,16 @@ def _floats(value, n: int, what: str) -> tuple:
 
 def _robot_from(data: dict | None) -> BipedRobot:
     data = dict(data or {})
-    known = {"gait_length", "gait_width", "body_width", "body_left", "body_right", "step_height", "body_bottom",
-             "height"}
+    known = {
+        "gait_length",
+        "gait_width",
+        "body_width",
+        "body_left",
+        "body_right",
+        "step_height",
+        "body_bottom",
+        "height",
+    }
     unknown = set(data) - known
     if unknown:
         raise InvalidScene(f"unknown robot field(s) {str(sorted(map(str, unknown)))[:80]}; expected {sorted(known)}")
@@ -195,8 +205,17 @@ def world_from_dict(data: dict, name: str = "world") -> BipedWorld:
             line = np.zeros((0,))
         if line.ndim != 2 or line.shape[1] != 2 or len(line) < 2 or not np.isfinite(line).all():
             raise InvalidScene("reference_line must be a list of at least two [x, y] points")
-    return BipedWorld(str(data.get("name", name)), resolution, bounds, _robot_from(data.get("robot")), obstacles,
-                      start, goal, line, {k: v for k, v in data.items() if k == "description"})
+    return BipedWorld(
+        str(data.get("name", name)),
+        resolution,
+        bounds,
+        _robot_from(data.get("robot")),
+        obstacles,
+        start,
+        goal,
+        line,
+        {k: v for k, v in data.items() if k == "description"},
+    )
 
 
 def load_world(path) -> BipedWorld:
