@@ -31,10 +31,17 @@ from geometry_msgs.msg import Point32, PoseStamped
 from hypothesis import HealthCheck, Phase, given, seed, settings
 from hypothesis import strategies as st
 from nav_msgs.msg import OccupancyGrid, Odometry, Path
+from reactive_helpers import (
+    OBSTACLE,
+    ReactiveClient,
+    laser_scans,
+    odom,
+    reactive_params_file,
+    shipped_params,
+    synthetic_scan,
+)
 from sensor_msgs.msg import JointState
 from shape_msgs.msg import SolidPrimitive
-from test_reactive_node import OBSTACLE, ReactiveClient, _odom, reactive_params_file, shipped_params, synthetic_scan
-from test_reactive_properties import laser_scans
 
 from maru_planner.paths import config_path
 from maru_planner.planning.problems import PROBLEMS
@@ -1189,7 +1196,7 @@ def hostile_paths(draw):
 
 
 @st.composite
-def hostile_odometry(draw):
+def hostileodometry(draw):
     msg = Odometry()
     msg.header.frame_id = draw(names_from(["odom", ""]))
     msg.child_frame_id = draw(names_from(["base_link", ""]))
@@ -1207,7 +1214,7 @@ def reactive_messages() -> st.SearchStrategy:
         hostile_poses(["odom", "", "map"], near=REACTIVE_GOAL).map(lambda m: ("goal", m)),
         hostile_paths().map(lambda m: ("plan", m)),
         laser_scans().map(lambda m: ("scan", m)),
-        hostile_odometry().map(lambda m: ("odom", m)),
+        hostileodometry().map(lambda m: ("odom", m)),
     )
 
 
@@ -1287,7 +1294,7 @@ class ReactiveNodeTarget:
     def good_step(self):
         """Good odometry + scan after the good goal: the command must move the base, within the limits."""
         stamp = next(self._stamps)
-        twist = self.client.step(_odom((0.0, 0.0, 0.0), stamp), synthetic_scan(stamp, [OBSTACLE]))
+        twist = self.client.step(odom((0.0, 0.0, 0.0), stamp), synthetic_scan(stamp, [OBSTACLE]))
         limits = shipped_params()
         return 0.0 < twist.linear.x <= limits["max_linear"] + 1e-9 and abs(twist.angular.z) <= limits["max_angular"]
 

@@ -13,11 +13,11 @@ import re
 
 import numpy as np
 import pytest
-from test_reactive_node import (
+from reactive_helpers import (
     NODE_MODULE,
     OBSTACLE,
     ReactiveClient,
-    _odom,
+    odom,
     reactive_params_file,
     shipped_params,
     synthetic_scan,
@@ -82,7 +82,7 @@ def expect_rejected(client, node, send, counter_name: str, message: str) -> None
 def good_step(client):
     """A good odometry + scan pair; the answer must move the base towards the goal within the limits."""
     stamp = next(_stamps)
-    twist = client.step(_odom((0.0, 0.0, 0.0), stamp), synthetic_scan(stamp, [OBSTACLE]))
+    twist = client.step(odom((0.0, 0.0, 0.0), stamp), synthetic_scan(stamp, [OBSTACLE]))
     limits = shipped_params()
     assert 0.0 < twist.linear.x <= limits["max_linear"] + 1e-9, twist
     assert abs(twist.angular.z) <= limits["max_angular"] + 1e-9
@@ -168,7 +168,7 @@ BAD_SCANS = {
 
 
 @pytest.mark.parametrize("case", list(BAD_SCANS))
-def test_malformed_scans_are_dropped_and_counted(case, client, node):
+def testmalformed_scans_are_dropped_and_counted(case, client, node):
     make, message = BAD_SCANS[case]
     expect_rejected(client, node, lambda: client.scan_pub.publish(make()), "dropped", message)
     good_step(client)
@@ -179,7 +179,7 @@ def test_a_scan_stamped_in_the_future_is_dropped_and_does_not_freeze_the_base(cl
     client.publish_clock(round(now * 1e9))
 
     def send():
-        client.odom_pub.publish(_odom((0.0, 0.0, 0.0), now))
+        client.odom_pub.publish(odom((0.0, 0.0, 0.0), now))
         client.scan_pub.publish(synthetic_scan(now + 1000.0, [OBSTACLE]))
 
     expect_rejected(client, node, send, "future", "dropped scan stamped 1000.")
@@ -187,7 +187,7 @@ def test_a_scan_stamped_in_the_future_is_dropped_and_does_not_freeze_the_base(cl
         good_step(client)
 
 
-def test_bad_odometry_is_dropped(client, node):
+def test_badodometry_is_dropped(client, node):
     from maru_planner.ros import reactive_conversions as conv
 
     bad = conv.odom_msg((0.0, 0.0, 0.0), 0.0, 0.0, next(_stamps), "odom", "base_link")

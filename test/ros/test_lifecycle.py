@@ -166,7 +166,7 @@ def test_base_planner_node_transitions_and_a_failed_configure(node_process, test
 
 
 def test_reactive_node_commands_only_while_active_and_stops_the_base_on_deactivate(node_process, tester, tmp_path):
-    from test_reactive_node import OBSTACLE, ReactiveClient, reactive_params_file, synthetic_scan
+    from reactive_helpers import OBSTACLE, ReactiveClient, reactive_params_file, synthetic_scan
 
     from maru_planner.ros import reactive_conversions as conv
 

@@ -14,172 +14,27 @@ from __future__ import annotations
 
 import math
 import re
-import threading
 from pathlib import Path
 
 import numpy as np
 import pytest
-import yaml
+from reactive_helpers import (
+    NODE_MODULE,
+    OBSTACLE,
+    REPO_ROOT,
+    ReactiveClient,
+    malformed_scans,
+    odom,
+    reactive_params_file,
+    shipped_params,
+    synthetic_scan,
+)
 
 from maru_planner.paths import config_path
 
 pytestmark = pytest.mark.ros
 
-NODE_MODULE = "maru_planner.ros.reactive_node"
-NODE_KEY = "/**"  # the params file applies to reactive_node in any namespace
-REPO_ROOT = Path(__file__).resolve().parents[2]
 
-
-def reactive_params_file(tmp_path: Path, **overrides) -> Path:
-    """config/reactive.yaml with ``overrides`` applied, written to a temporary file."""
-    data = yaml.safe_load(config_path("reactive.yaml").read_text())
-    data[NODE_KEY]["ros__parameters"].update(overrides)
-    path = tmp_path / f"reactive_{len(list(tmp_path.glob('reactive_*.yaml')))}.yaml"
-    path.write_text(yaml.safe_dump(data))
-    return path
-
-
-def shipped_params() -> dict:
-    return yaml.safe_load(config_path("reactive.yaml").read_text())[NODE_KEY]["ros__parameters"]
-
-
-class ReactiveClient:
-    """Publishers for the node's inputs and recorders of its outputs (one namespace)."""
-
-    def __init__(self, spinning, namespace: str = "", process=None, sim_time: bool = True):
-        """``sim_time``: publish ``<namespace>/clock`` before each step (start the node with
-        ``use_sim_time`` and, in a namespace, ``-r /clock:=<namespace>/clock``)."""
-        from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
-        from nav_msgs.msg import Odometry, Path
-        from rclpy.qos import QoSProfile, ReliabilityPolicy
-        from rosgraph_msgs.msg import Clock
-        from sensor_msgs.msg import LaserScan
-        from trajectory_msgs.msg import JointTrajectory
-        from visualization_msgs.msg import MarkerArray
-
-        reliable = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)
-        self.spinning = spinning
-        self.process = process  # the node under test, for its log in failure messages
-        node = self.node = spinning.node
-        self._lock = threading.Lock()
-        self.twists: list = []
-        self.stamped: dict[int, object] = {}  # scan stamp (ns) -> the Twist answering it
-        self.strips: list = []
-        self.arm: list = []
-        self.markers: list = []
-        # Created in this order on purpose: discovery announces endpoints in creation order, so once the
-        # node has matched the last writer (scan) and the last reader (cmd_vel_stamped), it has the others.
-        self.clock_pub = node.create_publisher(Clock, f"{namespace}/clock", reliable) if sim_time else None
-        self.odom_pub = node.create_publisher(Odometry, f"{namespace}/odom", reliable)
-        self.plan_pub = node.create_publisher(Path, f"{namespace}/plan", reliable)
-        self.goal_pub = node.create_publisher(PoseStamped, f"{namespace}/goal_pose", reliable)
-        self.scan_pub = node.create_publisher(LaserScan, f"{namespace}/scan", reliable)
-        private = f"{namespace}/reactive_node"
-        self._subscriptions = [
-            node.create_subscription(Twist, f"{namespace}/cmd_vel", self._keep(self.twists), reliable),
-            node.create_subscription(Path, f"{private}/strip", self._keep(self.strips), reliable),
-            node.create_subscription(JointTrajectory, f"{private}/arm_command", self._keep(self.arm), reliable),
-            node.create_subscription(MarkerArray, f"{private}/markers", self._keep(self.markers), reliable),
-            node.create_subscription(TwistStamped, f"{private}/cmd_vel_stamped", self._keep_stamped, reliable),
-        ]
-
-    def _keep(self, store: list):
-        def callback(msg):
-            with self._lock:
-                store.append(msg)
-
-        return callback
-
-    def _keep_stamped(self, msg) -> None:
-        from maru_planner.ros.reactive_conversions import stamp_to_ns
-
-        with self._lock:
-            self.stamped[stamp_to_ns(msg.header.stamp)] = msg.twist
-
-    def wait_connected(self, timeout: float = 90.0) -> None:
-        pubs = (self.scan_pub, self.odom_pub, self.plan_pub, self.goal_pub, *filter(None, [self.clock_pub]))
-        ok = self.spinning.wait_for(lambda: all(p.get_subscription_count() > 0 for p in pubs), timeout=timeout)
-        assert ok, "reactive_node did not subscribe to scan, odom, plan and goal_pose"
-        subs = self._subscriptions
-        ok = self.spinning.wait_for(lambda: all(s.get_publisher_count() > 0 for s in subs), timeout=timeout)
-        assert ok, "reactive_node's cmd_vel, strip, arm_command, markers, cmd_vel_stamped publishers not discovered"
-        self._handshake()
-
-    def _handshake(self, attempts: int = 60) -> None:
-        """Send odometry and a scan stamped 0 until their answer comes back.
-
-        Discovery is not symmetric: we can see the node's endpoints before the node knows ours, and
-        a volatile endpoint misses what is sent meanwhile. An answer to a scan (a zero Twist: there
-        is no goal yet) proves both directions are matched. Answers are told apart by their stamp.
-        """
-        from sensor_msgs.msg import LaserScan
-
-        from maru_planner.ros import reactive_conversions as conv
-
-        scan = LaserScan()
-        scan.angle_min, scan.angle_max, scan.angle_increment = -0.1, 0.1, 0.1
-        scan.range_min, scan.range_max, scan.ranges = 0.05, 10.0, [float("inf")] * 3
-        for _ in range(attempts):
-            self.odom_pub.publish(conv.odom_msg((0.0, 0.0, 0.0), 0.0, 0.0, 0.0, "odom", "base_link"))
-            self.scan_pub.publish(scan)
-            if self.spinning.wait_for(lambda: 0 in self.stamped and self.twist_count() > 0, timeout=1.0):
-                return
-        raise AssertionError("reactive_node never answered the handshake scan" + self._log_tail())
-
-    def _log_tail(self) -> str:
-        return f"; node log:\n{self.process.log()[-3000:]}" if self.process else ""
-
-    def send_and_confirm(self, publisher, msg, process, marker: str, attempts: int = 60) -> None:
-        """Publish a goal or plan until the node's log shows it was applied (``marker`` once more).
-
-        Re-sending is harmless: both only (re)set the initial path, and no scan is sent in between.
-        """
-        before = process.log().count(marker)
-        for _ in range(attempts):
-            publisher.publish(msg)
-            if self.spinning.wait_for(lambda: process.log().count(marker) > before, timeout=1.0):
-                return
-        raise AssertionError(f"reactive_node did not apply {publisher.topic_name}:\n{process.log()[-1500:]}")
-
-    def twist_count(self) -> int:
-        with self._lock:
-            return len(self.twists)
-
-    def publish_clock(self, stamp_ns: int) -> None:
-        from rosgraph_msgs.msg import Clock
-
-        from maru_planner.ros.reactive_conversions import ns_to_stamp
-
-        self.clock_pub.publish(Clock(clock=ns_to_stamp(stamp_ns)))
-
-    def step(self, odom, scan, timeout: float = 60.0, clock_ns: int | None = None):
-        """Send the clock (sim time: ``clock_ns``, else the newer of the two stamps), odometry and a scan;
-        return the command (Twist) that answers the scan."""
-        from maru_planner.ros.reactive_conversions import stamp_to_ns
-
-        stamp = stamp_to_ns(scan.header.stamp)
-        assert stamp not in self.stamped, "scan stamps must be unique within a test"
-        if self.clock_pub is not None:
-            newest = max(stamp, stamp_to_ns(odom.header.stamp) if odom is not None else stamp)
-            self.publish_clock(newest if clock_ns is None else clock_ns)
-        if odom is not None:
-            self.odom_pub.publish(odom)
-        self.scan_pub.publish(scan)
-        ok = self.spinning.wait_for(lambda: stamp in self.stamped, timeout=timeout)
-        assert ok, f"no command for the scan stamped {stamp} ns" + self._log_tail()
-        with self._lock:
-            return self.stamped[stamp]
-
-    def plain_twists_end_with(self, commands: list, timeout: float = 60.0) -> bool:
-        """The cmd_vel stream ends with ``commands`` (the answers to the scans, in order)."""
-        n = len(commands)
-        ok = self.spinning.wait_for(lambda: self.twist_count() >= n, timeout=timeout)
-        with self._lock:
-            tail = [(t.linear.x, t.angular.z) for t in self.twists[-n:]]
-        return ok and tail == [(t.linear.x, t.angular.z) for t in commands]
-
-
-# ---------------------------------------------------------------- conversions, no DDS
 def test_scan_conversion_round_trip_and_rep117_beams():
     from maru_planner.reactive import LaserScanData
     from maru_planner.ros import reactive_conversions as conv
@@ -228,7 +83,7 @@ def test_pose_path_twist_and_arm_conversions():
     from maru_planner.ros import reactive_conversions as conv
 
     odom = conv.odom_msg((1.0, -2.0, 2.5), 0.3, -0.4, 7.5, "odom", "base_link")
-    assert conv.pose_from_odom(odom) == pytest.approx((1.0, -2.0, 2.5))
+    assert conv.pose_fromodom(odom) == pytest.approx((1.0, -2.0, 2.5))
     assert odom.child_frame_id == "base_link" and odom.twist.twist.angular.z == -0.4
     goal = conv.pose_stamped_msg((3.0, 4.0, -3.0), "map", 1.0)
     assert conv.pose_from_pose_stamped(goal) == pytest.approx((3.0, 4.0, -3.0))
@@ -258,7 +113,7 @@ def test_bag_records_decode_to_rclpy_messages():
     from rclpy.serialization import serialize_message
 
     back = conv.decode_bag_record("nav_msgs/msg/Odometry", serialize_message(odom))
-    assert conv.pose_from_odom(back) == pytest.approx((1.0, 2.0, 0.5))
+    assert conv.pose_fromodom(back) == pytest.approx((1.0, 2.0, 0.5))
     with pytest.raises(ValueError, match="no rclpy class"):
         conv.decode_bag_record("tf2_msgs/msg/TFMessage", b"")
     with pytest.raises(ValueError, match="not of the form"):
@@ -303,45 +158,6 @@ def test_shipped_config_declares_only_known_parameters():
 
 
 # ---------------------------------------------------------------- the node as a process
-def synthetic_scan(stamp: float, circles=(), pose=(0.0, 0.0, 0.0), laser_x: float = 0.22, beams: int = 361):
-    """An LMS200-like scan (180 deg, 0.5 deg) from a robot at ``pose`` seeing circles (x, y, r) in the world."""
-    from maru_planner.reactive import LaserScanData
-    from maru_planner.ros import reactive_conversions as conv
-
-    angles = -math.pi / 2 + np.arange(beams) * (math.pi / (beams - 1))
-    c, s = math.cos(pose[2]), math.sin(pose[2])
-    origin = np.array([pose[0] + c * laser_x, pose[1] + s * laser_x])
-    dirs = np.stack([np.cos(angles + pose[2]), np.sin(angles + pose[2])], axis=1)
-    ranges = np.full(beams, np.inf)
-    for cx, cy, r in circles:
-        rel = np.array([cx, cy]) - origin
-        along = dirs @ rel
-        miss2 = rel @ rel - along**2
-        hit = (miss2 <= r * r) & (along > 0)
-        ranges[hit] = np.minimum(ranges[hit], along[hit] - np.sqrt(r * r - miss2[hit]))
-    data = LaserScanData(-math.pi / 2, math.pi / (beams - 1), ranges, 0.05, 10.0, stamp=stamp)
-    return conv.scan_msg(data, "laser_link", scan_time=0.1)
-
-
-def _odom(pose, stamp):
-    from maru_planner.ros import reactive_conversions as conv
-
-    return conv.odom_msg(pose, 0.0, 0.0, stamp, "odom", "base_link")
-
-
-def _malformed_scans(stamp: float):
-    zero_increment = synthetic_scan(stamp)
-    zero_increment.angle_increment = 0.0
-    nan_angle = synthetic_scan(stamp)
-    nan_angle.angle_min = float("nan")
-    short = synthetic_scan(stamp)
-    short.ranges = short.ranges[:100]
-    return [zero_increment, nan_angle, short]
-
-
-OBSTACLE = (1.6, 0.25, 0.3)  # a post a little left of the straight line to the goal
-
-
 @pytest.fixture(scope="module")
 def reactive_node(node_process, tmp_path_factory):
     overrides = reactive_params_file(
@@ -367,7 +183,7 @@ def client(reactive_node, rclpy_session):
 
 
 def test_node_holds_still_without_a_goal(client, reactive_node):
-    twist = client.step(_odom((0.0, 0.0, 0.0), 1.0), synthetic_scan(1.0, [OBSTACLE]))
+    twist = client.step(odom((0.0, 0.0, 0.0), 1.0), synthetic_scan(1.0, [OBSTACLE]))
     assert (twist.linear.x, twist.angular.z) == (0.0, 0.0)
     assert client.strips == [], "no strip before there is a goal"
     assert reactive_node.alive()
@@ -379,7 +195,7 @@ def test_each_scan_gives_one_bounded_twist_strip_and_arm_command(client, reactiv
     limits = shipped_params()
     goal = conv.pose_stamped_msg((4.0, 0.0, 0.0), "odom", 1.05)
     client.send_and_confirm(client.goal_pub, goal, reactive_node, "goal (")
-    twists = [client.step(_odom((0.0, 0.0, 0.0), t), synthetic_scan(t, [OBSTACLE])) for t in (1.1, 1.2, 1.3, 1.4, 1.5)]
+    twists = [client.step(odom((0.0, 0.0, 0.0), t), synthetic_scan(t, [OBSTACLE])) for t in (1.1, 1.2, 1.3, 1.4, 1.5)]
     assert all(abs(t.linear.x) <= limits["max_linear"] + 1e-9 for t in twists)
     assert all(abs(t.angular.z) <= limits["max_angular"] + 1e-9 for t in twists)
     assert any(t.linear.x > 0.0 for t in twists), "a free goal 4 m ahead must get the base moving"
@@ -398,21 +214,21 @@ def test_each_scan_gives_one_bounded_twist_strip_and_arm_command(client, reactiv
     assert all(abs(v) * 0.1 <= 0.05 + 1e-9 for v in arm.points[0].velocities), "arm steps within the step limit"
 
 
-def test_malformed_scans_are_dropped_and_the_node_keeps_serving(client, reactive_node):
-    for bad in _malformed_scans(1.55):
+def testmalformed_scans_are_dropped_and_the_node_keeps_serving(client, reactive_node):
+    for bad in malformed_scans(1.55):
         client.scan_pub.publish(bad)
-    twist = client.step(_odom((0.0, 0.0, 0.0), 1.6), synthetic_scan(1.6, [OBSTACLE]))
+    twist = client.step(odom((0.0, 0.0, 0.0), 1.6), synthetic_scan(1.6, [OBSTACLE]))
     assert twist.linear.x > 0.0
     assert reactive_node.alive()
     assert client.spinning.wait_for(lambda: "dropped malformed scan" in reactive_node.log(), timeout=10)
 
 
 def test_a_stale_scan_stops_the_base(client, reactive_node):
-    moving = client.step(_odom((0.0, 0.0, 0.0), 1.7), synthetic_scan(1.7, [OBSTACLE]))
+    moving = client.step(odom((0.0, 0.0, 0.0), 1.7), synthetic_scan(1.7, [OBSTACLE]))
     assert moving.linear.x > 0.0
-    stale = client.step(_odom((0.0, 0.0, 0.0), 3.0), synthetic_scan(2.0, [OBSTACLE]))
+    stale = client.step(odom((0.0, 0.0, 0.0), 3.0), synthetic_scan(2.0, [OBSTACLE]))
     assert (stale.linear.x, stale.angular.z) == (0.0, 0.0)
-    fresh = client.step(_odom((0.0, 0.0, 0.0), 3.1), synthetic_scan(3.1, [OBSTACLE]))
+    fresh = client.step(odom((0.0, 0.0, 0.0), 3.1), synthetic_scan(3.1, [OBSTACLE]))
     assert fresh.linear.x > 0.0
     assert client.spinning.wait_for(lambda: "stopping the base" in reactive_node.log(), timeout=10)
 
@@ -432,8 +248,8 @@ def test_status_counts_match_what_was_sent(client, reactive_node):
 
 def test_sim_time_jumping_back_restarts_the_clock(client, reactive_node):
     """A bag played in a loop starts over: /clock goes back, and fresh scans after the jump are not stale."""
-    assert client.step(_odom((0.0, 0.0, 0.0), 3.2), synthetic_scan(3.2, [OBSTACLE])).linear.x > 0.0
-    again = client.step(_odom((0.0, 0.0, 0.0), 1.25), synthetic_scan(1.25, [OBSTACLE]))
+    assert client.step(odom((0.0, 0.0, 0.0), 3.2), synthetic_scan(3.2, [OBSTACLE])).linear.x > 0.0
+    again = client.step(odom((0.0, 0.0, 0.0), 1.25), synthetic_scan(1.25, [OBSTACLE]))
     assert again.linear.x > 0.0
     assert "time jumped back" in reactive_node.log()
 
@@ -462,7 +278,7 @@ def test_wall_clock_watchdog_stops_the_base_when_scans_stop(node_process, rclpy_
         client.wait_connected()
         client.send_and_confirm(client.goal_pub, conv.pose_stamped_msg((4.0, 0.0, 0.0), "odom", 0.0), process, "goal (")
         now = 100.0 if sim_time else spinning.node.get_clock().now().nanoseconds / 1e9
-        moving = client.step(_odom((0.0, 0.0, 0.0), now), synthetic_scan(now, [OBSTACLE]))
+        moving = client.step(odom((0.0, 0.0, 0.0), now), synthetic_scan(now, [OBSTACLE]))
         assert moving.linear.x > 0.0, "a fresh scan on the node clock gets the base moving"
         assert client.plain_twists_end_with([moving])
         moving_count = client.twist_count()
@@ -473,7 +289,7 @@ def test_wall_clock_watchdog_stops_the_base_when_scans_stop(node_process, rclpy_
         assert "no scan for" in process.log()
         old = now - 10.0
         stale = client.step(
-            _odom((0.0, 0.0, 0.0), old), synthetic_scan(old, [OBSTACLE]), clock_ns=round((now + 0.1) * 1e9)
+            odom((0.0, 0.0, 0.0), old), synthetic_scan(old, [OBSTACLE]), clock_ns=round((now + 0.1) * 1e9)
         )
         assert (stale.linear.x, stale.angular.z) == (0.0, 0.0), "a scan 10 s behind the node clock is stale"
         assert process.alive()

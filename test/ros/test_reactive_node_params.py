@@ -6,7 +6,7 @@ from __future__ import annotations
 import itertools
 
 import pytest
-from test_reactive_node import NODE_MODULE, OBSTACLE, ReactiveClient, _odom, reactive_params_file, synthetic_scan
+from reactive_helpers import NODE_MODULE, OBSTACLE, ReactiveClient, odom, reactive_params_file, synthetic_scan
 
 pytestmark = pytest.mark.ros
 
@@ -70,7 +70,7 @@ def set_parameter(client, name: str, value):
 
 def step(client):
     stamp = next(_stamps)
-    return stamp, client.step(_odom((0.0, 0.0, 0.0), stamp), synthetic_scan(stamp, [OBSTACLE]))
+    return stamp, client.step(odom((0.0, 0.0, 0.0), stamp), synthetic_scan(stamp, [OBSTACLE]))
 
 
 def test_params_file_keyed_for_any_namespace_applies(client):

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
-from test_reactive_node import NODE_MODULE, ReactiveClient, reactive_params_file, shipped_params
+from reactive_helpers import NODE_MODULE, ReactiveClient, reactive_params_file, shipped_params
 
 from maru_planner.bag import read_messages, summarize
 from maru_planner.paths import config_path
@@ -87,7 +87,7 @@ def _start_node(node_process, tmp_path: Path):
 
 def replay_bag(bag: Path, node_process, spinning_factory, tmp_path: Path, inject_every: int = 0) -> Replay:
     """Feed a bag to a fresh node lock-step; optionally a malformed scan before every ``inject_every``-th scan."""
-    from test_reactive_node import _malformed_scans
+    from reactive_helpers import malformed_scans
 
     from maru_planner.ros import reactive_conversions as conv
 
@@ -110,7 +110,7 @@ def replay_bag(bag: Path, node_process, spinning_factory, tmp_path: Path, inject
             result.reference.append((msg.linear.x, msg.angular.z))
         elif record.topic == "/scan":
             if inject_every and len(result.scans) % inject_every == 0:
-                client.scan_pub.publish(_malformed_scans(conv.stamp_to_s(msg.header.stamp))[next(bad)])
+                client.scan_pub.publish(malformed_scans(conv.stamp_to_s(msg.header.stamp))[next(bad)])
             client.step(odom, msg, clock_ns=record.timestamp_ns)
             result.scans.append(msg)
     assert spinning.wait_for(
@@ -200,7 +200,7 @@ def test_commands_turn_away_from_obstacles_close_ahead(scenario, recorded_bags, 
     params = strip_params_from_config(config_path("reactive.yaml"))
     records = [r for r in read_messages(recorded_bags[scenario], topics=["/goal_pose", "/odom"])]
     goal = conv.pose_from_pose_stamped(conv.decode_bag_record(records[0].msgtype, records[0].rawdata))
-    poses = [conv.pose_from_odom(conv.decode_bag_record(r.msgtype, r.rawdata)) for r in records[1:]]
+    poses = [conv.pose_fromodom(conv.decode_bag_record(r.msgtype, r.rawdata)) for r in records[1:]]
     checked = 0
     for scan, pose, (_v, w) in zip(result.scans, poses, result.twists, strict=True):
         distance, bearing = _nearest_front_obstacle(scan, params.laser_pose, params.beam_window)
@@ -214,7 +214,7 @@ def test_commands_turn_away_from_obstacles_close_ahead(scenario, recorded_bags, 
     assert checked >= 3, f"only {checked} scans with an obstacle close ahead: the bag does not test avoidance"
 
 
-def test_malformed_scans_injected_into_a_replay_change_no_command(recorded_bags, replays):
+def testmalformed_scans_injected_into_a_replay_change_no_command(recorded_bags, replays):
     clean = replays(recorded_bags["single_static"])
     noisy = replays(recorded_bags["single_static"], variant="malformed", inject_every=4)
     assert noisy.twists == clean.twists, "malformed scans must be dropped without touching the controller"

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from reactive_helpers import laser_scans
 
 from maru_planner.errors import InvalidRequest, InvalidScene
 from maru_planner.reactive import ElasticStripController, StripParams
@@ -21,28 +22,6 @@ pytestmark = pytest.mark.ros  # the conversions need the message packages
 SETTINGS = settings(max_examples=200, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
 FLOAT32 = st.floats(width=32)  # LaserScan fields are float32 on the wire: any of them, NaN and inf included
 ANY_FLOAT = st.floats()
-
-
-@st.composite
-def laser_scans(draw):
-    from sensor_msgs.msg import LaserScan
-
-    msg = LaserScan()
-    msg.header.stamp.sec = draw(st.integers(0, 2**31 - 1))
-    if draw(st.booleans()):  # a plausible geometry, hostile details
-        count = draw(st.integers(1, 400))
-        msg.angle_min = draw(st.floats(-3.0, 3.0))
-        msg.angle_increment = draw(st.floats(1e-4, 0.1))
-        msg.angle_max = msg.angle_min + msg.angle_increment * (count - 1)
-        msg.range_min = draw(st.floats(0.0, 1.0))
-        msg.range_max = draw(st.floats(0.0, 100.0))
-        msg.ranges = draw(st.lists(FLOAT32, min_size=count, max_size=count))
-    else:  # anything at all
-        msg.angle_min, msg.angle_max, msg.angle_increment = draw(FLOAT32), draw(FLOAT32), draw(FLOAT32)
-        msg.range_min, msg.range_max = draw(FLOAT32), draw(FLOAT32)
-        msg.ranges = draw(st.lists(FLOAT32, max_size=50))
-    msg.intensities = draw(st.lists(FLOAT32, max_size=3))
-    return msg
 
 
 @SETTINGS
