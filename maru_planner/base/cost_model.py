@@ -162,6 +162,8 @@ class CostModel:
                 points, stretch, layer.obstacles, dist_cells, cap, params, grid.resolution, deadline
             )
             info["sweeps"] = max(info["sweeps"], out.sweeps)
+            if deadline is not None and deadline.cancelled:
+                deadline.raise_timeout("smoothing the path")  # PlanningCancelled: the caller wants no answer
             if not out.accepted:
                 info["accepted"] = False
                 continue

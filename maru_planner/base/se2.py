@@ -45,7 +45,6 @@ from maru_planner.base.common import states_to_path
 from maru_planner.base.cost_model import CostModel, CostSettings
 from maru_planner.base.footprint import (
     as_polygon,
-    dilate,
     footprint_radii,
     heading_index,
     heading_offsets,
@@ -56,7 +55,7 @@ from maru_planner.base.kernels import heap_grow, heap_pop, heap_push, now
 from maru_planner.base.planner import Cell, Endpoint, GridPlanner, PlanRun, Pose, require_grid
 from maru_planner.base.result import PlanStats
 from maru_planner.base.smoother import Stretch, stretches_at_headings
-from maru_planner.errors import InvalidRequest, NoPath
+from maru_planner.errors import InvalidRequest, NoPath, PlanningTimedOut
 
 # Bytes per SE(2) state during a search: padded layer (1), g (8), parent (8), closed (1), C-space layer (1).
 _BYTES_PER_STATE = 19
@@ -404,12 +403,21 @@ class SE2AStarPlanner(GridPlanner[OccupancyGrid]):
         if not self.costs.settings.smooth or layer is None or len(path) < 3:
             return path
         offsets = self.offsets(grid, run.deadline)
-        stretches = [self._stretch(grid, path, first, last, offsets) for first, last in stretches_at_headings(path)]
+        try:
+            stretches = [
+                self._stretch(grid, path, first, last, offsets, run.deadline)
+                for first, last in stretches_at_headings(path)
+            ]
+        except PlanningTimedOut:  # out of time after the search: the planned path stands
+            run.stats.smoothing = {"stretches": 0, "sweeps": 0, "moved": 0, "accepted": False}
+            return path
         xy, info = self.costs.smooth(grid, path[:, :2], layer, stretches, run.deadline)
         run.stats.smoothing = info
         return np.column_stack([xy, path[:, 2]])
 
-    def _stretch(self, grid: OccupancyGrid, path: np.ndarray, first: int, last: int, offsets) -> Stretch:
+    def _stretch(
+        self, grid: OccupancyGrid, path: np.ndarray, first: int, last: int, offsets, deadline: Deadline
+    ) -> Stretch:
         """The stretch's window (its cells + a margin) of the C-space layer at its heading."""
         k = heading_index(grid.heading_to_grid(path[first, 2]), self.headings)
         cells = np.array([grid.world_to_cell(x, y) for x, y in path[first : last + 1, :2]])
@@ -418,5 +426,6 @@ class SE2AStarPlanner(GridPlanner[OccupancyGrid]):
         reach = int(np.max(np.abs(offsets[k]))) if len(offsets[k]) else 0
         R0, C0 = max(r0 - reach, 0), max(c0 - reach, 0)
         crop = grid.occupied[R0 : min(r1 + reach, grid.height), C0 : min(c1 + reach, grid.width)]
-        blocked = dilate(crop, offsets[k])[r0 - R0 : r1 - R0, c0 - C0 : c1 - C0]
+        layer = cspace_layers(crop, self.footprint, grid.resolution, 1, [offsets[k]], deadline)[0]
+        blocked = layer[r0 - R0 : r1 - R0, c0 - C0 : c1 - C0]
         return Stretch(first, last, blocked, (int(r0), int(c0)))

@@ -181,11 +181,13 @@ def _smooth_kernel(
     return y, max_its, False
 
 
-def segment_clearances(occupied: np.ndarray, dist_cells: np.ndarray, points: np.ndarray, cap: float) -> np.ndarray:
+@numba.njit(cache=True, nogil=True)
+def segment_clearances(occupied, dist_cells, points, cap):
     """Capped exact clearance (cells) of each segment of a polyline (cell units)."""
-    return np.array(
-        [capped_clearance(occupied, dist_cells, points[j], points[j + 1], cap) for j in range(len(points) - 1)]
-    )
+    out = np.empty(max(points.shape[0] - 1, 0))
+    for j in range(points.shape[0] - 1):
+        out[j] = capped_clearance(occupied, dist_cells, points[j], points[j + 1], cap)
+    return out
 
 
 def turn_rates(points: np.ndarray) -> np.ndarray:
@@ -213,14 +215,14 @@ def smooth_stretch(
         return SmoothOutcome(x, 0, 0, True)
     occupied = np.ascontiguousarray(occupied, dtype=np.bool_)
     blocked = np.ascontiguousarray(stretch.blocked, dtype=np.bool_)
-    own = segment_clearances(occupied, dist_cells, x, cap)
+    own = segment_clearances(occupied, dist_cells, x, float(cap))
     baseline = own.copy()  # the smallest clearance of the original segment and its two neighbours
     baseline[1:] = np.minimum(baseline[1:], own[:-1])
     baseline[:-1] = np.minimum(baseline[:-1], own[1:])
     fixed = np.zeros(len(x), dtype=np.bool_)
     fixed[0] = fixed[-1] = True
     max_turn = resolution / params.min_turning_radius if params.min_turning_radius > 0 else 0.0
-    turn0 = turn_rates(x)
+    turn0 = turn_rates(x) if max_turn > 0 else np.zeros(len(x))
     y, sweeps, timed_out = _smooth_kernel(
         x,
         fixed,
@@ -247,16 +249,23 @@ def smooth_stretch(
 
 def _recheck(x, y, blocked, offset, occupied, dist_cells, cap, baseline, max_turn, turn0) -> bool:
     """The smoothed stretch again: every changed segment free and as far from obstacles as required, turns kept."""
-    moved = np.hypot(*(y - x).T) > 0.0
-    for j in range(len(y) - 1):
-        if not (moved[j] or moved[j + 1]):
-            continue  # the planner's own segment
-        if not segment_free(blocked, offset[0], offset[1], y[j], y[j + 1]):
-            return False
-        if capped_clearance(occupied, dist_cells, y[j], y[j + 1], cap) < baseline[j] - _EPS:
-            return False
+    if not _segments_hold(x, y, blocked, offset[0], offset[1], occupied, dist_cells, float(cap), baseline):
+        return False
     if max_turn > 0:
         return bool(np.all(turn_rates(y) <= np.maximum(max_turn, turn0) + 1e-9))
+    return True
+
+
+@numba.njit(cache=True, nogil=True)
+def _segments_hold(x, y, blocked, off_r, off_c, occupied, dist, cap, baseline):
+    for j in range(y.shape[0] - 1):
+        moved = (x[j, 0] != y[j, 0] or x[j, 1] != y[j, 1]) or (x[j + 1, 0] != y[j + 1, 0] or x[j + 1, 1] != y[j + 1, 1])
+        if not moved:
+            continue  # the planner's own segment
+        if not segment_free(blocked, off_r, off_c, y[j], y[j + 1]):
+            return False
+        if capped_clearance(occupied, dist, y[j], y[j + 1], cap) < baseline[j] - _EPS:
+            return False
     return True
 
 

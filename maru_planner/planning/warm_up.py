@@ -3,9 +3,20 @@
 
 import sys
 
-from maru_planner.runtime.warm_up import WarmUp, main, warm_up
+from maru_planner.runtime.warm_up import (
+    BOX,
+    BUDGET,
+    EDGE_STEP,
+    MANY_BOXES,
+    SAMPLE_TRIES,
+    SEED,
+    STEP,
+    WarmUp,
+    main,
+    warm_up,
+)
 
-__all__ = ["WarmUp", "main", "warm_up"]
+__all__ = ["BOX", "BUDGET", "EDGE_STEP", "MANY_BOXES", "SAMPLE_TRIES", "SEED", "STEP", "WarmUp", "main", "warm_up"]
 
 if __name__ == "__main__":
     sys.exit(main())

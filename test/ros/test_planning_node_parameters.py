@@ -147,6 +147,8 @@ def test_parameters_carry_descriptors(params):
     assert params.describe("robot_urdf").read_only
     assert params.describe("collision_model").additional_constraints == "one of: exact, spheres"
     assert params.describe("planners.PRM.max_nearest_neighbors").integer_range[0].from_value == 1
+    step = params.describe("planners.CBiRRT.step")  # CBiRRT is registered like every planner
+    assert step.floating_point_range[0].to_value == pytest.approx(1.0) and "projected" in step.description
 
 
 def _flattened(params: dict, prefix: str = "") -> dict:

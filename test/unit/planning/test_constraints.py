@@ -182,3 +182,33 @@ def test_goal_region_lands_inside_the_pose_tolerances(panda):
     far = PathConstraints(position=PositionConstraint(LINK, away, np.full(3, 0.01)))
     unreachable = planner.plan(MotionRequest("arm", start=start, goal_region=far, time_budget=1.0))
     assert unreachable.status is PlanStatus.NO_IK_SOLUTION
+
+
+def test_cbirrt_is_registered_and_a_cancel_stops_its_search(panda, monkeypatch):
+    """CBiRRT is in the planner registry like every planner (its parameters with ranges, the path_constraints
+    capability) and its search loop ends at a cancel arriving mid-search."""
+    from maru_planner.errors import PlanningCancelled
+    from maru_planner.monitor import PlanMonitor
+    from maru_planner.planning import PLANNERS
+    from maru_planner.planning.planners import cbirrt
+
+    spec = PLANNERS["CBiRRT"]
+    assert spec.has("path_constraints") and spec.search is cbirrt.search and set(spec.params) == {"step", "inset"}
+    robot, q0, idx = panda
+    constraints = _upright(robot, q0)
+    goal = _tilting_goal(robot, q0, idx, constraints)
+    monitor, extend = PlanMonitor(), cbirrt._Extender.__call__
+    extensions = []
+
+    def cancelled_while_extending(self, tree, target):
+        extensions.append(target)
+        monitor.cancel()  # as a client's cancel would, from its own thread, while the trees grow
+        return extend(self, tree, target)
+
+    monkeypatch.setattr(cbirrt._Extender, "__call__", cancelled_while_extending)
+    request = MotionRequest("arm", start=dict(zip(robot.joint_names, q0.tolist(), strict=True)),
+                            goal_joints={robot.joint_names[i]: float(goal[i]) for i in idx}, seed=2, time_budget=600,
+                            path_constraints=constraints)  # fmt: skip
+    result = MotionPlanner.from_scene(robot, Scene()).plan(request, monitor)
+    assert isinstance(result.error, PlanningCancelled), result.message
+    assert result.message == "cancelled during search" and len(extensions) <= 2
