@@ -36,8 +36,14 @@ interfaces: $(STAMP)
 demo: setup
 	@$(PY) -m maru_planner.ros.demo
 
+# every lane, one pytest run each (a lane's failure does not skip the others), its time printed
+LANES := unit ros hostile architecture
 test: setup
-	@$(PY) -m pytest -p no:cacheprovider test
+	@status=0; for lane in $(LANES); do \
+		start=$$(date +%s); echo "[test] lane $$lane (test/$$lane)"; \
+		$(PY) -m pytest -p no:cacheprovider test/$$lane || status=1; \
+		echo "[test] lane $$lane: $$(( $$(date +%s) - start )) s"; \
+	done; exit $$status
 
 # the unit lane: no rclpy node, colcon build or hostile-input sweep (test/ros/, test/hostile/, test/architecture/)
 test-fast: setup
@@ -45,6 +51,7 @@ test-fast: setup
 
 lint: setup
 	@$(VENV)/bin/ruff check maru_planner bench test scripts launch
+	@$(VENV)/bin/ruff format --check maru_planner bench test scripts launch setup.py
 	@$(VENV)/bin/mypy
 
 bench-deps: setup

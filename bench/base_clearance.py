@@ -66,6 +66,7 @@ class Case:
     robot_radius: float
     inflation_radius: float
     cost_scaling_factor: float
+    optimal: float = 0.0  # the scenario's optimal length (cells; 0 for BARN)
 
 
 def movingai_cases(per_map: int, inflation: float = 5.0, scaling: float = 3.0) -> list[Case]:
@@ -76,7 +77,15 @@ def movingai_cases(per_map: int, inflation: float = 5.0, scaling: float = 3.0) -
         for i, scen in enumerate(spread(load_scenarios(Path(f"{path}.scen")), per_map)):
             cases.append(
                 Case(
-                    entry.split("/")[0], f"{path.stem}#{i}", grid, scen["start"], scen["goal"], 0.0, inflation, scaling
+                    entry.split("/")[0],
+                    f"{path.stem}#{i}",
+                    grid,
+                    scen["start"],
+                    scen["goal"],
+                    0.0,
+                    inflation,
+                    scaling,
+                    scen["optimal"],
                 )
             )
     return cases
@@ -181,7 +190,7 @@ def score(case: Case, xy: np.ndarray, seconds: float, edt: np.ndarray, cost: np.
     }
 
 
-def bench_case(case: Case, multiplier: float, repeats: int, peers: list[str]) -> dict:
+def bench_case(case: Case, multiplier: float, repeats: int, peers: list[str], peer_max: float = math.inf) -> dict:
     grid = case.grid
     layer = cost_layer(grid, case.robot_radius, case.robot_radius, case.inflation_radius, case.cost_scaling_factor)
     edt = distance_transform(grid.occupied)
@@ -196,7 +205,7 @@ def bench_case(case: Case, multiplier: float, repeats: int, peers: list[str]) ->
         "pathfinding": lambda: run_pathfinding(grown, case, None),
         "pathfinding_cost": lambda: run_pathfinding(grown, case, weights),
     }
-    for name in peers:
+    for name in peers if case.optimal <= peer_max else []:
         cells, seconds = runners[name]()
         xy = grid.cells_to_world(cells) if len(cells) else np.zeros((0, 2))
         row["paths"][name] = score(case, xy, seconds, edt, layer.cost)
@@ -412,6 +421,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--per-map", type=int, help="MovingAI queries per map (default 20, 4 quick)")
     parser.add_argument("--peers", nargs="*", default=list(PEERS), choices=PEERS)
     parser.add_argument("--barn-worlds", type=int, help="BARN worlds, spread over 0..299 (default 300, 30 quick)")
+    parser.add_argument(
+        "--peer-max-length",
+        type=float,
+        default=150.0,
+        help="peers get MovingAI queries up to this optimal length in cells (pure Python A* takes minutes on the "
+        "longest; default 150)",
+    )
     parser.add_argument("--no-sweep", action="store_true", help="skip the settings sweep (done in full runs)")
     parser.add_argument("--out", default=str(RESULTS / "base_clearance"), help="output stem (json/md/png)")
     parser.add_argument(
@@ -452,7 +468,7 @@ def main(argv: list[str] | None = None) -> int:
     rows = []
     t0 = time.perf_counter()
     for case in cases:
-        rows.append(bench_case(case, args.multiplier, args.repeats, args.peers))
+        rows.append(bench_case(case, args.multiplier, args.repeats, args.peers, args.peer_max_length))
         progress.step(case.name)
     log(f"{len(cases)} queries in {time.perf_counter() - t0:.0f} s")
     names = list(OURS) + list(args.peers)
@@ -466,7 +482,7 @@ def main(argv: list[str] | None = None) -> int:
     swept = [] if args.quick or args.no_sweep else sweep(per_map, worlds)
     context = (
         f"{len(rows) - len(worlds)} MovingAI queries ({', '.join(MOVINGAI_MAPS)}), {len(worlds)} BARN worlds; "
-        f"peers: {', '.join(args.peers) or 'none'}"
+        f"peers: {', '.join(args.peers) or 'none'} (on MovingAI the queries up to {args.peer_max_length:g} cells)"
     )
     results = {
         "quick": args.quick,

@@ -316,3 +316,34 @@ def kernel_violations(
         return any(name == k or name.startswith(k + ".") for k in kernels)
 
     return [i for i in imports if in_kernels(i.importer) and internal(i.target, package) and not in_kernels(i.target)]
+
+
+#: What ``ros/`` may not import: the arm stack's machinery. The nodes reach planning through ``runtime/`` and its
+#: types (requests, results, configuration, the planner registry's table for their parameters).
+ROS_FORBIDDEN = (
+    "planning.motion_planner",
+    "planning.pipeline",
+    "planning.stages",
+    "planning.adapters",
+    "planning.problem",
+    "planning.context",
+    "planning.planners",
+    "collision",
+)
+ROS_ALLOWED = ("planning.planners.registry",)
+
+
+def ros_reach_violations(imports: list[Import], package: str = PACKAGE) -> list[Import]:
+    """Imports from ``<package>.ros`` of the arm stack's machinery (:data:`ROS_FORBIDDEN`)."""
+
+    def under(module: str, prefixes: tuple[str, ...]) -> bool:
+        name = module[len(package) + 1 :]
+        return any(name == p or name.startswith(p + ".") for p in prefixes)
+
+    return [
+        i
+        for i in imports
+        if internal(i.importer, f"{package}.ros")
+        and under(i.target, ROS_FORBIDDEN)
+        and not under(i.target, ROS_ALLOWED)
+    ]

@@ -22,6 +22,7 @@ from import_graph import (
     module_files,
     package_imports,
     ros_imports_in_core,
+    ros_reach_violations,
     unjustified_lazy_imports,
 )
 
@@ -179,3 +180,22 @@ def test_no_module_is_over_600_lines():
     sizes = {m: len(p.read_text().splitlines()) for m, p in module_files(REPO_ROOT, PACKAGE).items()}
     over = {m: n for m, n in sizes.items() if n > MAX_MODULE_LINES}
     assert not over, f"modules over {MAX_MODULE_LINES} lines: {over}"
+
+
+def test_ros_reaches_planning_through_the_runtime(imports):
+    offenders = ros_reach_violations(imports)
+    if offenders:
+        pytest.fail("ros/ importing the arm stack's machinery (use runtime/):\n" + listing(offenders), pytrace=False)
+
+
+def test_detects_ros_reaching_past_the_runtime(tmp_path):
+    for name, text in {
+        "pkg/__init__.py": "",
+        "pkg/ros/__init__.py": "",
+        "pkg/ros/node.py": "from pkg.runtime import service\nfrom pkg.planning.stages import search\n",
+        "pkg/ros/params.py": "from pkg.planning.planners.registry import PLANNERS\n",
+    }.items():
+        (tmp_path / name).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / name).write_text(text)
+    offenders = ros_reach_violations(package_imports(tmp_path, "pkg"), "pkg")
+    assert [(i.importer, i.target) for i in offenders] == [("pkg.ros.node", "pkg.planning.stages")]
