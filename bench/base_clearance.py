@@ -38,7 +38,7 @@ sys.path.insert(0, str(ROOT / "bench"))
 from _common import RESULTS, Progress, log, write_results  # noqa: E402
 from movingai import load_map, load_scenarios, spread  # noqa: E402
 
-from maru_planner.base.astar import GridAStarPlanner  # noqa: E402
+from maru_planner.base.astar import GridAStarPlanner, astar_2d  # noqa: E402
 from maru_planner.base.clearance import distance_transform, path_clearance, resample, to_cell_units  # noqa: E402
 from maru_planner.base.costmap import INSCRIBED_INFLATED_OBSTACLE, cost_layer  # noqa: E402
 from maru_planner.base.footprint import footprint_radii, rectangle  # noqa: E402
@@ -200,6 +200,7 @@ def bench_case(case: Case, multiplier: float, repeats: int, peers: list[str], pe
         row["paths"][name] = score(case, xy, seconds, edt, layer.cost) | {"status": status}
     grown = grid.inflate(case.robot_radius).occupied
     weights = layer.traversal_weights(multiplier)
+    row["search_ms"] = search_times(grown, case, weights, repeats)
     runners = {
         "pmp": lambda: run_pmp(grown, case),
         "pathfinding": lambda: run_pathfinding(grown, case, None),
@@ -209,11 +210,35 @@ def bench_case(case: Case, multiplier: float, repeats: int, peers: list[str], pe
         cells, seconds = runners[name]()
         xy = grid.cells_to_world(cells) if len(cells) else np.zeros((0, 2))
         row["paths"][name] = score(case, xy, seconds, edt, layer.cost)
+    for name in ("cost", "pathfinding_cost"):  # the same objective: the same optimum
+        entry = row["paths"].get(name)
+        if entry and entry["solved"]:
+            entry["objective"] = objective(grid, entry["xy"], weights)
     shortest = row["paths"]["plain"].get("length_m")
     for entry in row["paths"].values():
         if entry["solved"] and shortest:
             entry["length_ratio"] = entry["length_m"] / shortest
     return row
+
+
+def search_times(grown: np.ndarray, case: Case, weights: np.ndarray, repeats: int) -> dict[str, float]:
+    """Search only (ms, best of ``repeats``) on the grown map: JPS, plain A*, and plain A* with the weights."""
+    out = {}
+    for name, kwargs in (("jps", {}), ("astar", {"method": "astar"}), ("weighted", {"cell_weight": weights})):
+        best = math.inf
+        for _ in range(repeats):
+            t = time.perf_counter()
+            astar_2d(grown, case.start, case.goal, **kwargs)
+            best = min(best, time.perf_counter() - t)
+        out[name] = 1e3 * best
+    return out
+
+
+def objective(grid: OccupancyGrid, xy: np.ndarray, weights: np.ndarray) -> float:
+    """Length + multiplier x cost of a cell-centre path (cells), as the cost-aware search counts it."""
+    cells = np.array([grid.world_to_cell(x, y) for x, y in xy])
+    steps = np.linalg.norm(np.diff(cells, axis=0), axis=1)
+    return float(np.sum(steps * (1.0 + weights[cells[1:, 0], cells[1:, 1]])))
 
 
 # ------------------------------------------------------------------------------------------- summary
@@ -246,7 +271,25 @@ def summarise(rows: list[dict], names: list[str]) -> dict:
             "mean_clearance_m": statistics.fmean(p["mean_clearance_m"] for _, p in pairs),
             "min_clearance_m": min(p["min_clearance_m"] for _, p in pairs),
         }
+        if name == "pathfinding_cost":  # the same objective as our cost-aware search: the same optimum?
+            same = [
+                abs(r["paths"][name]["objective"] - r["paths"]["cost"]["objective"])
+                <= 1e-6 * r["paths"]["cost"]["objective"]
+                for r in rows
+                if r["paths"].get(name, {}).get("solved") and r["paths"]["cost"]["solved"]
+            ]
+            out[name]["same_optimum"] = f"{sum(same)}/{len(same)}"
     return out
+
+
+def search_summary(rows: list[dict]) -> dict:
+    """Medians of the search-only time ratios: what the costs cost, what losing JPS costs."""
+    ratio = {
+        "weighted_over_jps": [r["search_ms"]["weighted"] / r["search_ms"]["jps"] for r in rows],
+        "weighted_over_astar": [r["search_ms"]["weighted"] / r["search_ms"]["astar"] for r in rows],
+        "astar_over_jps": [r["search_ms"]["astar"] / r["search_ms"]["jps"] for r in rows],
+    }
+    return {k: statistics.median(v) for k, v in ratio.items() if v}
 
 
 # (label, multiplier, MovingAI (inflation, scaling), BARN (inflation, scaling), BARN robot): what the targets take
@@ -317,7 +360,7 @@ def sweep_markdown(rows: list[dict]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def markdown(summary: dict, args, context: str) -> str:
+def markdown(summary: dict, searches: dict, args, context: str) -> str:
     lines = [
         "# Base paths that keep their distance (issue 37): cost-aware 2-D A* vs the shortest path",
         "",
@@ -340,6 +383,26 @@ def markdown(summary: dict, args, context: str) -> str:
                 f"{s['min_clearance_ratio']:.2f} | {s['length_ratio']:.3f} ({s['max_length_ratio']:.3f}) | "
                 f"{s['lethal_paths']} | {s['plan_time_ratio']:.2f} | {s['median_time_ms']:.2f} | {flags} |"
             )
+    lines += [
+        "",
+        "Peers' times are their search only, on the grown map we hand them; ours include the grown map and "
+        "the cost layer. pathfinding_cost runs pathfinding's A* with weights 1 + multiplier x cost / 252 "
+        "(our objective), so its optimum must equal ours: "
+        + ", ".join(
+            f"{f} {per['pathfinding_cost']['same_optimum']}"
+            for f, per in summary.items()
+            if "pathfinding_cost" in per and "/" not in f
+        )
+        + " queries with the same optimal cost.",
+        "",
+        "Search only (median ratio over queries): "
+        + "; ".join(
+            f"{f}: weighted A* / JPS {s['weighted_over_jps']:.1f}, weighted / plain A* "
+            f"{s['weighted_over_astar']:.2f}, plain A* / JPS {s['astar_over_jps']:.1f}"
+            for f, s in searches.items()
+        )
+        + " (JPS gives way to plain A* once cells cost differently).",
+    ]
     return "\n".join(lines) + "\n"
 
 
@@ -479,6 +542,10 @@ def main(argv: list[str] | None = None) -> int:
     }
     for family in families:
         summary[f"movingai/{family}"] = summarise([r for r in rows if r["family"] == family], names)
+    searches = {
+        "movingai": search_summary([r for r in rows if r["family"] in families]),
+        "barn": search_summary([r for r in rows if r["family"] == "barn"]),
+    }
     swept = [] if args.quick or args.no_sweep else sweep(per_map, worlds)
     context = (
         f"{len(rows) - len(worlds)} MovingAI queries ({', '.join(MOVINGAI_MAPS)}), {len(worlds)} BARN worlds; "
@@ -490,6 +557,7 @@ def main(argv: list[str] | None = None) -> int:
         "repeats": args.repeats,
         "targets": TARGETS,
         "summary": summary,
+        "search_time_ratios": searches,
         "sweep": swept,
         "verdicts": {f: {n: verdicts(s) for n, s in per.items() if n in OURS} for f, per in summary.items()},
         "queries": [
@@ -501,7 +569,7 @@ def main(argv: list[str] | None = None) -> int:
         ],
     }
     by_name = {c.name: c for c in cases}
-    text = markdown(summary, args, context) + (sweep_markdown(swept) if swept else "")
+    text = markdown(summary, searches, args, context) + (sweep_markdown(swept) if swept else "")
     write_results(Path(args.out), results, text, lambda png: plot(rows, by_name, png, args.multiplier))
     return 0
 

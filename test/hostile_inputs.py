@@ -1196,7 +1196,7 @@ def hostile_paths(draw):
 
 
 @st.composite
-def hostileodometry(draw):
+def hostile_odometry(draw):
     msg = Odometry()
     msg.header.frame_id = draw(names_from(["odom", ""]))
     msg.child_frame_id = draw(names_from(["base_link", ""]))
@@ -1214,7 +1214,7 @@ def reactive_messages() -> st.SearchStrategy:
         hostile_poses(["odom", "", "map"], near=REACTIVE_GOAL).map(lambda m: ("goal", m)),
         hostile_paths().map(lambda m: ("plan", m)),
         laser_scans().map(lambda m: ("scan", m)),
-        hostileodometry().map(lambda m: ("odom", m)),
+        hostile_odometry().map(lambda m: ("odom", m)),
     )
 
 

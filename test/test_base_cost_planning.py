@@ -21,6 +21,7 @@ from maru_planner.base.clearance import (
     to_cell_units,
 )
 from maru_planner.base.cli import main
+from maru_planner.base.costmap import cost_layer
 from maru_planner.base.footprint import disc, rectangle
 from maru_planner.base.grid import OccupancyGrid
 from maru_planner.base.se2 import search_layers
@@ -97,6 +98,31 @@ def test_weighted_astar_is_optimal(seed):
         if len(out.path):  # the path's own cost is the reported one
             steps = np.abs(np.diff(out.path, axis=0)).sum(axis=1)
             own = np.sum(np.where(steps == 2, SQRT2, 1.0) * (1.0 + weight[out.path[1:, 0], out.path[1:, 1]]))
+            assert own == pytest.approx(out.cost)
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_weighted_astar_is_optimal_on_cost_layers(seed):
+    """The weights of real cost layers: zero away from obstacles, a band of decaying costs near them."""
+    rng = np.random.default_rng(50 + seed)
+    size = (int(rng.integers(15, 40)), int(rng.integers(15, 40)))
+    occupied = rng.random(size) < rng.choice([0.02, 0.06, 0.15])
+    grid = OccupancyGrid(occupied, 1.0)
+    inflation = float(rng.choice([1.5, 3.0, 5.0]))
+    layer = cost_layer(grid, 0.0, 0.0, inflation, float(rng.choice([0.3, 1.0, 3.0])))
+    weight = layer.traversal_weights(float(rng.choice([1.0, 5.0, 50.0])))
+    assert (weight == 0).any() and (weight > 0).any()
+    free = np.argwhere(~occupied)
+    for _ in range(8):
+        s, g = (tuple(int(v) for v in free[i]) for i in rng.choice(len(free), 2, replace=False))
+        out = astar_2d(occupied, s, g, cell_weight=weight)
+        assert out.cost == pytest.approx(dijkstra_2d(occupied, weight, s, g), abs=1e-9)
+        if len(out.path):  # the traced path is 8-connected and costs what was reported
+            steps = np.abs(np.diff(out.path, axis=0))
+            assert steps.max() <= 1
+            own = np.sum(
+                np.where(steps.sum(axis=1) == 2, SQRT2, 1.0) * (1.0 + weight[out.path[1:, 0], out.path[1:, 1]])
+            )
             assert own == pytest.approx(out.cost)
 
 

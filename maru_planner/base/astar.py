@@ -70,6 +70,7 @@ def _astar_kernel(
     """
     height, width = blocked.shape
     flat = blocked.ravel()
+    cflat = cell_cost.ravel()
     sqrt2 = np.sqrt(2.0)
     diag_extra = sqrt2 - 1.0
     drs = np.array([0, 1, 0, -1, 1, 1, -1, -1])
@@ -109,9 +110,9 @@ def _astar_kernel(
             else:
                 ng = g + 1.0
             if cost_mode == 1:
-                ng += cell_cost.ravel()[nb]
+                ng += cflat[nb]
             elif cost_mode == 2:
-                ng = g + (sqrt2 if m >= 4 else 1.0) * (1.0 + cell_cost.ravel()[nb])
+                ng = g + (sqrt2 if m >= 4 else 1.0) * (1.0 + cflat[nb])
             if seen[nb] != gen or ng < g_best[nb]:
                 g_best[nb] = ng
                 seen[nb] = gen

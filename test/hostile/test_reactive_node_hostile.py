@@ -168,7 +168,7 @@ BAD_SCANS = {
 
 
 @pytest.mark.parametrize("case", list(BAD_SCANS))
-def testmalformed_scans_are_dropped_and_counted(case, client, node):
+def test_malformed_scans_are_dropped_and_counted(case, client, node):
     make, message = BAD_SCANS[case]
     expect_rejected(client, node, lambda: client.scan_pub.publish(make()), "dropped", message)
     good_step(client)
@@ -187,7 +187,7 @@ def test_a_scan_stamped_in_the_future_is_dropped_and_does_not_freeze_the_base(cl
         good_step(client)
 
 
-def test_badodometry_is_dropped(client, node):
+def test_bad_odometry_is_dropped(client, node):
     from maru_planner.ros import reactive_conversions as conv
 
     bad = conv.odom_msg((0.0, 0.0, 0.0), 0.0, 0.0, next(_stamps), "odom", "base_link")

@@ -83,7 +83,7 @@ def test_pose_path_twist_and_arm_conversions():
     from maru_planner.ros import reactive_conversions as conv
 
     odom = conv.odom_msg((1.0, -2.0, 2.5), 0.3, -0.4, 7.5, "odom", "base_link")
-    assert conv.pose_fromodom(odom) == pytest.approx((1.0, -2.0, 2.5))
+    assert conv.pose_from_odom(odom) == pytest.approx((1.0, -2.0, 2.5))
     assert odom.child_frame_id == "base_link" and odom.twist.twist.angular.z == -0.4
     goal = conv.pose_stamped_msg((3.0, 4.0, -3.0), "map", 1.0)
     assert conv.pose_from_pose_stamped(goal) == pytest.approx((3.0, 4.0, -3.0))
@@ -113,7 +113,7 @@ def test_bag_records_decode_to_rclpy_messages():
     from rclpy.serialization import serialize_message
 
     back = conv.decode_bag_record("nav_msgs/msg/Odometry", serialize_message(odom))
-    assert conv.pose_fromodom(back) == pytest.approx((1.0, 2.0, 0.5))
+    assert conv.pose_from_odom(back) == pytest.approx((1.0, 2.0, 0.5))
     with pytest.raises(ValueError, match="no rclpy class"):
         conv.decode_bag_record("tf2_msgs/msg/TFMessage", b"")
     with pytest.raises(ValueError, match="not of the form"):
@@ -214,7 +214,7 @@ def test_each_scan_gives_one_bounded_twist_strip_and_arm_command(client, reactiv
     assert all(abs(v) * 0.1 <= 0.05 + 1e-9 for v in arm.points[0].velocities), "arm steps within the step limit"
 
 
-def testmalformed_scans_are_dropped_and_the_node_keeps_serving(client, reactive_node):
+def test_malformed_scans_are_dropped_and_the_node_keeps_serving(client, reactive_node):
     for bad in malformed_scans(1.55):
         client.scan_pub.publish(bad)
     twist = client.step(odom((0.0, 0.0, 0.0), 1.6), synthetic_scan(1.6, [OBSTACLE]))

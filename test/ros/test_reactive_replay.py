@@ -200,7 +200,7 @@ def test_commands_turn_away_from_obstacles_close_ahead(scenario, recorded_bags, 
     params = strip_params_from_config(config_path("reactive.yaml"))
     records = [r for r in read_messages(recorded_bags[scenario], topics=["/goal_pose", "/odom"])]
     goal = conv.pose_from_pose_stamped(conv.decode_bag_record(records[0].msgtype, records[0].rawdata))
-    poses = [conv.pose_fromodom(conv.decode_bag_record(r.msgtype, r.rawdata)) for r in records[1:]]
+    poses = [conv.pose_from_odom(conv.decode_bag_record(r.msgtype, r.rawdata)) for r in records[1:]]
     checked = 0
     for scan, pose, (_v, w) in zip(result.scans, poses, result.twists, strict=True):
         distance, bearing = _nearest_front_obstacle(scan, params.laser_pose, params.beam_window)
@@ -214,7 +214,7 @@ def test_commands_turn_away_from_obstacles_close_ahead(scenario, recorded_bags, 
     assert checked >= 3, f"only {checked} scans with an obstacle close ahead: the bag does not test avoidance"
 
 
-def testmalformed_scans_injected_into_a_replay_change_no_command(recorded_bags, replays):
+def test_malformed_scans_injected_into_a_replay_change_no_command(recorded_bags, replays):
     clean = replays(recorded_bags["single_static"])
     noisy = replays(recorded_bags["single_static"], variant="malformed", inject_every=4)
     assert noisy.twists == clean.twists, "malformed scans must be dropped without touching the controller"
