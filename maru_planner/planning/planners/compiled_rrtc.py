@@ -47,7 +47,7 @@ from ompl import util as ou
 
 from maru_planner.params import ParamSpec
 from maru_planner.planning.checkers import is_compiled_sphere_checker
-from maru_planner.planning.planners.planner_params import PlannerParams, stored_params
+from maru_planner.planning.planners.planner_params import SAMPLER_SEED, PlannerParams, stored_params
 from maru_planner.planning.planners.registry import ArmPlannerSpec, register
 from maru_planner.planning.space import EdgeChecker
 
@@ -90,14 +90,7 @@ COMPILED_RRTC_PARAMS: dict[str, ParamSpec] = {
             upper=1.0,
         ),  # fmt: skip
         ParamSpec("domain_min_radius", 1.0, "smallest dynamic domain (rad)", lower=0.0),
-        ParamSpec(
-            "seed",
-            None,
-            "seed of the sampler; unset: drawn from OMPL's seeded generator",
-            lower=0,
-            optional=True,
-            type=int,
-        ),  # fmt: skip
+        SAMPLER_SEED,
     )
 }
 

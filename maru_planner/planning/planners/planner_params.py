@@ -33,6 +33,12 @@ class _Declared:
     getter: Callable[[], Any]
 
 
+#: Our sampling planners' seed parameter (RCRRT, CompiledRRTConnect).
+SAMPLER_SEED = ParamSpec(
+    "seed", None, "seed of the sampler; unset: drawn from OMPL's seeded generator", lower=0, optional=True, type=int
+)
+
+
 class PlannerParams:
     """The named parameters of one planner instance: declare once, then set/get by name."""
 

@@ -48,7 +48,7 @@ from ompl import util as ou
 from maru_planner.params import ParamSpec
 from maru_planner.planning.checkers import is_compiled_sphere_checker
 from maru_planner.planning.kdtree import GrowingKDTree
-from maru_planner.planning.planners.planner_params import PlannerParams, stored_params
+from maru_planner.planning.planners.planner_params import SAMPLER_SEED, PlannerParams, stored_params
 from maru_planner.planning.planners.registry import ArmPlannerSpec, register
 from maru_planner.planning.space import EdgeChecker
 
@@ -61,14 +61,7 @@ RCRRT_PARAMS: dict[str, ParamSpec] = {
         ParamSpec(
             "goal_range", 1.5, "L-inf distance (rad) within which the straight edge to the goal is tried", lower=0.0
         ),  # fmt: skip
-        ParamSpec(
-            "seed",
-            None,
-            "seed of the sampler; unset: drawn from OMPL's seeded generator",
-            lower=0,
-            optional=True,
-            type=int,
-        ),  # fmt: skip
+        SAMPLER_SEED,
     )
 }
 
