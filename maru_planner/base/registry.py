@@ -31,8 +31,7 @@ from maru_planner.base.mspp import LocalMultiStagePlanner, MultiStagePlanner
 from maru_planner.base.planner import BasePlanner
 from maru_planner.base.result import BasePlanResult
 from maru_planner.base.se2 import SE2AStarPlanner
-from maru_planner.base.tunnel import TunnelParams
-from maru_planner.base.tunnel_grid import TunnelGridPlanner
+from maru_planner.base.tunnel import TunnelGridPlanner, TunnelParams
 from maru_planner.errors import InvalidPlanner
 from maru_planner.params import ParamSpec, check_params, dataclass_params
 

@@ -30,7 +30,12 @@ cells and finds a path whenever a 4-connected (= 8-connected without
 corner cutting) free path exists.
 
 The final path is the PFP cell chain shortened by line-of-sight
-shortcuts between its cells (the paper's "turning points").
+shortcuts between its cells (the paper's "turning points", ``line_of_sight.py``).
+
+:class:`TunnelGridPlanner` is the registry's ``tunnel``: the planner on an ``OccupancyGrid`` grown by the robot's
+radius. The cost layer is an option (``cost_travel_multiplier`` > 0; off by default, the paper's behaviour): the
+line-of-sight shortcuts then never cross a cell costlier than the chain of cells they replace. ``smooth`` smooths the
+waypoint path on the grown map (``smoother.py``).
 """
 
 from __future__ import annotations
@@ -44,6 +49,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from maru_planner.base.budget import Deadline, unlimited
+from maru_planner.base.cost_model import CostSettings, split_cost_kwargs
+from maru_planner.base.grid import OccupancyGrid
+from maru_planner.base.line_of_sight import (  # noqa: F401 (segment_*: re-exported, their old home)
+    segment_is_free,
+    segment_max_cost,
+    shortcut_cells,
+)
+from maru_planner.base.planner import DiscPlanner, Endpoint, PlanRun
 from maru_planner.base.result import PlanStats, PlanStatus, status_of
 from maru_planner.errors import (
     GoalOccupied,
@@ -371,75 +384,6 @@ def path_finding(
     return None, progress, expansions
 
 
-# ------------------------------------------------------------------- shortcuts
-
-
-def segment_is_free(occupied: np.ndarray, a, b) -> bool:
-    """True when the segment between the centres of cells a and b crosses only free cells.
-
-    Conservative: samples every quarter cell and tests the 2 × 2 cells around
-    each sample's ±0.25 box, so a segment grazing a corner counts as touching it.
-    """
-    (r0, c0), (r1, c1) = a, b
-    n = int(np.ceil(4.0 * max(abs(r1 - r0), abs(c1 - c0)))) + 1
-    t = np.linspace(0.0, 1.0, n)
-    rows = r0 + 0.5 + t * (r1 - r0)
-    cols = c0 + 0.5 + t * (c1 - c0)
-    h, w = occupied.shape
-    for dr in (-0.25, 0.25):
-        for dc in (-0.25, 0.25):
-            ri = np.clip(np.floor(rows + dr).astype(int), 0, h - 1)
-            ci = np.clip(np.floor(cols + dc).astype(int), 0, w - 1)
-            if occupied[ri, ci].any():
-                return False
-    return True
-
-
-def segment_max_cost(cost: np.ndarray, a, b) -> int:
-    """The highest cost among the cells :func:`segment_is_free` reads for the segment a-b."""
-    (r0, c0), (r1, c1) = a, b
-    n = int(np.ceil(4.0 * max(abs(r1 - r0), abs(c1 - c0)))) + 1
-    t = np.linspace(0.0, 1.0, n)
-    rows, cols = r0 + 0.5 + t * (r1 - r0), c0 + 0.5 + t * (c1 - c0)
-    h, w = cost.shape
-    ri = np.clip(np.floor(rows[:, None] + np.array([-0.25, 0.25])).astype(int), 0, h - 1)
-    ci = np.clip(np.floor(cols[:, None] + np.array([-0.25, 0.25])).astype(int), 0, w - 1)
-    return int(cost[ri[:, :, None], ci[:, None, :]].max())
-
-
-def shortcut_cells(
-    occupied: np.ndarray, cells: list, deadline: Deadline | None = None, cost: np.ndarray | None = None
-) -> list:
-    """Keep only the turning points: from each anchor, the farthest cell still in line of sight.
-
-    With ``cost`` (a cost layer), a shortcut is taken only where it crosses no cell costlier than the
-    chain it replaces: it never cuts closer to an obstacle than the chain did.
-    When ``deadline`` passes, the rest of the chain is kept as it is (still a valid path).
-    """
-    if len(cells) <= 2:
-        return list(cells)
-    deadline = deadline or unlimited()
-    out = [cells[0]]
-    anchor = 0
-    chain_max = -1
-    j = 1
-    while j < len(cells):
-        if deadline.expired():
-            return out + list(cells[anchor + 1 :])
-        if cost is not None:
-            chain_max = max(chain_max, segment_max_cost(cost, cells[j - 1], cells[j]))
-        if segment_is_free(occupied, cells[anchor], cells[j]) and (
-            cost is None or j == anchor + 1 or segment_max_cost(cost, cells[anchor], cells[j]) <= chain_max
-        ):
-            j += 1
-            continue
-        anchor = j - 1
-        chain_max = -1 if cost is None else segment_max_cost(cost, cells[anchor], cells[j])
-        out.append(cells[anchor])
-    out.append(cells[-1])
-    return out
-
-
 # ----------------------------------------------------------------------- driver
 
 
@@ -554,3 +498,69 @@ class TunnelPlanner:
         stats.expansions = stats.tfp_expansions + stats.pfp_expansions
         stats.planning_time = time.perf_counter() - t0
         return CellPlan(error, message, _as_array(cells), _as_array(waypoints), attempts, stats)
+
+
+# ------------------------------------------------ the registry's planner on an OccupancyGrid
+
+
+def segment_headings(xy: np.ndarray, start_theta: float, goal_theta: float) -> np.ndarray:
+    """θ of each pose along its outgoing segment; the ends keep the request's θ."""
+    theta = np.empty(len(xy))
+    if len(xy) > 1:
+        d = np.diff(xy, axis=0)
+        theta[:-1] = np.arctan2(d[:, 1], d[:, 0])
+    if len(xy):
+        theta[0] = start_theta
+        theta[-1] = goal_theta
+    return theta
+
+
+def cells_to_path(grid, cells: np.ndarray, start_theta: float, goal_theta: float) -> np.ndarray:
+    """(row, col) cells → (x, y, θ) rows; θ follows each segment, the ends keep the request's θ."""
+    if len(cells) == 0:
+        return np.zeros((0, 3))
+    xy = grid.cells_to_world(cells)
+    return np.column_stack([xy, segment_headings(xy, start_theta, goal_theta)])
+
+
+class TunnelGridPlanner(DiscPlanner):
+    """Registry entry ``tunnel``: the tunnel planner on an ``OccupancyGrid`` for a disc robot.
+
+    Obstacles are grown by ``robot_radius`` metres (default: the footprint's
+    circumradius, 0.25 m without a footprint — the paper's robot). Other
+    keyword arguments are :class:`~maru_planner.base.tunnel.TunnelParams` fields and
+    :class:`~maru_planner.base.cost_model.CostSettings` fields.
+    """
+
+    default_radius = 0.25
+
+    def __init__(self, footprint=None, robot_radius: float | None = None, **params):
+        costs, tunnel_params = split_cost_kwargs(params)
+        super().__init__(robot_radius, footprint, CostSettings(**costs))
+        self.planner = TunnelPlanner(**tunnel_params)
+
+    @property
+    def robot_radius(self) -> float:
+        return self.radius
+
+    def new_stats(self) -> PlanStats:
+        return TunnelStats(deciding_stage="tunnel")
+
+    def search(self, space: OccupancyGrid, start: Endpoint, goal: Endpoint, run: PlanRun) -> np.ndarray:
+        layer = run.layers.get("costmap")
+        cost = layer.cost if layer is not None and self.costs.cost_aware else None
+        plan = self.planner.plan_cells(
+            space.occupied, start.cell, goal.cell, run.deadline, run.stats_as(TunnelStats), cost=cost
+        )
+        run.stats.collision_checks = run.stats.expansions
+        last = plan.attempts[-1] if plan.attempts else None
+        run.stats.deciding_stage = f"tunnel b={last.big_cell_size}" if last else "tunnel"
+        run.layers.update(attempts=plan.attempts, raw_cells=plan.raw_cells, waypoints=plan.waypoints)
+        if plan.error is not None:
+            raise plan.error
+        path = cells_to_path(space, plan.waypoints, start.pose[2], goal.pose[2])
+        path[0, :2] = start.pose[:2]
+        path[-1, :2] = goal.pose[:2]
+        run.stats.cost = float(np.sum(np.linalg.norm(np.diff(path[:, :2], axis=0), axis=1)))
+        run.message = plan.message
+        return self.smooth_path(space, path, run, lambda xy: segment_headings(xy, start.pose[2], goal.pose[2]))

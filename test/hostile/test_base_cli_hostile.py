@@ -15,7 +15,7 @@ from PIL import Image
 from maru_planner.base.cli import EXIT_BAD_INPUT, EXIT_NO_PATH, EXIT_OUTPUT, EXIT_SOLVED
 from maru_planner.paths import config_path
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 MEDIUM = str(config_path("maps", "paper002_medium.yaml"))
 POSES = ["--start", "1", "2", "0", "--goal", "5", "2", "0"]
 

@@ -11,11 +11,11 @@ import pytest
 from maru_planner.base.astar import GridAStarPlanner, astar_2d
 from maru_planner.base.grid import OccupancyGrid
 from maru_planner.base.result import PlanStatus as res
-from maru_planner.base.tunnel_grid import TunnelGridPlanner
+from maru_planner.base.tunnel import TunnelGridPlanner
 from maru_planner.errors import InvalidRequest
 from maru_planner.paths import config_path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "bench"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[3] / "bench"))
 from paper003_maps import HOUSE_GOAL, HOUSE_START, far_free_pair, random_boxes_map, rooms_map  # noqa: E402
 
 

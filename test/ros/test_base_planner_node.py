@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import json
+import os
 import time
+from pathlib import Path
 
 import pytest
 from conftest import BaseNodeClient
@@ -16,6 +18,8 @@ pytestmark = pytest.mark.ros
 
 NODE_MODULE = "maru_planner.ros.base_planner_node"
 START, GOAL = (1.0, 2.0, 0.0), (5.0, 2.0, 0.0)
+TEST_DIR = Path(__file__).resolve().parents[1]
+TOY_PLANNER = "toy_straight"  # test/toy_base_planner.py
 
 
 @pytest.fixture(scope="module")
@@ -199,3 +203,19 @@ def test_budgets_hold_for_huge_footprints_maps_and_searches(client):
         assert slow.planning_time <= 1.5, (planner_id, slow.planning_time)
     client.publish_map(map_msg(table1("easy")), "map 60 x 40 cells")
     assert client.request().error_code == E.NONE and client.proc.alive()
+
+
+def test_a_base_planner_registered_from_outside_is_served_by_the_node(node_process, spinning_node, monkeypatch):
+    from maru_planner_interfaces.srv import PlanBasePath
+
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join(filter(None, [str(TEST_DIR), os.environ.get("PYTHONPATH")])))
+    proc = node_process("toy_base_planner", ["node", "--ros-args", "-p", f"planner_id:={TOY_PLANNER}"])
+    client = Client(spinning_node, proc)
+    client.publish_map(map_msg(table1("easy")), "map 60 x 40 cells")
+    response = client.request(start=(1.0, 2.0, 0.0), goal=(2.0, 2.0, 0.0))  # the node's default: the toy
+    assert response.error_code == PlanBasePath.Response.NONE, response.error_msg
+    assert response.error_msg == "straight segment is free" and len(response.path.poses) >= 2
+    through_wall = client.request(start=(1.0, 2.0, 0.0), goal=(5.5, 0.6, 0.0), planner_id=TOY_PLANNER)
+    assert through_wall.error_code == PlanBasePath.Response.NO_VALID_PATH, through_wall.error_msg
+    assert client.request(planner_id="mspp").error_code == PlanBasePath.Response.NONE
+    assert proc.alive()

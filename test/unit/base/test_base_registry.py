@@ -1,5 +1,6 @@
 """Adding a base planner is one registry entry: a toy registered from outside the package shows up in the
-CLI, the node (a real PlanBasePath call) and the parametrised planner tests, with no other edit."""
+CLI, the node (a real PlanBasePath call: ``test/ros/test_base_planner_node.py``) and the parametrised planner tests,
+with no other edit."""
 
 from __future__ import annotations
 
@@ -13,11 +14,10 @@ import pytest
 
 from maru_planner.base import registry
 from maru_planner.base.astar import GridAStarPlanner
-from maru_planner.base.scenes import table1
 from maru_planner.params import ParamSpec
 from maru_planner.paths import config_path
 
-TEST_DIR = Path(__file__).resolve().parent
+TEST_DIR = Path(__file__).resolve().parents[2]
 REPO = TEST_DIR.parent
 TOY = "toy_straight"
 
@@ -94,32 +94,13 @@ def test_toy_runs_through_the_parametrised_planner_tests():
         "-q",
         "-k",
         TOY,
-        str(TEST_DIR / "test_base_planners.py"),
+        str(TEST_DIR / "unit" / "base" / "test_base_planners.py"),
     ]
     out = subprocess.run(cmd, capture_output=True, text=True, cwd=REPO, env=_env(), timeout=600)
     assert out.returncode == 0, out.stdout[-3000:]
     summary = out.stdout.strip().splitlines()[-1]
     assert " passed" in summary and "failed" not in summary and "error" not in summary
     assert int(summary.split(" passed")[0].split()[-1]) >= 6  # the tests that iterate the registry
-
-
-@pytest.mark.ros
-def test_toy_is_served_by_the_node(node_process, spinning_node, monkeypatch):
-    from test_base_planner_node import Client, map_msg
-
-    from maru_planner_interfaces.srv import PlanBasePath
-
-    monkeypatch.setenv("PYTHONPATH", _env()["PYTHONPATH"])
-    proc = node_process("toy_base_planner", ["node", "--ros-args", "-p", f"planner_id:={TOY}"])
-    client = Client(spinning_node, proc)
-    client.publish_map(map_msg(table1("easy")), "map 60 x 40 cells")
-    response = client.request(start=(1.0, 2.0, 0.0), goal=(2.0, 2.0, 0.0))  # the node's default: the toy
-    assert response.error_code == PlanBasePath.Response.NONE, response.error_msg
-    assert response.error_msg == "straight segment is free" and len(response.path.poses) >= 2
-    through_wall = client.request(start=(1.0, 2.0, 0.0), goal=(5.5, 0.6, 0.0), planner_id=TOY)
-    assert through_wall.error_code == PlanBasePath.Response.NO_VALID_PATH, through_wall.error_msg
-    assert client.request(planner_id="mspp").error_code == PlanBasePath.Response.NONE
-    assert proc.alive()
 
 
 def test_spec_capabilities_match_their_parameters():
