@@ -39,6 +39,7 @@ POSITION_TOLERANCE = 1e-4  # m
 ROTATION_TOLERANCE = 1e-3  # rad
 BLEND_DEVIATION = 0.01  # rad: the timed trajectory stays this close to the computed states' polyline
 DAMPING = 1e-6
+MAX_STEPS = 100_000  # interpolated poses of one request: each is an IK solve and a state (refused before allocating)
 
 
 @dataclass
@@ -116,6 +117,34 @@ def _supporting_joints(robot, link: str) -> set[int]:
     return out
 
 
+def segment_lengths(start: np.ndarray, waypoints: list[np.ndarray]) -> list[float]:
+    """How far (m) each line start -> waypoint 0 -> waypoint 1 ... moves the link, a rotation counted at
+    :data:`ROTATION_STEP_RADIUS` (the distance :func:`interpolate_poses` divides into steps)."""
+    lengths, current = [], start
+    for target in waypoints:
+        rotation = pin.log3(current[:3, :3].T @ target[:3, :3])
+        moved = float(np.linalg.norm(target[:3, 3] - current[:3, 3]))
+        lengths.append(max(moved, float(np.linalg.norm(rotation)) * ROTATION_STEP_RADIUS))
+        current = target
+    return lengths
+
+
+def check_step_count(start: np.ndarray, waypoints: list[np.ndarray], max_step: float) -> int:
+    """How many poses :func:`interpolate_poses` makes; InvalidRequest (before anything is allocated) past
+    :data:`MAX_STEPS`."""
+    ratios = [length / max_step for length in segment_lengths(start, waypoints)]  # inf for a tiny max_step
+    count = math.inf
+    if all(ratio <= MAX_STEPS for ratio in ratios):  # NaN fails too
+        count = sum(max(1, math.ceil(ratio)) for ratio in ratios)
+    if count > MAX_STEPS:
+        implied = count if math.isfinite(count) else sum(ratios)
+        raise errors.InvalidRequest(
+            f"max_step {max_step:.3g} m implies {implied:.3g} interpolated poses along {len(waypoints)} "
+            f"waypoint(s), more than {MAX_STEPS}; raise max_step"
+        )
+    return int(count)
+
+
 def interpolate_poses(start: np.ndarray, waypoints: list[np.ndarray], max_step: float) -> list[np.ndarray]:
     """The link poses along the lines start -> waypoint 0 -> waypoint 1 ..., excluding the start."""
     poses, current = [], start
@@ -175,6 +204,7 @@ def _compute(context, request: CartesianRequest, result: CartesianResult, t0: fl
     jump = float(request.jump_threshold)
     if not (math.isfinite(jump) and jump >= 0.0):
         raise errors.InvalidRequest(f"jump_threshold must be a finite number >= 0, got {jump}")
+    scalings = _scalings(request)
     indices = np.array(sorted(robot.group_joint_indices(request.group)), dtype=int)
     link = request.link or default_link(robot, request.group)
     check_link(robot, link)
@@ -183,9 +213,11 @@ def _compute(context, request: CartesianRequest, result: CartesianResult, t0: fl
     waypoints = [_pose(w, k) for k, w in enumerate(request.waypoints)]
     if not waypoints:
         raise errors.InvalidRequest("no waypoints: give at least one pose of the link")
+    start_pose = robot.frame_pose(start, link)
+    check_step_count(start_pose, waypoints, max_step)
     if request.avoid_collisions:
         check_free(context.checker, start, errors.StartInCollision, "start")
-    poses = interpolate_poses(robot.frame_pose(start, link), waypoints, max_step)
+    poses = interpolate_poses(start_pose, waypoints, max_step)
     states, reason = _follow(robot, link, indices, start, poses, deadline)
     states, reason = _jump_cut(states, reason, jump)
     margin = end_margin(context, context.config.safety_margin, start) if request.avoid_collisions else 0.0
@@ -197,7 +229,7 @@ def _compute(context, request: CartesianRequest, result: CartesianResult, t0: fl
     result.fraction = (len(states) - 1) / len(poses)
     result.stop_reason = reason
     result.path = states[:, indices]
-    result.trajectory = _timed(context, request, states, indices, deadline, margin)
+    result.trajectory = _timed(context, request, states, indices, deadline, margin, scalings)
     result.status = PlanStatus.SUCCESS
     result.message = f"Cartesian path of {link}: {result.fraction:.1%} of {len(poses)} steps" + (
         f", stopped: {reason}" if reason else ""
@@ -276,9 +308,14 @@ def _collision_cut(context, states, reason: str, deadline: float, margin: float,
     return states[: k + 1], f"segment {k + 1} not certified collision-free ({certificate.reason})"
 
 
-def _timed(context, request: CartesianRequest, states, indices, deadline: float, margin: float) -> Trajectory:
-    scalings = (check_scaling(request.velocity_scaling, "velocity_scaling"),
-                check_scaling(request.acceleration_scaling, "acceleration_scaling"))  # fmt: skip
+def _scalings(request: CartesianRequest) -> tuple[float, float]:
+    """The request's velocity and acceleration scalings, checked before any work."""
+    return (check_scaling(request.velocity_scaling, "velocity_scaling"),
+            check_scaling(request.acceleration_scaling, "acceleration_scaling"))  # fmt: skip
+
+
+def _timed(context, request: CartesianRequest, states, indices, deadline: float, margin: float,
+           scalings: tuple[float, float]) -> Trajectory:  # fmt: skip
     method = request.time_parameterization or context.config.time_parameterization
     certifier = context.certifier if request.avoid_collisions else None
     return time_dense_path(context.robot, context.config, certifier, states, indices, method, scalings, deadline,

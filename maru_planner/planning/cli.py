@@ -31,13 +31,15 @@ from maru_planner import errors
 from maru_planner.collision import sphere_model
 from maru_planner.planning.cartesian import CartesianRequest, CartesianResult, default_link
 from maru_planner.planning.config import COLLISION_MODELS, TIME_PARAMETERIZATIONS, PlannerConfig
-from maru_planner.planning.links import check_link
+from maru_planner.planning.links import check_link, link_names
 from maru_planner.planning.motion_planner import MotionPlanner
 from maru_planner.planning.planners.registry import PLANNERS, get_spec, merged_params
 from maru_planner.planning.problems import PROBLEMS
+from maru_planner.planning.requests import MAX_ATTEMPTS
 from maru_planner.planning.types import MotionRequest, MotionResult, PlanStatus, status_of_error
 from maru_planner.robot import RobotModel, load_example_robot
 from maru_planner.scene import Scene
+from maru_planner.scene.planning_scene import DEFAULT_FRAME
 from maru_planner.trajectory.limits import MIN_SCALING
 
 PROG = "maru-plan"
@@ -84,10 +86,10 @@ def _scaling(text: str) -> float:
     return value
 
 
-def _count(text: str) -> int:
+def _attempts(text: str) -> int:
     value = int(text)
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be >= 1, got {text!r}")
+    if not 1 <= value <= MAX_ATTEMPTS:
+        raise argparse.ArgumentTypeError(f"must be in [1, {MAX_ATTEMPTS}], got {text[:40]!r}")
     return value
 
 
@@ -132,7 +134,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--time", "--max-time", dest="time", type=_positive, default=5.0,
                    help="time budget in seconds (IK + search + post-processing)")  # fmt: skip
     p.add_argument("--seed", type=_seed, default=None, help="random seed (same seed, same path); default random")
-    p.add_argument("--attempts", type=_count, default=1)
+    p.add_argument("--attempts", type=_attempts, default=1, help=f"searches until one finds a path (1-{MAX_ATTEMPTS})")
     p.add_argument("--resolution", type=_positive, default=PlannerConfig.resolution, help="motion-check step (rad)")
     p.add_argument(
         "--collision-model",
@@ -217,6 +219,20 @@ def load_robot(name: str) -> RobotModel:
     return RobotModel.maru1() if name == "maru1" else load_example_robot(name)
 
 
+def check_scene_frame(scene: Scene, robot: RobotModel) -> None:
+    """InvalidScene unless ``scene`` is in ``robot``'s root frame, where its obstacles are placed (no tf here).
+
+    A scene that names no frame reads as base_link: that is taken as the root of a robot without a base_link.
+    """
+    root = link_names(robot)[0]
+    if scene.frame == root or (scene.frame == DEFAULT_FRAME and not robot.model.existFrame(DEFAULT_FRAME)):
+        return
+    raise errors.InvalidScene(
+        f"--scene: frame {scene.frame[:60]!r} is not the root frame {root!r} of {robot.name}; "
+        "obstacles are placed in the root frame (no tf here)"
+    )
+
+
 def load_scene(path: str | None) -> Scene:
     if not path or path == "none":
         return Scene()
@@ -279,6 +295,7 @@ def run(args: argparse.Namespace, params: dict[str, Any], progress: _Progress) -
     start = _values(robot, args.group, args.start, "start")
     goal = _values(robot, args.group, args.goal, "goal") if args.cartesian is None else {}
     scene = load_scene(args.scene)
+    check_scene_frame(scene, robot)
     config = PlannerConfig(
         resolution=args.resolution,
         collision_model=args.collision_model,

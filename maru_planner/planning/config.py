@@ -63,7 +63,7 @@ class PlannerConfig:
         choices=COLLISION_MODELS,
     )
     verify_resolution: float | None = param(
-        None, "joint step (rad) of the exact re-check of a spheres path; unset = resolution / 4", lower=1e-5
+        None, "joint step (rad) of the exact re-check of a spheres path; unset = resolution / 4", lower=1e-5, upper=3.0
     )
     max_refinements: int = param(
         2,

@@ -25,7 +25,9 @@ from maru_planner.planning.planners.registry import PLANNERS, ArmPlannerSpec
 
 
 def compute_fk(robot, q: np.ndarray, links: Sequence[str] = ()) -> dict[str, np.ndarray]:
-    """{link: 4x4 pose in the root frame} at full configuration ``q``; every link when ``links`` is empty."""
+    """{link: 4x4 pose in the root frame} at full configuration ``q``; every link when ``links`` is empty.
+
+    InvalidState for a value that is not finite or outside its joint's limits."""
     q = _robot_state(robot, q)
     wanted = list(links) or link_names(robot)
     ids = [check_link(robot, link) for link in wanted]
@@ -34,11 +36,24 @@ def compute_fk(robot, q: np.ndarray, links: Sequence[str] = ()) -> dict[str, np.
     return {link: data.oMf[fid].homogeneous.copy() for link, fid in zip(wanted, ids, strict=True)}
 
 
+LIMIT_TOLERANCE = 1e-9  # rad or m a joint value may pass its limit by (rounding), as a request's start may
+
+
 def _robot_state(robot, q: np.ndarray) -> np.ndarray:
-    """``q`` as a float array; InvalidState unless it is ``robot.nq`` finite values."""
+    """``q`` as a float array; InvalidState unless it is ``robot.nq`` finite values within the joint limits."""
     q = np.asarray(q, dtype=float)
-    if q.shape != (robot.nq,) or not np.all(np.isfinite(q)):
+    if q.shape != (robot.nq,):
         raise errors.InvalidState(f"robot state must be {robot.nq} finite values, got shape {q.shape}")
+    lower, upper = np.asarray(robot.lower_limits), np.asarray(robot.upper_limits)
+    # NaN compares False: not-finite values are caught by the isfinite test, not by the limits
+    outside = ~np.isfinite(q) | (q < lower - LIMIT_TOLERANCE) | (q > upper + LIMIT_TOLERANCE)
+    if outside.any():
+        k = int(np.flatnonzero(outside)[0])
+        name = robot.joint_names[k] if k < len(robot.joint_names) else f"q[{k}]"
+        raise errors.InvalidState(
+            f"robot state: joint {name} = {q[k]:.4g} is "
+            + (f"outside its limits [{lower[k]:.4f}, {upper[k]:.4f}]" if np.isfinite(q[k]) else "not finite")
+        )
     return q
 
 
@@ -56,7 +71,10 @@ class StateValidity:
 
 
 def check_state_validity(robot, checker, q: np.ndarray, constraints: PathConstraints | None = None) -> StateValidity:
-    """Collisions (self, scene, attached objects), joint limits and ``constraints`` at full configuration ``q``."""
+    """Collisions (self, scene, attached objects) and ``constraints`` at full configuration ``q``.
+
+    A value that is not finite or outside its joint's limits is no state to judge: InvalidState names the joint.
+    """
     q = _robot_state(robot, q)
     pairs = list(checker.colliding_pairs(q))
     closest, distance = checker.closest_pair(q)

@@ -17,6 +17,8 @@ from maru_planner.planning.config import PlannerConfig
 from maru_planner.planning.types import MotionRequest
 from maru_planner.trajectory import check_method, check_scaling
 
+MAX_ATTEMPTS = 1000  # searches of one request (each within the request's budget)
+
 
 def finite_time(value: Any, name: str) -> float:
     """``value`` as a finite number of seconds > 0; InvalidRequest otherwise."""
@@ -45,8 +47,8 @@ def check_request(request: MotionRequest, config: PlannerConfig) -> tuple[float,
     """``request``'s time budget and seed (its own, or a random one); InvalidRequest naming the first bad field
     among time_budget, attempts, the scalings, time_parameterization, safety_margin and seed."""
     budget = finite_time(request.time_budget, "time_budget")
-    if int(request.attempts) < 1:
-        raise errors.InvalidRequest(f"attempts must be >= 1, got {request.attempts}")
+    if not 1 <= int(request.attempts) <= MAX_ATTEMPTS:
+        raise errors.InvalidRequest(f"attempts must be in [1, {MAX_ATTEMPTS}], got {request.attempts}")
     for name in ("velocity_scaling", "acceleration_scaling", "jerk_scaling"):
         check_scaling(getattr(request, name), name)
     check_method(request.time_parameterization or config.time_parameterization)

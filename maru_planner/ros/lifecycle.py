@@ -18,11 +18,15 @@ reject goals (:meth:`ManagedNode.goal_when_active`) and its lifecycle publishers
 Requests admitted before a deactivation finish; cleanup is refused while any is still running.
 
 A transition whose method raises fails (``FAILURE``: the node stays in its state, the reason is
-logged on one line). The read-only parameter ``autostart`` (default true) configures and
-activates the node at start-up, as a plain node, raising what ``configure()`` raised so ``main()``
-can print one line and exit; ``autostart:=false`` leaves it unconfigured for a lifecycle manager
-(``ros2 lifecycle set <node> configure``, ``nav2_lifecycle_manager``). ``destroy_node`` shuts the
-node down through the shutdown transition (a deactivation first, when active).
+logged on one line). A ``change_state`` request for a transition that does not start from the node's
+current state (configure while active, an unknown id or label) is answered ``success: false`` with a
+warning, as rclcpp's managed nodes answer it (rclpy alone lets rcl raise, and the process ends).
+
+The read-only parameter ``autostart`` (default true) configures and activates the node at start-up,
+as a plain node, raising what ``configure()`` raised so ``main()`` can print one line and exit;
+``autostart:=false`` leaves it unconfigured for a lifecycle manager (``ros2 lifecycle set <node>
+configure``, ``nav2_lifecycle_manager``). ``destroy_node`` shuts the node down through the shutdown
+transition (a deactivation first, when active).
 """
 
 from __future__ import annotations
@@ -35,6 +39,8 @@ from contextlib import contextmanager
 from typing import Any, TypeVar
 
 import rclpy
+from lifecycle_msgs.msg import State, Transition  # type: ignore[import-untyped]
+from lifecycle_msgs.srv import ChangeState  # type: ignore[import-untyped]
 from rclpy.action import ActionServer, GoalResponse
 from rclpy.client import Client
 from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor, SingleThreadedExecutor
@@ -46,7 +52,7 @@ from rclpy.service import Service
 from rclpy.subscription import Subscription
 from rclpy.timer import Timer
 
-from maru_planner.errors import MaruError, one_line
+from maru_planner.errors import MaruError, excerpt, one_line
 from maru_planner.params import ParamSpec
 from maru_planner.ros import parameters
 from maru_planner.ros.env import network_from_environment
@@ -62,6 +68,10 @@ AUTOSTART = ParamSpec(
 SUCCESS = TransitionCallbackReturn.SUCCESS
 FAILURE = TransitionCallbackReturn.FAILURE
 INACTIVE_WARNING_PERIOD = 5.0  # s between repeats of the "not active" warning
+PRIMARY_STATES = frozenset(
+    (State.PRIMARY_STATE_UNCONFIGURED, State.PRIMARY_STATE_INACTIVE, State.PRIMARY_STATE_ACTIVE,
+     State.PRIMARY_STATE_FINALIZED)
+)  # fmt: skip
 
 
 def inactive_response(response: Any, message: str) -> Any:
@@ -82,6 +92,7 @@ class ManagedNode(LifecycleNode):
 
     def __init__(self, node_name: str, **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
+        self._refuse_invalid_transitions()
         self.autostart: bool = parameters.declare_parameters(self, {AUTOSTART.name: AUTOSTART})[AUTOSTART.name]
         self.is_configured = False
         self.is_active = False
@@ -209,6 +220,55 @@ class ManagedNode(LifecycleNode):
         return message
 
     # ------------------------------------------------------------ transitions
+    def _refuse_invalid_transitions(self) -> None:
+        """Put :meth:`_transition_refusal` in front of rclpy's ``change_state`` service callback.
+
+        rclpy 7 hands a request's transition id to ``rcl_lifecycle_trigger_transition_by_id`` unchecked, and for an
+        id that does not start from the current state rcl raises "Transition is not registered" out of the executor:
+        the process ends. A label is looked up first and answered ``success: false`` when unknown.
+        """
+        service = getattr(self, "_service_change_state", None)  # None without the communication interface
+        if service is None:
+            return
+        rclpy_change_state = service.callback
+
+        def change_state(request: ChangeState.Request, response: ChangeState.Response) -> ChangeState.Response:
+            refusal = self._transition_refusal(request.transition)
+            if refusal is None:
+                try:
+                    return rclpy_change_state(request, response)
+                except RuntimeError as exc:  # rcl's RCLError, should the check above ever miss a case
+                    refusal = f"rcl refused it: {one_line(exc)}"
+            self.get_logger().warning(f"change_state {self._describe(request.transition)} refused: {refusal}")
+            response.success = False
+            return response
+
+        service.callback = change_state
+
+    def _transition_refusal(self, transition: Transition) -> str | None:
+        """Why ``transition`` cannot start from the current state, or None when it can.
+
+        As in rclcpp, a label, when given, names the transition and the id is ignored (``ros2 service call``
+        leaves the id 0). The lifecycle services share the node's mutually exclusive default callback group,
+        so the state cannot change between this check and the transition.
+        """
+        state_id, state = self._state_machine.current_state
+        if state_id not in PRIMARY_STATES:
+            return f"the node is {state} (a transition is in progress)"
+        valid = [(transition_id, label) for transition_id, label, *_ in self._state_machine.available_transitions]
+        if transition.label:
+            starts_here = any(label == transition.label for _, label in valid)
+        else:
+            starts_here = any(transition_id == transition.id for transition_id, _ in valid)
+        if starts_here:
+            return None
+        allowed = ", ".join(f"{label} ({transition_id})" for transition_id, label in valid) or "none"
+        return f"not allowed while {state} (allowed: {allowed})"
+
+    @staticmethod
+    def _describe(transition: Transition) -> str:
+        return f"label {excerpt(transition.label)}" if transition.label else f"id {transition.id}"
+
     def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
         before = self._entities()
         result = self._run("configure", self.configure)

@@ -15,6 +15,7 @@ from sensor_msgs.msg import JointState
 from maru_planner import errors
 from maru_planner.monitor import Progress
 from maru_planner.planning import MotionRequest
+from maru_planner.planning.requests import MAX_ATTEMPTS
 from maru_planner.ros import manipulation
 from maru_planner.ros import planning_conversions as conv
 from maru_planner.ros.planning_parameters import NodeSettings
@@ -57,8 +58,8 @@ def motion_request(request: Any, settings: NodeSettings, default_planner: str, l
         goal_poses=goal_poses,
         planner_id=request.planner_id or ("" if not constraints.empty else default_planner),
         time_budget=budget,
-        seed=None if request.seed < 0 else int(request.seed),
-        attempts=int(request.num_attempts) if request.num_attempts > 0 else settings.default_attempts,
+        seed=plan_seed(request.seed),
+        attempts=plan_attempts(request.num_attempts, settings.default_attempts),
         velocity_scaling=scaling(request.max_velocity_scaling_factor, "max_velocity_scaling_factor"),
         acceleration_scaling=scaling(request.max_acceleration_scaling_factor, "max_acceleration_scaling_factor"),
         time_parameterization=request.time_parameterization,
@@ -75,6 +76,23 @@ def start_state(msg: JointState, latest: Latest) -> dict[str, float]:
     if not values:
         raise errors.NoStartState("start_state is empty and no /joint_states message has been received")
     return values
+
+
+def plan_seed(value: int) -> int | None:
+    """A request's seed: -1 means a random one (None); other negative values are refused."""
+    if value < -1:
+        raise errors.InvalidRequest(f"seed must be in [0, 2^63) or -1 (random), got {value}")
+    return None if value == -1 else int(value)
+
+
+def plan_attempts(value: int, default: int) -> int:
+    """A request's ``num_attempts``: 0 means the node's ``default_attempts``; negative or past MAX_ATTEMPTS
+    is refused."""
+    if not 0 <= value <= MAX_ATTEMPTS:
+        raise errors.InvalidRequest(
+            f"num_attempts must be in [1, {MAX_ATTEMPTS}] (0 = the node's default_attempts), got {value}"
+        )
+    return int(value) if value > 0 else default
 
 
 def scaling(value: float, field: str) -> float:

@@ -166,6 +166,12 @@ class PlanningRuntime:
             return self._pool.workers
 
     @property
+    def worker_pids(self) -> list[int]:
+        """The process ids of the worker processes (none without ``worker_processes``); one killed is replaced."""
+        processes = self._processes
+        return processes.pids if processes is not None else []
+
+    @property
     def admitted(self) -> int:
         """Requests planning or waiting for a worker."""
         with self._lock:

@@ -4,7 +4,8 @@ Every OMPL search of a process runs under one lock (OMPL's seed generator is pro
 :mod:`~maru_planner.planning.motion_planner`), so planning threads queue; worker processes plan in
 parallel. Each worker builds its own robot model and :class:`MotionPlanner` once, from picklable
 inputs (:class:`RobotSource`, a scene dict, a :class:`PlannerConfig`), and plans the requests the pool
-hands it, one at a time; the same seed gives the same path as planning in the caller's process.
+hands it, one at a time (:mod:`~maru_planner.runtime.worker_process`); the same seed gives the same path as
+planning in the caller's process.
 
 * ``submit(request, monitor)`` returns a ``concurrent.futures.Future`` of the :class:`MotionResult`
   (a typed error stays in ``result.error`` with its class and message). With a ``monitor``, the
@@ -14,8 +15,13 @@ hands it, one at a time; the same seed gives the same path as planning in the ca
 * Workers start from a fork server that has imported the planning modules once (fork would copy the
   caller's threads, e.g. rclpy's, in an undefined state), all at the same time and in the background:
   the constructor returns at once, :meth:`wait_ready` waits for them (requests submitted meanwhile wait too).
-  A worker exits when the pool closes or its pipe to the caller breaks (the caller died); one that dies
-  while the pool runs fails its request with :class:`~maru_planner.errors.PlanningFailed` and is replaced.
+  A worker exits when the pool closes or its pipe to the caller breaks (the caller died).
+* A worker that dies while the pool runs (killed, out of memory, a crash in native code) fails its request at
+  once with :class:`~maru_planner.errors.PlanningFailed` ("the planning worker 1234 died (signal 9, SIGKILL)
+  while planning; it was restarted") and a new worker replaces it; requests waiting meanwhile are served by the
+  other workers or the new one, their wait counted against their ``time_budget`` (PlanningTimedOut when it ran
+  out). Only a worker that cannot start (its replacement included) is not restarted: with no worker left, what
+  waits and what comes fails with PlanningFailed instead of waiting for ever.
 
 Messages on a worker's pipe: to the worker ``("plan", job, request, forward_progress)``,
 ``("cancel", job)``, ``("scene", scene_dict)``, ``("config", config)``, ``("stop",)``; from it
@@ -26,16 +32,14 @@ Messages on a worker's pipe: to the worker ``("plan", job, request, forward_prog
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import itertools
+import logging
 import multiprocessing
-import os
-import pickle
-import queue
 import signal
 import threading
 import time
 from collections import deque
-from collections.abc import Callable
 from concurrent.futures import Future
 from dataclasses import dataclass, field
 from multiprocessing.connection import Connection
@@ -43,132 +47,18 @@ from multiprocessing.context import ForkServerContext, SpawnContext
 from typing import cast
 
 from maru_planner import errors
-from maru_planner.monitor import PlanMonitor, Progress
+from maru_planner.monitor import PlanMonitor
 from maru_planner.planning.config import PlannerConfig
-from maru_planner.planning.motion_planner import MotionPlanner
 from maru_planner.planning.types import MotionRequest, MotionResult
 from maru_planner.runtime.robot_loading import RobotSource
-from maru_planner.runtime.warm_up import warm_up
+from maru_planner.runtime.worker_process import worker_main
 from maru_planner.scene import Scene
 
 START_METHOD = "forkserver"  # not "fork": the caller may run rclpy/DDS threads a fork would copy half-way
 START_METHODS = ("forkserver", "spawn")
 _ProcessContext = ForkServerContext | SpawnContext
 STOP_TIMEOUT = 5.0  # s a stopping worker may take to finish (a cancelled plan ends within milliseconds)
-
-
-# ---------------------------------------------------------------- worker process
-
-
-class _Inbox:
-    """The worker's reader thread: cancels at once, queues everything else for the planning thread.
-
-    A plan's :class:`PlanMonitor` is made here, so a cancel that arrives before the plan starts still
-    reaches it. EOF before a stop means the pool's process is gone: the worker exits at once.
-    """
-
-    def __init__(self, conn: Connection, send: Callable[[tuple], None]):
-        self._conn = conn
-        self._send = send
-        self._messages: queue.SimpleQueue[tuple | None] = queue.SimpleQueue()
-        self._monitors: dict[int, PlanMonitor] = {}
-        self._lock = threading.Lock()
-        threading.Thread(target=self._read, name="inbox", daemon=True).start()
-
-    def next(self) -> tuple | None:
-        """The next message for the planning thread; None once the worker must stop."""
-        return self._messages.get()
-
-    def done(self, job: int) -> None:
-        with self._lock:
-            self._monitors.pop(job, None)
-
-    def _read(self) -> None:
-        while True:
-            try:
-                message = self._conn.recv()
-            except (EOFError, OSError):
-                os._exit(0)  # the pool's process died: no one is left to answer
-            kind = message[0]
-            if kind == "cancel":
-                self._cancel(message[1])
-            elif kind == "plan":
-                self._queue_plan(*message[1:])
-            elif kind == "stop":
-                self._stop()
-                return
-            else:
-                self._messages.put(message)
-
-    def _queue_plan(self, job: int, request: MotionRequest, forward_progress: bool) -> None:
-        monitor = PlanMonitor(self._progress_sender(job) if forward_progress else None)
-        with self._lock:
-            self._monitors[job] = monitor
-        self._messages.put(("plan", job, request, monitor))
-
-    def _progress_sender(self, job: int) -> Callable[[Progress], None]:
-        def forward(progress: Progress) -> None:
-            self._send(("progress", job, progress.stage, progress.info))
-
-        return forward
-
-    def _cancel(self, job: int) -> None:
-        with self._lock:
-            monitor = self._monitors.get(job)
-        if monitor is not None:
-            monitor.cancel()
-
-    def _stop(self) -> None:
-        with self._lock:
-            monitors = list(self._monitors.values())
-        for monitor in monitors:
-            monitor.cancel()
-        self._messages.put(None)
-
-
-def _worker_main(conn: Connection, robot: RobotSource, scene: dict, config: PlannerConfig) -> None:
-    """A worker process: build the planner once, then plan until told to stop."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C reaches the whole group; the pool stops us
-    send_lock = threading.Lock()
-
-    def send(message: tuple) -> None:
-        with send_lock:
-            conn.send(message)
-
-    inbox = _Inbox(conn, send)  # reading already: the pool never blocks on a pipe a building worker leaves full
-    try:
-        model = robot.load()
-        planner = MotionPlanner.from_scene(model, Scene.from_dict(scene), config)
-    except Exception as exc:  # noqa: BLE001 - reported to the pool, which refuses to start
-        send(("broken", errors.one_line(f"{type(exc).__name__}: {exc}")))
-        return
-    warmed = warm_up(model, config)  # no request pays numba's compile or cache load (its module doc)
-    send(("ready", warmed.summary()))
-    while (message := inbox.next()) is not None:
-        kind = message[0]
-        if kind == "scene":
-            planner.set_scene(Scene.from_dict(message[1]))
-        elif kind == "config":
-            planner = MotionPlanner.from_scene(model, planner.scene, message[1])
-            warm_up(model, message[1])
-        elif kind == "plan":
-            _, job, request, monitor = message
-            result = planner.plan(request, monitor)
-            inbox.done(job)
-            send(("result", job, _portable(result)))
-
-
-def _portable(result: MotionResult) -> MotionResult:
-    """``result`` with an error the pool's process can unpickle (else a RuntimeError with its message)."""
-    if result.error is not None:
-        try:
-            pickle.loads(pickle.dumps(result.error))
-        except Exception:  # noqa: BLE001 - any exception a third-party library raised
-            result.error = RuntimeError(result.message)
-    return result
-
-
-# ---------------------------------------------------------------- the pool (caller's process)
+_LOG = logging.getLogger(__name__)
 
 
 @dataclass
@@ -177,12 +67,28 @@ class _Job:
     request: MotionRequest
     monitor: PlanMonitor | None
     future: Future
+    submitted: float = field(default_factory=time.monotonic)
+    queued: bool = False  # it waited for a worker: the wait counts against its time_budget
     attached: contextlib.ExitStack = field(default_factory=contextlib.ExitStack)
-    lock: threading.Lock = field(default_factory=threading.Lock)  # the monitor is attached before it is detached
+    lock: threading.Lock = field(default_factory=threading.Lock)  # starts, detaches and fails it one at a time
 
     def detach(self) -> None:
         with self.lock:
             self.attached.close()
+
+    def fail(self, error: Exception) -> None:
+        """Detach the monitor and end the Future with ``error`` (nothing if it has ended already)."""
+        with self.lock:
+            self.attached.close()
+            if not self.future.done():
+                self.future.set_exception(error)
+
+    def request_left(self) -> MotionRequest | None:
+        """The request with the time left of its budget after its wait; None once the wait used it up."""
+        if not self.queued:
+            return self.request
+        left = self.request.time_budget - (time.monotonic() - self.submitted)
+        return dataclasses.replace(self.request, time_budget=left) if left > 0.0 else None
 
 
 class _Worker:
@@ -250,6 +156,7 @@ class ProcessPool:
         self._worker_ids = itertools.count()
         self._closed = False
         self._start_failure = ""
+        self._last_loss = ""  # why the last worker went: the error when none is left
         # the constructor returns at once: the caller builds what it needs while the fork server imports
         self._starting = threading.Thread(target=self._start_first, args=(workers,), name="maru-planner-start")
         self._starting.start()
@@ -344,12 +251,16 @@ class ProcessPool:
         with self._lock:
             if self._closed:
                 raise RuntimeError("the process pool is closed")
-            worker = self._idle.pop() if self._idle else None
-            if worker is None:
+            unserved = self._no_worker_left()
+            worker = self._idle.pop() if self._idle and not unserved else None
+            if worker is None and not unserved:
+                job.queued = True
                 self._pending.append(job)
-            else:
+            elif worker is not None:
                 worker.job = job
-        if worker is not None:
+        if unserved:
+            job.fail(errors.PlanningFailed(unserved, source="workers"))
+        elif worker is not None:
             self._start(worker, job)
         return job.future
 
@@ -392,36 +303,62 @@ class ProcessPool:
 
     def _start_workers(self, count: int) -> None:
         for _ in range(max(0, count)):
-            parent_end, child_end = self._mp.Pipe()
             with self._lock:
-                process = self._mp.Process(
-                    target=_worker_main,
-                    args=(child_end, self._robot, self._scene, self._config),
-                    name=f"maru-planner-worker-{next(self._worker_ids)}",
-                    daemon=True,
-                )
-                process.start()
-                worker = _Worker(process, parent_end)
-                self._workers.append(worker)
+                if self._closed:  # close() has taken its list of workers: one started now would outlive the pool
+                    return
+                self._spawn()
+
+    def _spawn(self) -> _Worker:
+        """Start one worker process and its reader thread (the caller holds the pool's lock)."""
+        parent_end, child_end = self._mp.Pipe()
+        process = self._mp.Process(
+            target=worker_main,
+            args=(child_end, self._robot, self._scene, self._config),
+            name=f"maru-planner-worker-{next(self._worker_ids)}",
+            daemon=True,
+        )
+        try:
+            process.start()
+        except BaseException:
+            parent_end.close()
+            raise
+        finally:
             child_end.close()
-            worker.reader = threading.Thread(target=self._read, args=(worker,), name=process.name, daemon=True)
-            worker.reader.start()
+        worker = _Worker(process, parent_end)
+        self._workers.append(worker)
+        worker.reader = threading.Thread(target=self._read, args=(worker,), name=process.name, daemon=True)
+        worker.reader.start()
+        return worker
+
+    def _no_worker_left(self) -> str:
+        """Why no request can be served (no worker runs or starts), else "" (the caller holds the lock)."""
+        if self._starting.is_alive() or any(not w.retiring for w in self._workers):
+            return ""
+        return f"no planning worker is running ({self._last_loss or self._start_failure or 'none started'})"
 
     def _start(self, worker: _Worker, job: _Job) -> None:
         """Send ``job`` to ``worker`` (its monitor's cancel now reaches the worker)."""
-        if not job.future.set_running_or_notify_cancel():  # the caller cancelled the Future meanwhile
-            self._next_job(worker)
-            return
         with job.lock:
-            worker.send(("plan", job.job_id, job.request, job.monitor is not None))
-            if job.monitor is not None:  # after the plan: a monitor cancelled already sends its cancel at once
-                job.attached.enter_context(job.monitor.attach(_CancelInWorker(worker, job.job_id)))
+            if job.future.done() and not job.future.cancelled():
+                return  # the worker died before the plan went out: its reader failed the job
+            running = job.future.set_running_or_notify_cancel()  # False: the caller cancelled the Future
+            request = job.request_left() if running else None
+            if request is not None:
+                worker.send(("plan", job.job_id, request, job.monitor is not None))
+                if job.monitor is not None:  # after the plan: a monitor cancelled already sends its cancel at once
+                    job.attached.enter_context(job.monitor.attach(_CancelInWorker(worker, job.job_id)))
+                return
+            if running:
+                job.future.set_exception(
+                    errors.PlanningTimedOut("the time budget ran out while the request waited for a planning worker")
+                )
+        self._next_job(worker)
 
     def _next_job(self, worker: _Worker) -> None:
         """Give ``worker`` the next waiting job, else mark it idle (a retiring one stops instead)."""
         with self._lock:
             job = None
-            if not worker.retiring and not self._closed:
+            if not worker.retiring and not self._closed and worker in self._workers:  # not one that died meanwhile
                 job = self._pending.popleft() if self._pending else None
                 if job is None:
                     self._idle.append(worker)
@@ -469,6 +406,8 @@ class ProcessPool:
 
     def _lost(self, worker: _Worker) -> None:
         """The worker's pipe closed: it stopped, or died (then its job fails and a new worker replaces it)."""
+        worker.conn.close()
+        _reap(worker.process)  # its exit code; at once for a process that is gone
         with self._lock:
             if worker in self._workers:
                 self._workers.remove(worker)
@@ -478,19 +417,52 @@ class ProcessPool:
             if not worker.ready.is_set():  # died while building its planner: wait_ready reports it, no restart loop
                 worker.failure = worker.failure or f"{worker.process.name} exited before it was ready"
                 worker.ready.set()
-            replace = not (self._closed or worker.retiring or worker.failure)
-        worker.conn.close()
-        _reap(worker.process)
+            stopped = (self._closed or worker.retiring) and job is None  # told to stop: not a loss
+            loss = "" if stopped else self._replace(worker, planning=job is not None)
+            orphans, unserved = self._orphans()
+        if loss:
+            _LOG.warning(loss)
         if job is not None:
-            job.detach()
-            job.future.set_exception(
-                errors.PlanningFailed(
-                    f"planning worker {worker.process.name} exited (code {worker.process.exitcode}) while planning",
-                    source="workers",
-                )
-            )
-        if replace:
-            self._start_workers(1)
+            job.fail(errors.PlanningFailed(loss, source="workers"))
+        for orphan in orphans:
+            orphan.fail(errors.PlanningFailed(unserved, source="workers"))
+
+    def _replace(self, worker: _Worker, planning: bool) -> str:
+        """Start a worker instead of the dead ``worker`` unless the pool is closing, ``worker`` was retiring or
+        could not start; what happened, one line (the caller holds the lock)."""
+        ending = f"the planning worker {worker.process.pid} {_exit_description(worker.process.exitcode)}"
+        if worker.failure:
+            outcome = f"it could not start: {worker.failure}"
+        elif self._closed:
+            outcome = "the pool is closing"
+        elif worker.retiring:
+            outcome = "it was retiring (not replaced)"
+        else:
+            try:
+                outcome = f"it was restarted (as {self._spawn().process.pid})"
+            except Exception as exc:  # noqa: BLE001 - e.g. the fork server is gone: no worker left, and no hang
+                outcome = errors.one_line(f"it could not be restarted: {type(exc).__name__}: {exc}")
+        self._last_loss = f"{ending}{' while planning' if planning else ''}; {outcome}"
+        return self._last_loss
+
+    def _orphans(self) -> tuple[list[_Job], str]:
+        """(the waiting jobs, why) taken from the queue when no worker is left to serve them (lock held)."""
+        unserved = "" if self._closed else self._no_worker_left()
+        if not unserved:
+            return [], ""
+        orphans, self._pending = list(self._pending), deque()
+        return orphans, unserved
+
+
+def _exit_description(exitcode: int | None) -> str:
+    """How a worker process ended, from its ``exitcode`` (negative: the signal that killed it)."""
+    if exitcode is None:
+        return "closed its pipe"
+    if exitcode < 0:
+        with contextlib.suppress(ValueError):
+            return f"died (signal {-exitcode}, {signal.Signals(-exitcode).name})"
+        return f"died (signal {-exitcode})"
+    return f"exited (code {exitcode})"
 
 
 def _reap(process) -> None:

@@ -49,6 +49,7 @@ def _is_file(text: str) -> bool:
 
 
 MAX_OBSTACLES = 500_000  # default size limit of a scene
+DEFAULT_FRAME = "base_link"  # the frame of a scene that names none (maru1's root link)
 
 
 class BuildClock:
@@ -73,7 +74,7 @@ class Scene:
     """An ordered set of named obstacles in ``frame`` (the robot's root frame), at most ``max_obstacles``."""
 
     def __init__(
-        self, obstacles: list[Obstacle] | None = None, frame: str = "base_link", *, max_obstacles: int = MAX_OBSTACLES
+        self, obstacles: list[Obstacle] | None = None, frame: str = DEFAULT_FRAME, *, max_obstacles: int = MAX_OBSTACLES
     ):
         self.frame = frame
         self.max_obstacles = int(max_obstacles)
@@ -204,7 +205,7 @@ class Scene:
         dupes = sorted(name for name, count in Counter(o.name for o in obstacles).items() if count > 1)
         if dupes:
             raise InvalidScene(f"scene: duplicate obstacle name(s) {dupes}")
-        scene = cls(obstacles, frame=str(d.get("frame", "base_link")), max_obstacles=max_obstacles)
+        scene = cls(obstacles, frame=str(d.get("frame", DEFAULT_FRAME)), max_obstacles=max_obstacles)
         attached = d.get("attached") or []
         if not isinstance(attached, list):
             raise InvalidScene("scene: field 'attached' must be a list")

@@ -31,8 +31,20 @@ def matrix_rpy(R: np.ndarray) -> tuple[float, float, float]:
     return math.atan2(R[2, 1], R[2, 2]), pitch, math.atan2(R[1, 0], R[0, 0])
 
 
+MAX_COORDINATE = 1e3  # m: |x|, |y| and |z| of an obstacle's position in the scene frame
+
+
 def pose_matrix(pose: Any, where: str = "pose") -> np.ndarray:
-    """A 4x4 from a 4x4, {xyz, rpy}, (x, y, z) or (x, y, z, roll, pitch, yaw)."""
+    """A 4x4 from a 4x4, {xyz, rpy}, (x, y, z) or (x, y, z, roll, pitch, yaw); finite, its position within
+    :data:`MAX_COORDINATE` (else InvalidScene naming ``where``)."""
+    T = _pose_matrix(pose, where)
+    if np.abs(T[:3, 3]).max() > MAX_COORDINATE:
+        shown = ", ".join(f"{v:.4g}" for v in T[:3, 3])
+        raise InvalidScene(f"{where}: pose position ({shown}) is farther than {MAX_COORDINATE:g} m along an axis")
+    return T
+
+
+def _pose_matrix(pose: Any, where: str) -> np.ndarray:
     if pose is None:
         return np.eye(4)
     if isinstance(pose, dict):

@@ -29,6 +29,7 @@ from maru_planner.errors import InvalidScene
 
 Dimensions = dict[str, Any]  # validated field values: floats, 3-tuples of floats, path strings
 KERNEL_KINDS = ("box", "sphere", "cylinder")  # what the sphere checker's kernels test exactly
+MAX_DIMENSION = 1e3  # m: largest obstacle dimension (side, radius, length) and mesh scale factor
 
 
 @dataclass(frozen=True)
@@ -175,9 +176,9 @@ def validate(spec: ShapeSpec, where: str, values: Mapping[str, Any]) -> Dimensio
 
 def _positive(where: str, dim: Dimension, value: Any) -> float | tuple[float, ...]:
     arr = numbers(where, dim.name, value, dim.count)
-    if (arr <= 0).any():
+    if (arr <= 0).any() or (arr > MAX_DIMENSION).any():
         shown = arr.tolist() if dim.count > 1 else float(arr[0])
-        raise InvalidScene(f"{where}: field '{dim.name}' must be > 0, got {shown}")
+        raise InvalidScene(f"{where}: field '{dim.name}' must be > 0 and <= {MAX_DIMENSION:g}, got {str(shown):.60}")
     return float(arr[0]) if dim.count == 1 else tuple(float(v) for v in arr)
 
 

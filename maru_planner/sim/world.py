@@ -36,6 +36,7 @@ from scipy.ndimage import distance_transform_edt
 
 from maru_planner.base.grid import OccupancyGrid
 from maru_planner.errors import InvalidScene, MaruError, one_line
+from maru_planner.reactive.inputs import MAX_COORDINATE, MAX_PATH_POSES
 from maru_planner.reactive.scan import MAX_SCAN_BEAMS
 from maru_planner.sim.geometry import box_polygon, polygon_segments
 
@@ -219,9 +220,7 @@ class World:
             if not map_path.is_absolute() and base_dir is not None:
                 map_path = base_dir / map_path
             occupancy = OccupancyMap.from_yaml(map_path)
-        path = None
-        if data.get("path") is not None:
-            path = _array(data["path"], "path", cols=(2, 3))
+        path = None if data.get("path") is None else _path(data["path"])
         bounds = tuple(_array(data["bounds"], "bounds", size=4)) if data.get("bounds") is not None else None
         return cls(
             robot=_parse_robot(data["robot"]),
@@ -263,6 +262,18 @@ def _array(value, what: str, size: int | None = None, cols: tuple | None = None)
     if cols is not None and (arr.ndim != 2 or arr.shape[1] not in cols or arr.shape[0] < 1):
         raise WorldError(f"{what}: expected a list of points with {cols} coordinates, got shape {arr.shape}")
     return arr
+
+
+def _path(value) -> np.ndarray:
+    """An initial path: 2 to MAX_PATH_POSES points (x, y[, yaw]) within MAX_COORDINATE of the origin."""
+    if isinstance(value, list) and len(value) > MAX_PATH_POSES:  # before converting them
+        raise WorldError(f"path: {len(value)} points, more than {MAX_PATH_POSES}")
+    path = _array(value, "path", cols=(2, 3))
+    if len(path) < 2:
+        raise WorldError(f"path: needs at least 2 points (a start and an end), got {len(path)}")
+    if np.abs(path[:, :2]).max() > MAX_COORDINATE:
+        raise WorldError(f"path: a point is farther than {MAX_COORDINATE:g} m from the origin")
+    return path
 
 
 def _number(value, what: str) -> float:

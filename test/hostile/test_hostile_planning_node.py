@@ -11,10 +11,13 @@ The 64-client burst is test_planning_node's.
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 import pytest
 from hostile_inputs import (
+    EASY_GOAL,
+    PAPER_START,
     PLANNING_LIMITS,
     SUITE_EXAMPLES,
     PlanningNodeTarget,
@@ -103,6 +106,72 @@ def test_rss_over_10000_junk_joint_states(node):
     after = rss_mb(node.process.proc.pid)
     MEASURED.append(f"planning_node RSS {before:.1f} MB -> {after:.1f} MB over {JUNK_MESSAGES} junk /joint_states")
     assert after - before <= RSS_GROWTH_MB
+
+
+# ---------------------------------------------------------------- issue 36's validation gaps, through the node
+# (the core and CLI cases are test_hostile_limits.py's)
+
+
+def test_a_cartesian_step_implying_too_many_poses_is_refused_at_once(node):
+    hand = node.client.compute_fk(PAPER_START, ["r_hand"])
+    assert hand.error.code == PlanningError.SUCCESS, hand.error.message
+    pose = hand.poses[0].pose
+    pose.position.x += 0.65
+    started = time.monotonic()
+    response = node.client.cartesian_path([pose], start=PAPER_START, group="right_arm", max_step=1e-9)
+    assert response.error.code == PlanningError.INVALID_REQUEST and "max_step" in response.error.message
+    assert time.monotonic() - started < 2.0
+
+
+def test_attempts_out_of_range_are_refused_by_the_service_and_the_action(node):
+    response = node.client.plan(EASY_GOAL, start=PAPER_START, attempts=-5, time_budget=1.0)
+    assert response.error.code == PlanningError.INVALID_REQUEST and "num_attempts" in response.error.message
+    _, result = node.client.plan_action(EASY_GOAL, start=PAPER_START, attempts=-5, time_budget=1.0).result(30.0)
+    assert result.error.code == PlanningError.INVALID_REQUEST and "num_attempts" in result.error.message
+
+
+def test_a_zero_scaling_is_full_speed_for_the_service_and_the_action(node):
+    fields = {"start": PAPER_START, "planner_id": "RRTConnect", "seed": 7, "time_budget": 2.0, "velocity_scaling": 0.0}
+    service = node.client.plan(EASY_GOAL, **fields)
+    _, action = node.client.plan_action(EASY_GOAL, **fields).result(30.0)
+    full = node.client.plan(EASY_GOAL, **{**fields, "velocity_scaling": 1.0})
+    assert service.error.code == action.error.code == full.error.code == PlanningError.SUCCESS
+    durations = [a.trajectory.points[-1].time_from_start for a in (service, action, full)]
+    assert durations[0] == durations[1] == durations[2]
+
+
+@pytest.mark.parametrize("value", [1e300, -1e300])
+def test_joint_values_outside_limits_are_refused_by_fk_and_validity(node, value):
+    state = {**PAPER_START, "r_arm_j2": value}
+    for response in (node.client.check_state_validity(state), node.client.compute_fk(state, ["r_hand"])):
+        assert response.error.code == PlanningError.INVALID_ROBOT_STATE and "r_arm_j2" in response.error.message
+
+
+def test_a_box_of_1e300_is_refused(node):
+    try:
+        response = node.client.add_obstacle("huge_box", "box", [1e300, 1.0, 1.0], np.eye(4))
+        assert response.error.code == PlanningError.INVALID_SCENE and "huge_box" in response.error.message
+        assert "huge_box" not in response.obstacle_names
+    finally:
+        node.restore_scene()
+
+
+def test_a_planner_parameter_out_of_range_is_refused(node):
+    from rclpy.parameter import Parameter
+    from rclpy.parameter_client import AsyncParameterClient
+
+    remote = AsyncParameterClient(node.spinning.node, "planning_node")
+    assert remote.wait_for_services(timeout_sec=30.0)
+
+    def answer(future):
+        assert node.spinning.wait_for(future.done, timeout=30.0), "no answer from the parameter service"
+        return future.result()
+
+    name = "planners.RCRRT.candidates"
+    described = answer(remote.describe_parameters([name])).descriptors[0]
+    assert described.integer_range[0].to_value == 1000
+    result = answer(remote.set_parameters([Parameter(name, value=10**12)])).results[0]
+    assert not result.successful
 
 
 def test_no_broken_invariant_and_enough_inputs(node):

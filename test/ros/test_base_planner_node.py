@@ -29,11 +29,11 @@ def node(node_process):
 
 
 class Client(BaseNodeClient):
-    def __init__(self, spinning, proc):
+    def __init__(self, spinning, proc, namespace: str = ""):
         from nav_msgs.msg import OccupancyGrid, Path
         from nav_msgs.srv import GetPlan
 
-        super().__init__(spinning, proc)
+        super().__init__(spinning, proc, namespace)
         node = spinning.node
         self.get_plan_client = node.create_client(GetPlan, "/make_plan")
         self.paths, self.eca_maps = [], []
@@ -209,8 +209,10 @@ def test_a_base_planner_registered_from_outside_is_served_by_the_node(node_proce
     from maru_planner_interfaces.srv import PlanBasePath
 
     monkeypatch.setenv("PYTHONPATH", os.pathsep.join(filter(None, [str(TEST_DIR), os.environ.get("PYTHONPATH")])))
-    proc = node_process("toy_base_planner", ["node", "--ros-args", "-p", f"planner_id:={TOY_PLANNER}"])
-    client = Client(spinning_node, proc)
+    proc = node_process(
+        "toy_base_planner", ["node", "--ros-args", "-r", "__ns:=/toy", "-p", f"planner_id:={TOY_PLANNER}"]
+    )
+    client = Client(spinning_node, proc, "/toy")  # its own namespace: the module's node serves the same names
     client.publish_map(map_msg(table1("easy")), "map 60 x 40 cells")
     response = client.request(start=(1.0, 2.0, 0.0), goal=(2.0, 2.0, 0.0))  # the node's default: the toy
     assert response.error_code == PlanBasePath.Response.NONE, response.error_msg

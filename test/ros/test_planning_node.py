@@ -7,10 +7,15 @@ that depend on the node's state (no /joint_states yet, scene contents) say so.
 from __future__ import annotations
 
 import math
+import os
+import re
+import signal
 import subprocess
 import sys
 import textwrap
+import threading
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -655,3 +660,44 @@ def test_junk_joint_states_are_ignored_and_counted_never_stored(client, tester, 
     assert _starts_at(response, moved)
     assert "r_gripper_finger_joint" in planner_node.log() and "so far" in planner_node.log()
     assert _rss_mb(planner_node.proc.pid) - rss_before < 50.0
+
+
+def _children(pid: int) -> list[int]:
+    children = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            parent = int(stat.read_text().rsplit(") ", 1)[1].split()[1])
+        except (OSError, IndexError, ValueError):  # a process that ended meanwhile
+            continue
+        if parent == pid:
+            children.append(int(stat.parent.name))
+    return children
+
+
+def _worker_pids(node_pid: int) -> list[int]:
+    """The node's planning worker processes: the children of its multiprocessing fork server."""
+    servers = [p for p in _children(node_pid) if b"forkserver" in Path(f"/proc/{p}/cmdline").read_bytes()]
+    return sorted(worker for server in servers for worker in _children(server))
+
+
+def test_a_killed_planning_worker_fails_its_goal_at_once_and_is_replaced(client, planner_node):
+    """SIGKILL to the worker processes while one plans a goal: the goal ends PLANNING_FAILED naming the worker and
+    the signal long before its budget, new workers replace them and the next request plans."""
+    workers = _worker_pids(planner_node.proc.pid)
+    assert len(workers) == 2, workers  # planner.yaml: workers 2
+    searching = threading.Event()
+    goal = client.plan_action(
+        PAPER_GOAL, start=PAPER_START, planner_id="RRT", time_budget=60.0, seed=3,
+        feedback_callback=lambda feedback: feedback.stage == "search" and searching.set(),
+    )  # fmt: skip
+    assert searching.wait(60.0), "the goal never reached a worker's search"
+    for pid in workers:  # the goal's worker among them
+        os.kill(pid, signal.SIGKILL)
+    _, result = goal.result(timeout=30.0)  # far below the 60 s budget
+    assert result.error.code == _codes().PLANNING_FAILED, result.error.message
+    killed = r"the planning worker (\d+) died \(signal 9, SIGKILL\) while planning; it was restarted"
+    match = re.search(killed, result.error.message)
+    assert match and int(match.group(1)) in workers, result.error.message
+    _good_request_still_succeeds(client)
+    replacements = _worker_pids(planner_node.proc.pid)
+    assert len(replacements) == 2 and not set(replacements) & set(workers), (workers, replacements)

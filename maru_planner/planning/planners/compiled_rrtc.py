@@ -47,7 +47,12 @@ from ompl import util as ou
 
 from maru_planner.params import ParamSpec
 from maru_planner.planning.checkers import is_compiled_sphere_checker
-from maru_planner.planning.planners.planner_params import SAMPLER_SEED, PlannerParams, stored_params
+from maru_planner.planning.planners.planner_params import (
+    MAX_JOINT_DISTANCE,
+    SAMPLER_SEED,
+    PlannerParams,
+    stored_params,
+)
 from maru_planner.planning.planners.registry import ArmPlannerSpec, register
 from maru_planner.planning.space import EdgeChecker
 
@@ -59,14 +64,19 @@ COMPILED_RRTC_PARAMS: dict[str, ParamSpec] = {
     spec.name: spec
     for spec in (
         ParamSpec(
-            "range", DEFAULT_RANGE, "max extension (rad, L2); 0 = OMPL's automatic 20 % of the space extent", lower=0.0
-        ),  # fmt: skip
+            "range",
+            DEFAULT_RANGE,
+            "max extension (rad, L2); 0 = OMPL's automatic 20 % of the space extent",
+            lower=0.0,
+            upper=MAX_JOINT_DISTANCE,
+        ),
         ParamSpec(
             "exact_near",
             EXACT_NEAR,
             "L-inf distance (rad) from the start or goal within which states the spheres leave ambiguous are "
             "decided on the exact model, farther away they count as colliding; unset: everywhere (module doc)",
             lower=0.0,
+            upper=MAX_JOINT_DISTANCE,
             optional=True,
         ),
         ParamSpec(
@@ -81,7 +91,8 @@ COMPILED_RRTC_PARAMS: dict[str, ParamSpec] = {
             "dynamic domain (rad, L2) a node gets at its first failed extension; "
             "samples farther than its domain from their nearest node are drawn again; 0 = no domains",
             lower=0.0,
-        ),  # fmt: skip
+            upper=MAX_JOINT_DISTANCE,
+        ),
         ParamSpec(
             "domain_alpha",
             1e-4,
@@ -89,7 +100,7 @@ COMPILED_RRTC_PARAMS: dict[str, ParamSpec] = {
             lower=0.0,
             upper=1.0,
         ),  # fmt: skip
-        ParamSpec("domain_min_radius", 1.0, "smallest dynamic domain (rad)", lower=0.0),
+        ParamSpec("domain_min_radius", 1.0, "smallest dynamic domain (rad)", lower=0.0, upper=MAX_JOINT_DISTANCE),
         SAMPLER_SEED,
     )
 }

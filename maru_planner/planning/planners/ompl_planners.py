@@ -10,11 +10,17 @@ from ompl import base as ob
 from ompl import geometric as og
 
 from maru_planner.params import ParamSpec
-from maru_planner.planning.planners.planner_params import ompl_params
+from maru_planner.planning.planners.planner_params import MAX_JOINT_DISTANCE, MAX_NEIGHBOURS, ompl_params
 from maru_planner.planning.planners.registry import ArmPlanner, ArmPlannerSpec, register
 from maru_planner.planning.space import EdgeChecker
 
-_RANGE = ParamSpec("range", 0.0, "max edge length (rad); 0 = OMPL's automatic 20 % of the space extent", lower=0.0)
+_RANGE = ParamSpec(
+    "range",
+    0.0,
+    "max edge length (rad); 0 = OMPL's automatic 20 % of the space extent",
+    lower=0.0,
+    upper=MAX_JOINT_DISTANCE,
+)
 
 
 def _goal_bias(default: float) -> ParamSpec:
@@ -49,7 +55,15 @@ _register_ompl(
     "PRM",
     "OMPL PRM; the roadmap is kept between queries and re-validated after a scene change",
     og.PRM,
-    (ParamSpec("max_nearest_neighbors", 3, "milestones each new milestone tries to connect to (OMPL: 10)", lower=1),),
+    (
+        ParamSpec(
+            "max_nearest_neighbors",
+            3,
+            "milestones each new milestone tries to connect to (OMPL: 10)",
+            lower=1,
+            upper=MAX_NEIGHBOURS,
+        ),
+    ),
     {"max_nearest_neighbors": ("setMaxNearestNeighbors", "getMaxNearestNeighbors")},
     frozenset({"roadmap"}),
 )

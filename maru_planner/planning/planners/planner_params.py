@@ -33,9 +33,21 @@ class _Declared:
     getter: Callable[[], Any]
 
 
+#: Upper bound of a joint-space distance parameter (rad): far beyond any arm's extent, so only absurd values fail.
+MAX_JOINT_DISTANCE = 100.0
+#: Upper bound of a neighbour or candidate count (a k-nearest query of that many nodes per sample).
+MAX_NEIGHBOURS = 1000
+SEED_MAX = 2**63 - 1  # a ROS integer parameter holds an int64
+
 #: Our sampling planners' seed parameter (RCRRT, CompiledRRTConnect).
 SAMPLER_SEED = ParamSpec(
-    "seed", None, "seed of the sampler; unset: drawn from OMPL's seeded generator", lower=0, optional=True, type=int
+    "seed",
+    None,
+    "seed of the sampler; unset: drawn from OMPL's seeded generator",
+    lower=0,
+    upper=SEED_MAX,
+    optional=True,
+    type=int,
 )
 
 

@@ -48,19 +48,31 @@ from ompl import util as ou
 from maru_planner.params import ParamSpec
 from maru_planner.planning.checkers import is_compiled_sphere_checker
 from maru_planner.planning.kdtree import GrowingKDTree
-from maru_planner.planning.planners.planner_params import SAMPLER_SEED, PlannerParams, stored_params
+from maru_planner.planning.planners.planner_params import (
+    MAX_JOINT_DISTANCE,
+    MAX_NEIGHBOURS,
+    SAMPLER_SEED,
+    PlannerParams,
+    stored_params,
+)
 from maru_planner.planning.planners.registry import ArmPlannerSpec, register
 from maru_planner.planning.space import EdgeChecker
 
 RCRRT_PARAMS: dict[str, ParamSpec] = {
     spec.name: spec
     for spec in (
-        ParamSpec("step", 0.3, "lattice step: each input moves one joint by +-step (rad)", lower=1e-6),
+        ParamSpec("step", 0.3, "lattice step: each input moves one joint by +-step (rad)", lower=1e-6, upper=np.pi),
         ParamSpec("goal_bias", 0.1, "probability of sampling the goal", lower=0.0, upper=1.0),
-        ParamSpec("candidates", 8, "nearest nodes with untried inputs visited per sample", lower=1),
         ParamSpec(
-            "goal_range", 1.5, "L-inf distance (rad) within which the straight edge to the goal is tried", lower=0.0
-        ),  # fmt: skip
+            "candidates", 8, "nearest nodes with untried inputs visited per sample", lower=1, upper=MAX_NEIGHBOURS
+        ),
+        ParamSpec(
+            "goal_range",
+            1.5,
+            "L-inf distance (rad) within which the straight edge to the goal is tried",
+            lower=0.0,
+            upper=MAX_JOINT_DISTANCE,
+        ),
         SAMPLER_SEED,
     )
 }

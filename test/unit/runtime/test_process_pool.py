@@ -188,7 +188,9 @@ def test_a_worker_that_dies_fails_its_request_and_is_replaced():
         assert log.searching.wait(LIVENESS_TIMEOUT)
         (pid,) = pool.pids
         os.kill(pid, signal.SIGKILL)
-        with pytest.raises(errors.PlanningFailed, match="exited"):
+        with pytest.raises(
+            errors.PlanningFailed, match=rf"worker {pid} died \(signal 9, SIGKILL\) while planning; it was restarted"
+        ):
             future.result()
         result = pool.plan(_request())
         assert result.success, result.message
