@@ -6,6 +6,7 @@ import, and the layer table of ``docs/architecture.md`` (:data:`LAYERS`).
 from __future__ import annotations
 
 import ast
+import functools
 import io
 import re
 import tokenize
@@ -270,6 +271,7 @@ def layer_of(module: str, package: str = PACKAGE, layers: tuple[tuple[str, ...],
     return best
 
 
+@functools.cache
 def is_reexport(path: Path) -> bool:
     """A module that only re-exports names defined elsewhere (an old import path kept, or a package's surface):
     a docstring, imports, ``__all__`` and at most an ``if __name__ == "__main__":`` block."""

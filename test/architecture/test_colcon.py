@@ -105,9 +105,21 @@ def test_planning_node_runs_from_the_install_space(install_space, spinning_node,
     proc = subprocess.Popen(
         # its own namespace: none of its services or actions (plan_motion) may answer another test's clients. The
         # install space has no numba cache of its own: on the sphere checker (the default) its three processes took
-        # 65-85 s here to compile the kernels at configure, ~12 s on the exact one; the source tree's tests plan on
-        # both, this one is about the installed files
-        [str(script), "--ros-args", "-r", "__ns:=/installed", "-p", "collision_model:=exact"],
+        # 65-85 s here to compile the kernels at configure, ~12 s on the exact one; each worker process compiles its
+        # own, so one planning thread in the node's process; the source tree's tests plan on both models and with
+        # worker processes, this one is about the installed files
+        [
+            str(script),
+            "--ros-args",
+            "-r",
+            "__ns:=/installed",
+            "-p",
+            "collision_model:=exact",
+            "-p",
+            "workers:=1",
+            "-p",
+            "worker_processes:=false",
+        ],  # fmt: skip
         stdout=log,
         stderr=subprocess.STDOUT,
         stdin=subprocess.DEVNULL,
