@@ -199,3 +199,15 @@ def test_detects_ros_reaching_past_the_runtime(tmp_path):
         (tmp_path / name).write_text(text)
     offenders = ros_reach_violations(package_imports(tmp_path, "pkg"), "pkg")
     assert [(i.importer, i.target) for i in offenders] == [("pkg.ros.node", "pkg.planning.stages")]
+
+
+def test_the_documented_layer_table_is_the_checked_one():
+    """docs/architecture.md's "Layers" table lists LAYERS' rows, top first, folder for folder."""
+    import re
+
+    text = (REPO_ROOT / "docs" / "architecture.md").read_text()
+    rows = re.findall(r"^\| (\d+) \| ([^|]+) \|", text, flags=re.MULTILINE)
+    documented = [tuple(f.strip("`/ ").replace("/", ".") for f in folders.split(",")) for _, folders in rows]
+    checked = [tuple(entry for entry in entries if entry) for entries in LAYERS]
+    assert [int(number) for number, _ in rows] == list(range(1, len(rows) + 1))
+    assert documented == checked, "docs/architecture.md's layer table differs from import_graph.LAYERS"
