@@ -69,7 +69,7 @@ def build_problem(context: PlanningContext, request: MotionRequest, result: Moti
     context.last_search_checker = checker
     setup = context.group_setup(checker, names, indices, start_full, resolution)
     return PlanningProblem(request, context, spec.id, monitor, t0, budget, seed, resolution, indices, names, start_full,
-                           goal_full, constraints, checker, setup, np.random.default_rng(seed))  # fmt: skip
+                           goal_full, constraints, checker, setup, np.random.default_rng(seed), margin)  # fmt: skip
 
 
 def _goal(context: PlanningContext, request: MotionRequest, start_full: np.ndarray, indices: list[int],

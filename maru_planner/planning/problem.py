@@ -13,8 +13,7 @@ from maru_planner.monitor import PlanMonitor
 from maru_planner.planning.config import PlannerConfig
 from maru_planner.planning.constraints import PathConstraints
 from maru_planner.planning.context import PlanningContext
-from maru_planner.planning.requests import safety_margin
-from maru_planner.planning.space import EdgeChecker, GroupSetup
+from maru_planner.planning.space import EdgeChecker, GroupSetup, full_configurations
 from maru_planner.planning.types import MotionRequest, MotionResult
 
 
@@ -38,6 +37,7 @@ class PlanningProblem:
     checker: Any  # the search's (the context's, padded by the margin when the path is certified with one)
     setup: GroupSetup  # the group's OMPL setup and edge check on ``checker``
     rng: np.random.Generator  # seeded by ``seed``: the planner's and the simplification's random stream
+    margin: float  # m: the clearance the certified path keeps (the request's safety_margin, else the configuration's)
     # re-plan this request at a motion resolution (the path stages only; set by the pipeline)
     replan: Callable[[float], MotionResult] | None = None
     margin_kept: float = 0.0  # m: the clearance the certified path keeps (set by certification)
@@ -63,11 +63,6 @@ class PlanningProblem:
         return self.goal_full[self.indices]
 
     @property
-    def margin(self) -> float:
-        """The clearance (m) the certified path keeps: the request's ``safety_margin``, else the configuration's."""
-        return safety_margin(self.request, self.config)
-
-    @property
     def constrained(self) -> bool:
         return not self.constraints.empty
 
@@ -77,7 +72,4 @@ class PlanningProblem:
 
     def full(self, group_states: np.ndarray) -> np.ndarray:
         """Group configurations (rows) as full ones, the joints outside the group at their start values."""
-        states = np.atleast_2d(np.asarray(group_states, dtype=float))
-        out = np.repeat(self.start_full[None, :], len(states), axis=0)
-        out[:, self.indices] = states
-        return out
+        return full_configurations(self.start_full, self.indices, np.atleast_2d(np.asarray(group_states, dtype=float)))

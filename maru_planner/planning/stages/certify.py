@@ -10,7 +10,6 @@ from typing import Any
 from maru_planner import errors
 from maru_planner.planning.checkers import is_sphere_checker
 from maru_planner.planning.problem import PlanningProblem
-from maru_planner.planning.space import full_configurations
 from maru_planner.planning.stages.parameterize import set_path
 from maru_planner.planning.stages.repair import RepairPlanner
 from maru_planner.planning.types import MotionResult, set_failure
@@ -47,7 +46,7 @@ def _certify(problem: PlanningProblem, result: MotionResult) -> None:
     certify_deadline = time.monotonic() + problem.config.certify_timeout
     repaired = certify_and_repair(
         context.certifier,
-        full_configurations(problem.start_full, problem.indices, result.path),
+        problem.full(result.path),
         RepairPlanner(problem, stats.seed or 0),
         problem.deadline,
         margin=problem.margin,

@@ -8,7 +8,6 @@ import time
 
 from maru_planner import errors
 from maru_planner.planning.problem import PlanningProblem
-from maru_planner.planning.space import full_configurations
 from maru_planner.planning.types import MotionResult, set_failure
 
 
@@ -24,7 +23,7 @@ def verify(problem: PlanningProblem, result: MotionResult) -> MotionResult:
         problem.monitor.report("certify")
         t_ver = time.monotonic()
         assert result.path is not None
-        path = full_configurations(problem.start_full, problem.indices, result.path)
+        path = problem.full(result.path)
         result.verification = verify_path(context.exact_checker, path, config.verify_step)
         verify_time += time.monotonic() - t_ver
         if result.verification.valid:
