@@ -234,7 +234,9 @@ def listing(imports: list[Import]) -> str:
 #: relative to the package; "" is the package's own ``__init__``). ``docs/architecture.md`` draws this table.
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("ros",),  # adapters: messages <-> core calls
+    ("web",),  # the browser view (viser): plans through the runtime, shows scenes, plans and base runs
     ("runtime",),  # the planning service without ROS: robot, scene store, admission, worker pool, warm-up
+    ("barn", "execution"),  # judged by physics: BARN in MuJoCo through the base stack, arm trajectories executed
     ("planning.cli", "planning.dual_arm", "planning.verified", "base.cli", "sim"),  # users of the facades: CLIs, demos
     ("viz",),  # pictures of everything below
     ("planning.motion_planner", "planning.queries"),  # the arm facade and the state queries
@@ -243,7 +245,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("planning.adapters",),  # request -> PlanningProblem
     ("planning.planners",),  # the registry and one module per planner (+ kernels/: search loops)
     ("planning",),  # the problem, its context, request checks, types, configuration, spaces, constraints
-    ("base", "reactive", "bag"),  # mobile-base planners, the elastic strip, rosbag I/O
+    ("base", "reactive", "bag", "physics"),  # mobile-base planners, the elastic strip, rosbag I/O, MuJoCo models
     ("trajectory",),  # path -> timed trajectory, one module per method
     ("collision",),  # exact checker, sphere model (+ certify/: continuous validation, kernels/: numba)
     ("robot.profiles",),  # the table of built-in robots

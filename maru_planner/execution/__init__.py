@@ -1,0 +1,1 @@
+"""Trajectories executed: joint_trajectory_controller-style interpolation, tolerances, and a simulated arm that follows them."""
