@@ -36,12 +36,14 @@ interfaces: $(STAMP)
 demo: setup
 	@$(PY) -m maru_planner.ros.demo
 
-# every lane, one pytest run each (a lane's failure does not skip the others), its time printed
+# every lane, one pytest run each (a lane's failure does not skip the others), its time printed; each lane's
+# modules are spread over TEST_WORKERS processes (pytest-xdist, a module stays on one worker: its node fixtures)
 LANES := unit ros hostile architecture
+TEST_WORKERS ?= 2
 test: setup
 	@status=0; for lane in $(LANES); do \
 		start=$$(date +%s); echo "[test] lane $$lane (test/$$lane)"; \
-		$(PY) -m pytest -p no:cacheprovider test/$$lane || status=1; \
+		$(PY) -m pytest -p no:cacheprovider -n $(TEST_WORKERS) --dist loadfile test/$$lane || status=1; \
 		echo "[test] lane $$lane: $$(( $$(date +%s) - start )) s"; \
 	done; exit $$status
 

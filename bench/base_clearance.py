@@ -35,7 +35,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
-from _common import RESULTS, Progress, log, write_results  # noqa: E402
+from _common import RESULTS, Progress, data_dir, log, require_data, require_peers, write_results  # noqa: E402
 from movingai import load_map, load_scenarios, spread  # noqa: E402
 
 from maru_planner.base.astar import GridAStarPlanner, astar_2d  # noqa: E402
@@ -43,15 +43,15 @@ from maru_planner.base.clearance import distance_transform, path_clearance, resa
 from maru_planner.base.costmap import INSCRIBED_INFLATED_OBSTACLE, cost_layer  # noqa: E402
 from maru_planner.base.footprint import footprint_radii, rectangle  # noqa: E402
 from maru_planner.base.grid import OccupancyGrid  # noqa: E402
-from maru_planner.paths import benchmarks_dir  # noqa: E402
 
-DATA = benchmarks_dir()
+DATA = data_dir()
 MOVINGAI_MAPS = ["dao/den312d", "room/32room_000", "maze/maze512-16-0", "street/Berlin_0_256", "random/random512-20-0"]
 BARN_RESOLUTION = 0.15
 BARN_START, BARN_GOAL = (14, 19), (14, 86)  # full_grid cells (README: start and goal of the challenge)
 JACKAL = rectangle(0.42, 0.33)
 OURS = ("plain", "cost", "cost_smooth")
 PEERS = ("pmp", "pathfinding", "pathfinding_cost")
+PEER_MODULES = {"pmp": "python_motion_planning", "pathfinding": "pathfinding", "pathfinding_cost": "pathfinding"}
 
 
 @dataclass
@@ -300,6 +300,8 @@ SWEEP = [
     ("gentle decay, BARN inscribed disc", 2.0, (5.0, 0.6), (0.30, 10.0), "inscribed"),
     ("gentle decay, BARN inscribed disc", 10.0, (5.0, 0.6), (0.30, 10.0), "inscribed"),
     ("wide gentle decay", 10.0, (10.0, 0.3), (0.60, 3.0), "inscribed"),
+    ("wide, steep weight", 100.0, (20.0, 0.2), (0.90, 2.0), "inscribed"),
+    ("wide, extreme weight", 1000.0, (15.0, 0.4), (0.90, 2.0), "inscribed"),
 ]
 
 TARGETS = {
@@ -329,6 +331,10 @@ def sweep(per_map: int, worlds: list[int]) -> list[dict]:
                 "barn": list(barn),
                 "barn_robot": robot,
                 "movingai_summary": summarise([r for r in rows if r["family"] != "barn"], list(OURS)),
+                "movingai_families": {
+                    family: summarise([r for r in rows if r["family"] == family], list(OURS))
+                    for family in sorted({r["family"] for r in rows if r["family"] != "barn"})
+                },
                 "barn_summary": summarise([r for r in rows if r["family"] == "barn"], list(OURS)),
             }
         )
@@ -345,8 +351,8 @@ def sweep_markdown(rows: list[dict]) -> str:
         "scaling 1/m, the disc the grown map uses).",
         "",
         "| settings | multiplier | MovingAI | BARN | MovingAI clearance ratio / length ratio | "
-        "BARN clearance ratio / length ratio | lethal |",
-        "|---|---|---|---|---|---|---|",
+        "BARN clearance ratio / length ratio | lethal | MovingAI per family: clearance / length |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
         m, b = r["movingai_summary"].get("cost_smooth", {}), r["barn_summary"].get("cost_smooth", {})
@@ -355,9 +361,22 @@ def sweep_markdown(rows: list[dict]) -> str:
             f"{r['barn'][0]:g} / {r['barn'][1]:g}, {r['barn_robot']} | "
             f"{m.get('mean_clearance_ratio', math.nan):.2f} / {m.get('length_ratio', math.nan):.3f} | "
             f"{b.get('mean_clearance_ratio', math.nan):.2f} / {b.get('length_ratio', math.nan):.3f} | "
-            f"{m.get('lethal_paths', 0) + b.get('lethal_paths', 0)} |"
+            f"{m.get('lethal_paths', 0) + b.get('lethal_paths', 0)} | {per_family(r)} |"
         )
+    lines += [
+        "",
+        "Random maps (20 % of cells blocked, scattered) bound what any setting reaches: their free space leaves "
+        "no room to keep away from obstacles, so their clearance ratio stays near 1 at any weight.",
+    ]
     return "\n".join(lines) + "\n"
+
+
+def per_family(row: dict) -> str:
+    return ", ".join(
+        f"{family} {s.get('cost_smooth', {}).get('mean_clearance_ratio', math.nan):.2f} / "
+        f"{s.get('cost_smooth', {}).get('length_ratio', math.nan):.2f}"
+        for family, s in row.get("movingai_families", {}).items()
+    )
 
 
 def markdown(summary: dict, searches: dict, args, context: str) -> str:
@@ -517,6 +536,8 @@ def main(argv: list[str] | None = None) -> int:
         "inscribed radius (Nav2's lethal cells, the rest only costed)",
     )
     args = parser.parse_args(argv)
+    require_data(DATA / "movingai", DATA / "barn")
+    require_peers(*sorted({PEER_MODULES[p] for p in args.peers}))
     args.repeats = args.repeats or (1 if args.quick else 3)
     per_map = args.per_map or (4 if args.quick else 20)
     count = args.barn_worlds or (30 if args.quick else 300)
@@ -570,7 +591,9 @@ def main(argv: list[str] | None = None) -> int:
     }
     by_name = {c.name: c for c in cases}
     text = markdown(summary, searches, args, context) + (sweep_markdown(swept) if swept else "")
-    write_results(Path(args.out), results, text, lambda png: plot(rows, by_name, png, args.multiplier))
+    write_results(
+        Path(args.out), results, text, lambda png: plot(rows, by_name, png, args.multiplier), quick=args.quick
+    )
     return 0
 
 

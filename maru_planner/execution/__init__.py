@@ -1,1 +1,2 @@
-"""Trajectories executed: joint_trajectory_controller-style interpolation, tolerances, and a simulated arm that follows them."""
+"""Trajectories executed: joint_trajectory_controller-style interpolation, tolerances, and a simulated arm
+that follows them."""
