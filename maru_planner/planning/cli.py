@@ -2,11 +2,12 @@
 
 Examples::
 
-    maru-plan --problem maru13 --planner RCRRT --time 10 --seed 3 --json out.json --png out.png
+    maru-plan --problem maru13 --planner RCRRT --seed 3 --json demo_output/plan.json --png demo_output/plan.png
     maru-plan --robot maru1 --scene config/scenes/maru13_desk_box.yaml --group upper_body \\
         --start -0.9 -0.7 1.57 0.7 0.7 -0.9 -0.9 -0.8 1.57 2.0 0.7 -1.9 -1.25 \\
         --goal 0.9 -0.8 1.57 1.14 0.7 -1.24 -1.9 -0.7 1.57 2.44 0.7 -2.24 -1.25 --planner RRTConnect
     maru-plan --robot panda --group arm --start ... --goal ...     # example-robot-data robots
+    maru-plan --robot my_arm.yaml --list-groups                    # your robot: a profile file (docs/your_robot.md)
     maru-plan --problem maru13 --collision-model exact --seed 1    # plan on pinocchio + coal instead of the spheres
     maru-plan --problem maru6 --planner RCRRT --param step=0.2     # a planner parameter
 
@@ -37,7 +38,8 @@ from maru_planner.planning.planners.registry import PLANNERS, get_spec, merged_p
 from maru_planner.planning.problems import PROBLEMS
 from maru_planner.planning.requests import MAX_ATTEMPTS
 from maru_planner.planning.types import MotionRequest, MotionResult, PlanStatus, status_of_error
-from maru_planner.robot import RobotModel, load_example_robot
+from maru_planner.robot import RobotModel
+from maru_planner.robot.profile_yaml import is_profile_file
 from maru_planner.scene import Scene
 from maru_planner.scene.planning_scene import DEFAULT_FRAME
 from maru_planner.trajectory.limits import MIN_SCALING
@@ -122,7 +124,12 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("--problem", choices=sorted(PROBLEMS), help="paper 000 problem: robot, scene, group, start, goal")
-    p.add_argument("--robot", default=None, help="maru1 (default) or an example-robot-data name (panda, ur5, ...)")
+    p.add_argument("--robot", default=None,
+                   help="maru1 (default), an example-robot-data name (panda, ur5, tiago, talos) or a robot profile "
+                   "file (.yaml, docs/your_robot.md)")  # fmt: skip
+    p.add_argument("--robot-file", type=Path, default=None, metavar="FILE.yaml",
+                   help="a robot profile file (URDF, SRDF, groups, limits...; docs/your_robot.md): "
+                   "the same as --robot FILE")  # fmt: skip
     p.add_argument("--scene", default=None, help="scene YAML (obstacles); default: none, or the problem's scene")
     p.add_argument("--group", default=None, help="planning group (e.g. upper_body, right_arm)")
     p.add_argument("--start", type=float, nargs="+", help="start values in the group's joint order")
@@ -216,7 +223,19 @@ def check_writable(path: Path, option: str) -> None:
 
 # --- loading and planning ------------------------------------------------------------------
 def load_robot(name: str) -> RobotModel:
-    return RobotModel.maru1() if name == "maru1" else load_example_robot(name)
+    """A built-in robot by name, or the robot of a profile file (``.yaml``/``.yml``)."""
+    return RobotModel.from_profile(name)
+
+
+def robot_option(args: argparse.Namespace) -> str:
+    """The robot of ``--robot`` / ``--robot-file`` (CliError when both name different robots)."""
+    if args.robot_file is None:
+        return str(args.robot or "")
+    if not is_profile_file(args.robot_file):
+        raise CliError(f"--robot-file {args.robot_file}: expected a .yaml or .yml robot profile")
+    if args.robot and Path(args.robot) != args.robot_file:
+        raise CliError(f"--robot {args.robot} and --robot-file {args.robot_file}: give one robot")
+    return str(args.robot_file)
 
 
 def check_scene_frame(scene: Scene, robot: RobotModel) -> None:
@@ -372,6 +391,10 @@ def _cartesian(args: argparse.Namespace, planner: MotionPlanner, start: dict[str
 # --- entry point ---------------------------------------------------------------------------
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    try:
+        args.robot = robot_option(args)
+    except CliError as exc:
+        return _fail(EXIT_BAD_INPUT, exc)
     if args.problem:
         _fill_from_problem(args)
     args.robot = args.robot or "maru1"

@@ -2,7 +2,8 @@
 
 Robots known by name (Maru-1, the example-robot-data arms) load through their profile
 (``RobotModel.from_profile``; the table is ``maru_planner/robot/robot_profile.py``'s, which
-``maru_planner/robot/profiles.py`` fills from ``maru_planner/robot/robots/``); any other URDF through ``from_urdf``.
+``maru_planner/robot/profiles.py`` fills from ``maru_planner/robot/robots/*.yaml``), a user's robot through its
+profile file (``RobotModel.from_profile("my_arm.yaml")``, docs/your_robot.md); any other URDF through ``from_urdf``.
 
 Any URDF loads with a fixed base. Joints whose configuration is not one
 number (continuous wheels, spherical, planar...) and any joints named in
@@ -19,9 +20,9 @@ import numpy as np
 import pinocchio as pin
 
 from maru_planner.errors import InvalidGroup, InvalidRequest
-from maru_planner.robot import robot_profile
+from maru_planner.robot import profile_yaml, robot_profile
 from maru_planner.robot.ik_strategy import IKStrategy
-from maru_planner.robot.robot_profile import DEFAULT_ACCELERATION_LIMIT, RobotProfile
+from maru_planner.robot.robot_profile import DEFAULT_ACCELERATION_LIMIT, InvalidRobotProfile, RobotProfile
 from maru_planner.robot.srdf import SrdfInfo, parse_srdf
 
 WORLD = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
@@ -110,24 +111,49 @@ class RobotModel:
         )
 
     @classmethod
-    def from_profile(cls, robot: str | RobotProfile) -> RobotModel:
-        """A robot of the profile table (``maru_planner/robot/profiles.py``), by name or profile."""
-        profile = robot_profile.profile(robot) if isinstance(robot, str) else robot
+    def from_profile(cls, robot: str | Path | RobotProfile) -> RobotModel:
+        """A robot by profile: a built-in name (``maru_planner/robot/profiles.py``), a profile YAML file
+        (``.yaml``/``.yml``, :mod:`maru_planner.robot.profile_yaml`) or a :class:`RobotProfile`.
+
+        InvalidRobotProfile when the profile does not fit its URDF (limits, groups, end effectors, locks)."""
+        profile = profile_yaml.resolve(robot)
         files = profile.files()
-        loaded = cls.from_urdf(
-            files.urdf,
-            files.srdf,
-            package_dirs=files.package_dirs,
-            name=profile.name,
-            acceleration_limits=profile.acceleration_limits,
-            end_effectors=profile.end_effectors or None,
-            ik_strategies=profile.ik_strategies,
-        )
-        if profile.groups and set(loaded.groups) == {"all"}:
-            loaded.groups = {"all": loaded.groups["all"], **profile.groups}
-        if profile.ignore_links_touching_at_rest:
-            loaded.disable_default_collisions()
+        try:
+            loaded = cls.from_urdf(
+                files.urdf,
+                files.srdf,
+                package_dirs=files.package_dirs,
+                name=profile.name,
+                locked_joints=profile.locked_joints,
+                end_effectors=profile.end_effectors or None,
+                ik_strategies=profile.ik_strategies,
+            )
+        except InvalidRequest as exc:  # the only one from_urdf raises: a lock of an unknown joint
+            raise InvalidRobotProfile(f"robot {profile.name}: locked_joints: {exc}") from None
+        loaded._apply_profile(profile)
         return loaded
+
+    def _apply_profile(self, profile: RobotProfile) -> None:
+        """The profile's limits, groups (checked) and collision rule; its end effectors must be frames of the robot."""
+        limits = np.asarray(profile.acceleration_limits, dtype=float)
+        if limits.ndim == 1 and len(limits) != self.nq:
+            raise InvalidRobotProfile(
+                f"robot {profile.name}: acceleration_limits: {len(limits)} values for the {self.nq} joints "
+                f"{self.joint_names}"
+            )
+        self.acceleration_limits = np.broadcast_to(limits, (self.nq,)).copy()
+        for group, joints in profile.groups.items():
+            unknown = [j for j in joints if j not in self._joint_q_index]
+            if unknown:
+                raise InvalidRobotProfile(
+                    f"robot {profile.name}: groups: {group}: unknown joint(s) {unknown}; joints: {self.joint_names}"
+                )
+        self.groups = {**self.groups, **{g: list(js) for g, js in profile.groups.items()}}
+        missing = {k: v for k, v in profile.end_effectors.items() if not self.model.existFrame(v)}
+        if missing:
+            raise InvalidRobotProfile(f"robot {profile.name}: end_effectors: no such frame(s) {missing}")
+        if profile.ignore_links_touching_at_rest:
+            self.disable_default_collisions()
 
     @classmethod
     def maru1(cls) -> RobotModel:

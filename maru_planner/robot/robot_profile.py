@@ -1,13 +1,14 @@
 """What a robot profile is, and the table of profiles that ``RobotModel.from_profile(name)`` reads.
 
 A :class:`RobotProfile` says where a robot's URDF/SRDF are, its acceleration limits (URDF has no
-field for them), end effectors, planning groups to add when it has no SRDF, whether links touching
-at rest are to be ignored (MoveIt's "Default" rule for robots shipped without an SRDF), and its IK
-strategies (tried before the numeric IK, see :mod:`maru_planner.robot.ik`).
+field for them), end effectors, planning groups to add to the SRDF's, joints to lock, whether links
+touching at rest are to be ignored (MoveIt's "Default" rule for robots shipped without an SRDF), and
+its IK strategies (tried before the numeric IK, see :mod:`maru_planner.robot.ik`). Profiles are written
+as YAML files (:mod:`maru_planner.robot.profile_yaml`, docs/your_robot.md).
 
-This module only holds the (generic) table; the robots themselves live one per module in
-``maru_planner/robot/robots/`` and :mod:`maru_planner.robot.profiles` registers them (importing
-``maru_planner.robot`` does, so the table is full whenever a robot module is in use).
+This module only holds the (generic) table; the built-in robots live in ``maru_planner/robot/robots/``
+(``<name>.yaml``, and a module where a robot has code of its own) and :mod:`maru_planner.robot.profiles`
+registers them (importing ``maru_planner.robot`` does, so the table is full whenever a robot module is in use).
 """
 
 from __future__ import annotations
@@ -24,6 +25,12 @@ from maru_planner.robot.ik_strategy import IKStrategy
 DEFAULT_ACCELERATION_LIMIT = 4.0  # rad/s^2 (or m/s^2): URDF has no field for it
 
 
+class InvalidRobotProfile(InvalidRequest):
+    """A robot profile (a YAML file or its fields) that cannot be used; the message names the file and field."""
+
+    source = "robot"
+
+
 @dataclass(frozen=True)
 class RobotFiles:
     urdf: Path
@@ -36,19 +43,23 @@ class RobotProfile:
     """One robot: files, limits, end effectors, extra groups, collision rule and IK strategies."""
 
     name: str
-    source: str  # a key of SOURCES: where ``urdf`` and ``srdf`` are relative to
+    source: str  # a key of SOURCES, or a directory: where ``urdf`` and ``srdf`` are relative to
     urdf: str
     srdf: str | None = None
     urdf_name: str = ""  # the URDF's <robot name>: a model loaded from the files by path gets this profile too
     acceleration_limits: float | tuple[float, ...] = DEFAULT_ACCELERATION_LIMIT
     end_effectors: dict[str, str] = field(default_factory=dict)  # empty: the SRDF's
-    groups: dict[str, list[str]] = field(default_factory=dict)  # added when the SRDF has none
+    groups: dict[str, list[str]] = field(default_factory=dict)  # added to the SRDF's (same name: replaces it)
     ignore_links_touching_at_rest: bool = False
     ik_strategies: tuple[IKStrategy, ...] = ()
+    package_dirs: tuple[str, ...] = ()  # more directories where package:// mesh URIs resolve
+    locked_joints: dict[str, float] = field(default_factory=dict)  # joint -> the value it is frozen at
 
     def files(self) -> RobotFiles:
-        root, package_dirs = SOURCES[self.source]()
-        return RobotFiles(root / self.urdf, root / self.srdf if self.srdf else None, package_dirs)
+        source = SOURCES.get(self.source)
+        root, package_dirs = source() if source is not None else (Path(self.source), [])
+        extra = [Path(d) for d in self.package_dirs]
+        return RobotFiles(root / self.urdf, root / self.srdf if self.srdf else None, [*package_dirs, *extra])
 
 
 def example_robot_data_dir() -> Path:

@@ -45,9 +45,19 @@ def _resolve_group(
 
 
 def parse_srdf(source: str | Path, chain_joints: Callable[[str, str], list[str]]) -> SrdfInfo:
-    """Parse an SRDF file (path) or text (string starting with '<')."""
-    text = source if isinstance(source, str) and source.lstrip().startswith("<") else Path(source).read_text()
-    root = ET.fromstring(text)
+    """Parse an SRDF file (path) or text (string starting with '<'); ValueError (one line) when it is not one."""
+    is_text = isinstance(source, str) and source.lstrip().startswith("<")
+    text = str(source) if is_text else Path(source).read_text()
+    where = "text" if is_text else str(source)
+    try:
+        return _read(ET.fromstring(text), chain_joints)
+    except ET.ParseError as exc:
+        raise ValueError(f"SRDF {where}: not valid XML ({exc})") from None
+    except KeyError as exc:
+        raise ValueError(f"SRDF {where}: an element lacks its attribute {exc}") from None
+
+
+def _read(root: ET.Element, chain_joints: Callable[[str, str], list[str]]) -> SrdfInfo:
     info = SrdfInfo()
     elements = {g.attrib["name"]: g for g in root.findall("group")}
     for name in elements:

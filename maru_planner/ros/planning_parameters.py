@@ -29,6 +29,12 @@ class NodeSettings:
 
     robot_urdf: str = param("", "URDF file; empty = the package's urdf/maru1_upper_body.urdf", read_only=True)
     robot_srdf: str = param("", "SRDF file; empty = the package's urdf/maru1_upper_body.srdf", read_only=True)
+    robot_file: str = param(
+        "",
+        "robot profile YAML (docs/your_robot.md: URDF, SRDF, groups, limits, IK); set: used instead of robot_urdf, "
+        "robot_srdf, robot_description* and package_dirs",
+        read_only=True,
+    )
     package_dirs: list[str] = param(
         default_factory=list, description="extra directories that resolve package:// mesh URIs", read_only=True
     )
@@ -79,7 +85,11 @@ class NodeSettings:
         read_only=True,
     )
     queue_size: int = param(
-        16, "requests admitted to wait for a busy worker; beyond workers + queue_size: BUSY", lower=0, upper=1024
+        200,
+        "most requests admitted to wait for a busy worker (a memory bound: beyond workers + queue_size, BUSY); "
+        "below it a request is BUSY only when its expected wait exceeds its budget",
+        lower=0,
+        upper=1024,
     )
     request_queue_depth: int = param(
         256,

@@ -23,6 +23,10 @@ def robot_source(node: Node, settings: NodeSettings, files: DescriptionFiles) ->
             "publish_robot_description would echo the robot_description topic it reads "
             "(robot_description_source topic); set one of them"
         )
+    if settings.robot_file and settings.robot_description_source == "topic":
+        raise errors.InvalidParameter(
+            "robot_file names the robot's URDF; robot_description_source topic reads another: set one"
+        )
     urdf_xml, urdf_from = settings.robot_description, "the robot_description parameter"
     if settings.robot_description_source == "topic":
         urdf_xml = wait_for_robot_description(node, settings.robot_description_timeout)
@@ -34,6 +38,7 @@ def robot_source(node: Node, settings: NodeSettings, files: DescriptionFiles) ->
         srdf_file=settings.robot_srdf,
         package_dirs=tuple(settings.package_dirs),
         urdf_from=urdf_from,
+        robot_file=settings.robot_file,
     )
     return description_source(description, files)
 

@@ -55,7 +55,7 @@ from maru_planner.paths import urdf_path
 from maru_planner.robot.disabled_collisions import compute_disabled_collisions
 from maru_planner.robot.ik import Validity, solve_ik_numeric, wrap_into
 from maru_planner.robot.model import RobotModel
-from maru_planner.robot.robot_profile import RobotProfile
+from maru_planner.robot.profile_yaml import load_profile
 from maru_planner.scene.poses import matrix_rpy
 
 # ---------------------------------------------------------------- Table 1 ----
@@ -135,7 +135,6 @@ JOINT_LIMITS: dict[str, tuple[float, float, float]] = {
     "j6": (-HALF_PI - 1.4, -HALF_PI + 1.4, 3.0),  # wrist, centred on -pi/2
 }
 EFFORT = 30.0
-ACCELERATION_LIMIT = 4.0  # rad/s^2, all joints (URDF has no field for it)
 
 
 def joint_limit(name: str) -> tuple[float, float, float]:
@@ -571,15 +570,8 @@ def _outward(center: float, lo: float, hi: float, step: float):
 
 
 # --------------------------------------------------------------- profile ----
-PROFILE = RobotProfile(
-    "maru1",
-    "maru_planner",
-    "maru1_upper_body.urdf",
-    "maru1_upper_body.srdf",
-    urdf_name="maru1_upper_body",
-    acceleration_limits=ACCELERATION_LIMIT,
-    ik_strategies=(one_arm_strategy, two_hands_strategy),
-)
+PROFILE = load_profile(Path(__file__).with_suffix(".yaml"), check_files=False)  # maru1.yaml (names the IK above)
+ACCELERATION_LIMIT = float(np.max(PROFILE.acceleration_limits))  # rad/s^2, all joints (URDF has no field for it)
 
 
 if __name__ == "__main__":

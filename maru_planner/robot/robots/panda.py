@@ -1,20 +1,16 @@
-"""Franka Emika Panda (example-robot-data), and the finger opening MotionBenchMaker's problems use."""
+"""Franka Emika Panda (example-robot-data): its profile is ``panda.yaml``; here the finger opening
+MotionBenchMaker's problems use."""
 
 from __future__ import annotations
+
+from pathlib import Path
 
 import numpy as np
 
 from maru_planner.robot.model import RobotModel
-from maru_planner.robot.robot_profile import RobotProfile
+from maru_planner.robot.profile_yaml import load_profile
 
-PROFILE = RobotProfile(
-    "panda",
-    "example-robot-data",
-    "panda_description/urdf/panda.urdf",
-    "panda_description/srdf/panda.srdf",
-    acceleration_limits=(15.0, 7.5, 10.0, 12.5, 15.0, 20.0, 20.0, 1.0, 1.0),  # Franka datasheet (+ fingers)
-    end_effectors={"hand": "panda_hand_tcp"},
-)
+PROFILE = load_profile(Path(__file__).with_suffix(".yaml"), check_files=False)
 
 PANDA_FINGERS_OPEN = {"panda_finger_joint1": 0.065, "panda_finger_joint2": 0.065}  # MotionBenchMaker's convention
 

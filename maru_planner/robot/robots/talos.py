@@ -1,17 +1,9 @@
-"""PAL Talos (example-robot-data), reduced model.
-
-Loaded with a fixed base (no free-flyer), all 32 revolute joints kept; SRDF groups (r_arm, l_arm,
-torso, ...) select the planned subset.
-"""
+"""PAL Talos (example-robot-data), reduced model: its profile is ``talos.yaml``."""
 
 from __future__ import annotations
 
-from maru_planner.robot.robot_profile import RobotProfile
+from pathlib import Path
 
-PROFILE = RobotProfile(
-    "talos",
-    "example-robot-data",
-    "talos_data/robots/talos_reduced.urdf",
-    "talos_data/srdf/talos.srdf",
-    end_effectors={"right": "gripper_right_base_link", "left": "gripper_left_base_link"},
-)
+from maru_planner.robot.profile_yaml import load_profile
+
+PROFILE = load_profile(Path(__file__).with_suffix(".yaml"), check_files=False)

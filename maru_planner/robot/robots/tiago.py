@@ -1,22 +1,10 @@
-"""PAL TIAGo (example-robot-data), the no-hand model.
-
-The wheels (continuous joints) are locked at 0, i.e. the base is fixed; planning uses torso lift, head
-and the 7-DOF arm. It ships without an SRDF: parent/child links and the link pairs touching at the
-neutral posture are not checked.
-"""
+"""PAL TIAGo (example-robot-data), the no-hand model: its profile is ``tiago.yaml`` (wheels locked, no SRDF)."""
 
 from __future__ import annotations
 
-from maru_planner.robot.robot_profile import RobotProfile
+from pathlib import Path
 
-TIAGO_ARM = [f"arm_{i}_joint" for i in range(1, 8)]
+from maru_planner.robot.profile_yaml import load_profile
 
-PROFILE = RobotProfile(
-    "tiago",
-    "example-robot-data",
-    "tiago_description/robots/tiago_no_hand.urdf",
-    acceleration_limits=2.0,
-    end_effectors={"tool": "arm_tool_link"},
-    groups={"arm": TIAGO_ARM, "arm_torso": ["torso_lift_joint", *TIAGO_ARM]},
-    ignore_links_touching_at_rest=True,
-)
+PROFILE = load_profile(Path(__file__).with_suffix(".yaml"), check_files=False)
+TIAGO_ARM = list(PROFILE.groups["arm"])
