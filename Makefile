@@ -11,7 +11,7 @@ STAMP := $(VENV)/.requirements.stamp
 unexport _ROS_WHEELS_BOOTSTRAP_COMPLETE
 export PIP_DISABLE_PIP_VERSION_CHECK := 1
 
-.PHONY: setup demo test test-fast lint bench bench-deps interfaces clean
+.PHONY: setup demo test test-fast docs-slow lint bench bench-deps interfaces clean
 
 KERNELS := $(VENV)/.kernels.stamp
 setup: $(STAMP) interfaces $(KERNELS)
@@ -38,7 +38,7 @@ demo: setup
 
 # every lane, one pytest run each (a lane's failure does not skip the others), its time printed; each lane's
 # modules are spread over TEST_WORKERS processes (pytest-xdist, a module stays on one worker: its node fixtures)
-LANES := unit ros hostile architecture
+LANES := unit ros hostile architecture docs
 TEST_WORKERS ?= 2
 test: setup
 	@status=0; for lane in $(LANES); do \
@@ -46,6 +46,10 @@ test: setup
 		$(PY) -m pytest -p no:cacheprovider -n $(TEST_WORKERS) --dist loadfile test/$$lane || status=1; \
 		echo "[test] lane $$lane: $$(( $$(date +%s) - start )) s"; \
 	done; exit $$status
+
+# the documentation's slow blocks too (ROS examples, benchmark runs): about ten minutes
+docs-slow: setup
+	@MARU_DOCS_SLOW=1 $(PY) -m pytest -p no:cacheprovider test/docs
 
 # the unit lane: no rclpy node, colcon build or hostile-input sweep (test/ros/, test/hostile/, test/architecture/)
 test-fast: setup
@@ -65,5 +69,5 @@ bench: bench-deps
 
 # what the build (setup, colcon, pip's egg-info), the demo and pytest write into the tree; .venv stays
 clean:
-	rm -rf build install log demo_output .pytest_cache
+	rm -rf build install log demo_output .pytest_cache .ruff_cache .mypy_cache .hypothesis bench/results/quick
 	find . -path ./.venv -prune -o -name '*.egg-info' -type d -prune -exec rm -rf {} +

@@ -34,8 +34,8 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
-from _common import RESULTS, Progress, log, write_results  # noqa: E402
-from peers_arm import mbm_cases  # noqa: E402
+from _common import RESULTS, Progress, log, require_data, write_results  # noqa: E402
+from peers_arm import TARBALL, mbm_cases  # noqa: E402
 
 from maru_planner.collision import CollisionChecker  # noqa: E402
 from maru_planner.collision.spheres import densify  # noqa: E402
@@ -298,6 +298,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--fine", type=float, default=0.001, help="step of the independent re-check (rad)")
     ap.add_argument("--out", type=Path, default=RESULTS / "certify")
     args = ap.parse_args(argv)
+    if "mbm" in args.suites:
+        require_data(TARBALL)  # or --suites paper
     seeds = 2 if args.quick else args.seeds
     per_set = 1 if args.quick else args.per_set
 
@@ -316,7 +318,7 @@ def main(argv: list[str] | None = None) -> int:
         warm_up(cases[0].robot, cases[-1], args)
         results["runs"][suite] = run_suite(cases, jobs, args, progress)
     summary = results["summary"] = build_summary(results)
-    write_results(args.out, results, markdown(summary, args), lambda path: plot(summary, path))
+    write_results(args.out, results, markdown(summary, args), lambda path: plot(summary, path), quick=args.quick)
     return 0
 
 

@@ -41,6 +41,8 @@ import pinocchio as pin
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from _common import results_dir  # noqa: E402
+
 from maru_planner.collision import CollisionChecker  # noqa: E402
 from maru_planner.paths import config_path  # noqa: E402
 from maru_planner.robot import RobotModel, load_example_robot  # noqa: E402
@@ -247,6 +249,8 @@ def main(argv=None) -> int:
     parser.add_argument("--quick", action="store_true", help="small sample sizes (a few seconds)")
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args(argv)
+    global RESULTS
+    RESULTS = results_dir(args.quick)  # --quick: bench/results/quick/, never the committed results
     n_states, n_edges = (300, 30) if args.quick else (3000, 200)
     rng = np.random.default_rng(args.seed)
     setups = [

@@ -30,7 +30,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pinocchio as pin  # noqa: E402
-from _common import RESULTS, Progress, log, write_results  # noqa: E402
+from _common import RESULTS, Progress, require_data, write_results  # noqa: E402
 from numba import njit  # noqa: E402
 from peers_arm import TARBALL, VAMP_PUBLISHED, Case, Ours, full_q, maru13_case, mbm_cases, peer_geometry  # noqa: E402
 
@@ -196,9 +196,8 @@ def main(argv: list[str] | None = None) -> int:
         args.mbm_per_set, args.seeds, args.repeats = min(args.mbm_per_set, 1), 1, 3
     if args.repeats < 1 or min(args.seeds, args.mbm_per_set) < 0:
         ap.error("--repeats must be >= 1, --seeds and --mbm-per-set >= 0")
-    if args.mbm_per_set > 0 and not TARBALL.is_file():
-        log(f"no MotionBenchMaker problems at {TARBALL}: the mbm rows are left out")
-        args.mbm_per_set = 0
+    if args.mbm_per_set > 0:
+        require_data(TARBALL)  # or --mbm-per-set 0: the Maru-1 rows only
     families: dict[str, tuple[Ours, list[tuple[Case, int]]]] = {}
     maru = RobotModel.maru1()
     maru_cases = [(maru13_case(maru), seed) for seed in range(args.seeds)]
@@ -212,7 +211,7 @@ def main(argv: list[str] | None = None) -> int:
                      "vamp_published_problem_s": VAMP_PUBLISHED["mbm_panda_median_s"], "runs": {}}  # fmt: skip
     for family, (ours, cases) in families.items():
         results["runs"][family] = measure(family, cases, ours, args.repeats, progress)
-    write_results(args.out, results, markdown(results), lambda path: plot(results, path))
+    write_results(args.out, results, markdown(results), lambda path: plot(results, path), quick=args.quick)
     return 0
 
 

@@ -340,8 +340,9 @@ def main(argv: list[str] | None = None) -> int:
         "dual_arm": dual_suite(seeds, args.budget, progress),
     }  # fmt: skip
     results["summary"] = summarize(results)
-    write_results(args.out, results, markdown(results["summary"], args), lambda path: plot(results, path))
-    for picture in pictures(args.out):
+    written = write_results(args.out, results, markdown(results["summary"], args), lambda path: plot(results, path),
+                            quick=args.quick)  # fmt: skip
+    for picture in pictures(written):
         log(f"picture {picture}")
     return 0
 

@@ -30,12 +30,13 @@ import numpy as np
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from maru_planner.base.astar import astar_2d, path_cost  # noqa: E402
-from maru_planner.paths import benchmarks_dir  # noqa: E402
+from _common import RESULTS, data_dir, log, require_data, require_peers, results_dir  # noqa: E402
 
-DATA = benchmarks_dir() / "movingai"
-RESULTS = REPO / "bench" / "results"
+from maru_planner.base.astar import astar_2d, path_cost  # noqa: E402
+
+DATA = data_dir("movingai")
 SETS = ("dao", "room", "maze", "street", "random")
+PEER_MODULES = {"pathfinding": "pathfinding", "pmp": "python_motion_planning"}
 
 
 def load_map(path: Path) -> np.ndarray:
@@ -219,8 +220,9 @@ def summarise(records: list[dict]) -> dict:
 
 
 def write_outputs(summary: dict, records: list[dict], args) -> None:
-    RESULTS.mkdir(parents=True, exist_ok=True)
-    with open(RESULTS / "movingai.json", "w") as f:
+    out = results_dir(args.quick)  # --quick: bench/results/quick/, never the committed results
+    out.mkdir(parents=True, exist_ok=True)
+    with open(out / "movingai.json", "w") as f:
         json.dump(
             {
                 "quick": args.quick,
@@ -260,10 +262,11 @@ def write_outputs(summary: dict, records: list[dict], args) -> None:
             f"{r.get('pmp_median_ms', math.nan):.1f} ({r.get('pmp_queries', 0)}) | "
             f"{r.get('speedup_vs_pmp', math.nan):.0f}x |"
         )
-    (RESULTS / "movingai.md").write_text("\n".join(lines) + "\n")
+    (out / "movingai.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
 
-    plot(summary, RESULTS / "movingai.png")
+    plot(summary, out / "movingai.png")
+    log(f"wrote {out}/movingai.{{json,md,png}}")
 
 
 def plot(summary: dict, path: Path) -> None:
@@ -306,7 +309,7 @@ def main(argv=None) -> int:
     parser.add_argument("--sets", nargs="+", default=list(SETS), choices=SETS)
     parser.add_argument("--per-map", type=int, help="queries per map (default: all, 40 with --quick)")
     parser.add_argument("--peer-queries", type=int, help="queries per map for pathfinding / pmp (default 4 / 12)")
-    parser.add_argument("--peers", nargs="*", default=["pathfinding", "pmp"])
+    parser.add_argument("--peers", nargs="*", default=["pathfinding", "pmp"], choices=list(PEER_MODULES))
     parser.add_argument(
         "--peer-max-length",
         type=float,
@@ -318,6 +321,8 @@ def main(argv=None) -> int:
     if args.replot:
         plot(json.loads((RESULTS / "movingai.json").read_text())["summary"], RESULTS / "movingai.png")
         return 0
+    require_data(*(DATA / s for s in args.sets))
+    require_peers("pyastar2d", *(PEER_MODULES[p] for p in args.peers))
     per_map = args.per_map or (40 if args.quick else None)
     peer_queries = args.peer_queries or (4 if args.quick else 12)
     astar_2d(np.zeros((3, 3), bool), (0, 0), (2, 2))  # compile / load the numba cache outside the timings

@@ -30,7 +30,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from _common import RESULTS, Progress, log  # noqa: E402
+from _common import RESULTS, Progress, log, output_dir  # noqa: E402
 
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig  # noqa: E402
 from maru_planner.planning.planners.roadmap import Roadmap  # noqa: E402
@@ -308,6 +308,7 @@ def main(argv=None) -> int:
     ap.add_argument("--planners", nargs="+", default=list(PLANNERS))
     ap.add_argument("--out", type=Path, default=RESULTS)
     args = ap.parse_args(argv)
+    args.out = output_dir(args.out, args.quick)  # --quick: bench/results/quick/, never the committed results
     if args.quick:
         args.seeds, args.budget, args.rrt_budget = min(args.seeds, 5), min(args.budget, 5.0), min(args.rrt_budget, 1.0)
 

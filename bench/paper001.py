@@ -13,15 +13,15 @@ from functools import cache
 from pathlib import Path
 
 import numpy as np
+from _common import data_dir, output_dir, require_data
 
-from maru_planner.paths import benchmarks_dir
 from maru_planner.reactive import ElasticStripController
 from maru_planner.reactive.kinematics import wrap_angle
 from maru_planner.sim import LaserSpec, RobotSpec, Simulator, World
 from maru_planner.sim.runner import strip_params_for
 
 REPO = Path(__file__).resolve().parent.parent
-BARN_DIR = benchmarks_dir() / "barn"
+BARN_DIR = data_dir("barn")
 CELL = 0.15
 JACKAL_FOOTPRINT = [[0.21, 0.165], [-0.21, 0.165], [-0.21, -0.165], [0.21, -0.165]]
 
@@ -454,6 +454,8 @@ def main(argv=None) -> int:
         help="only write BARN world INDEX as a world file for maru-reactive-sim, then exit",
     )
     args = parser.parse_args(argv)
+    if args.export_barn or not args.no_barn:
+        require_data(BARN_DIR)
     if args.export_barn:
         import yaml
 
@@ -492,7 +494,7 @@ def main(argv=None) -> int:
         "barn_worlds": f"{barn_worlds[0]}, {barn_worlds[1] if len(barn_worlds) > 1 else ''}, ... {barn_worlds[-1]}",
         "wall_time_s": round(time.time() - t_start, 1),
     }
-    out = Path(args.out)
+    out = output_dir(Path(args.out), args.quick)  # --quick: bench/results/quick/, never the committed results
     out.mkdir(parents=True, exist_ok=True)
     (out / "paper001.json").write_text(
         json.dumps({"meta": meta, "scenarios": scen, "update_cost": cost, "barn": barn, "targets": targets}, indent=2)

@@ -25,6 +25,8 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
+from _common import results_dir  # noqa: E402
+
 from maru_planner.base.mspp import LocalMultiStagePlanner, MultiStagePlanner  # noqa: E402
 from maru_planner.base.scenes import build_all  # noqa: E402
 from maru_planner.base.se2 import SE2AStarPlanner  # noqa: E402
@@ -186,6 +188,8 @@ def main(argv=None) -> int:
     parser.add_argument("--quick", action="store_true", help="5 repeats instead of 15")
     parser.add_argument("--repeats", type=int)
     args = parser.parse_args(argv)
+    global RESULTS
+    RESULTS = results_dir(args.quick)  # --quick: bench/results/quick/, never the committed results
     rows = run(args.repeats or (5 if args.quick else 15))
     RESULTS.mkdir(parents=True, exist_ok=True)
     md = write_markdown(rows)

@@ -29,16 +29,16 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
+from _common import data_dir, require_data, results_dir  # noqa: E402
 from movingai import load_map, load_scenarios  # noqa: E402
 from paper003_maps import HOUSE_GOAL, HOUSE_RADIUS, HOUSE_START, far_free_pair, rooms_map  # noqa: E402
 
 from maru_planner.base.astar import AStarResult, astar_2d  # noqa: E402
 from maru_planner.base.grid import OccupancyGrid  # noqa: E402
 from maru_planner.base.tunnel import TunnelPlanner  # noqa: E402
-from maru_planner.paths import benchmarks_dir  # noqa: E402
 
 RESULTS = ROOT / "bench" / "results"
-MOVINGAI = benchmarks_dir() / "movingai"
+MOVINGAI = data_dir("movingai")
 MOVINGAI_MAPS = [
     "dao/arena.map",
     "dao/den312d.map",
@@ -368,6 +368,9 @@ def main(argv=None) -> int:
     parser.add_argument("--quick", action="store_true", help="small sizes and few MovingAI queries")
     parser.add_argument("--replot", action="store_true", help="rewrite the .md/.png from the last .json, no runs")
     args = parser.parse_args(argv)
+    global RESULTS
+    RESULTS = results_dir(args.quick)  # --quick: bench/results/quick/, never the committed results
+    require_data(MOVINGAI)
     RESULTS.mkdir(parents=True, exist_ok=True)
     if args.replot:
         data = json.loads((RESULTS / "paper003.json").read_text())

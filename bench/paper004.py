@@ -23,6 +23,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from _common import results_dir  # noqa: E402
+
 from maru_planner.base.astar import astar_2d  # noqa: E402
 from maru_planner.base.biped import (  # noqa: E402
     TrackFollowingPlanner,
@@ -119,6 +121,8 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--quick", action="store_true", help="one repetition")
     args = parser.parse_args(argv)
+    global RESULTS
+    RESULTS = results_dir(args.quick)  # --quick: bench/results/quick/, never the committed results
     RESULTS.mkdir(parents=True, exist_ok=True)
     repeats = 1 if args.quick else 5
     astar_2d(np.zeros((3, 3), bool), (0, 0), (2, 2))

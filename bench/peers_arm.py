@@ -32,9 +32,9 @@ from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
+from _common import data_dir, fail, require_data, result_path
 
 from maru_planner.collision import self_collision_pairs
-from maru_planner.paths import benchmarks_dir
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig
 from maru_planner.planning.problems import PROBLEMS
 from maru_planner.robot import RobotModel
@@ -44,7 +44,7 @@ from maru_planner.scene.motion_bench_maker import iter_mbm_problems
 
 ROOT = Path(__file__).resolve().parent
 RESULTS = ROOT / "results"
-TARBALL = benchmarks_dir() / "motionbenchmaker" / "vamp_panda_problems.tar.bz2"
+TARBALL = data_dir("motionbenchmaker", "vamp_panda_problems.tar.bz2")
 PANDA_ARM = [f"panda_joint{i}" for i in range(1, 8)]
 NAIVE_RES = "naive OMPL, our resolution"
 COMPILED = "ours-compiled"
@@ -350,6 +350,8 @@ def main(argv=None) -> int:
         help=f"comma-separated solvers to run (default: all of {', '.join(SOLVERS)})",
     )
     args = ap.parse_args(argv)
+    args.out = result_path(args.out, args.quick)  # --quick: bench/results/quick/, never the committed results
+    require_data(TARBALL)
     unknown = sorted(set(args.solvers) - set(SOLVERS))
     if unknown:
         ap.error(f"unknown solver(s) {', '.join(unknown)}; known: {', '.join(SOLVERS)}")
@@ -357,7 +359,7 @@ def main(argv=None) -> int:
         try:
             import pyroboplan  # noqa: F401
         except ImportError:
-            ap.error("pyroboplan is not installed: run `make bench-deps`, or leave it out with --solvers")
+            fail("pyroboplan is not installed (run: make bench-deps), or leave it out with --solvers")
     per_set = 3 if args.quick else args.per_set
     pyro_per_set = 2 if args.quick else args.pyroboplan_per_set
     maru_seeds = list(range(3 if args.quick else args.maru_seeds))

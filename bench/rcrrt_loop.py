@@ -141,7 +141,7 @@ def main(argv: list[str] | None = None) -> int:
         results["runs"][name] = {loop: run_loop(robot, name, loop, batch, progress) for loop in LOOPS}
     summary = {name: {loop: summarise(rows) for loop, rows in loops.items()} for name, loops in results["runs"].items()}
     results["summary"] = summary
-    write_results(args.out, results, markdown(summary, seeds), lambda path: plot(results, path))
+    write_results(args.out, results, markdown(summary, seeds), lambda path: plot(results, path), quick=args.quick)
     return 0
 
 

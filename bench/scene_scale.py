@@ -39,6 +39,8 @@ import numpy as np  # noqa: E402
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from _common import output_dir  # noqa: E402
+
 from maru_planner.collision import CollisionChecker, SphereCollisionChecker  # noqa: E402
 from maru_planner.collision.broadphase import robot_reach  # noqa: E402
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig  # noqa: E402
@@ -216,6 +218,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seeds", type=int, default=5, help="plans per scene and checker")
     parser.add_argument("--out", type=Path, default=RESULTS)
     args = parser.parse_args(argv)
+    args.out = output_dir(args.out, args.quick)  # --quick: bench/results/quick/, never the committed results
     if min(args.sizes) < 0 or args.clutter < 0 or args.seeds < 1:
         print("scene_scale: sizes and --clutter must be >= 0 and --seeds >= 1", file=sys.stderr)
         return 2

@@ -252,7 +252,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     configure_loopback_dds(random_domain=True)
     results = run(configurations(args.workers, args.quick), args.clients, 16 if args.quick else args.requests)
-    write_results(RESULTS / NAME, results, table(results), lambda path: plot(results, path))
+    write_results(RESULTS / NAME, results, table(results), lambda path: plot(results, path), quick=args.quick)
     return 0
 
 

@@ -34,9 +34,8 @@ import toppra.constraint
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from _common import RESULTS, Progress, log, write_results  # noqa: E402
+from _common import RESULTS, Progress, data_dir, log, require_data, write_results  # noqa: E402
 
-from maru_planner.paths import benchmarks_dir  # noqa: E402
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig  # noqa: E402
 from maru_planner.planning.problems import PROBLEMS  # noqa: E402
 from maru_planner.robot import RobotModel  # noqa: E402
@@ -48,7 +47,7 @@ from maru_planner.trajectory.blends import BlendedPath, blend_half_lengths, dist
 from maru_planner.trajectory.toppra import rest_to_rest_speeds  # noqa: E402
 
 DRIVERS = ("toppra's driver", "ours")
-TARBALL = benchmarks_dir() / "motionbenchmaker" / "vamp_panda_problems.tar.bz2"
+TARBALL = data_dir("motionbenchmaker", "vamp_panda_problems.tar.bz2")
 CONFIG = PlannerConfig(collision_model="spheres", resolution=0.05)
 
 
@@ -180,6 +179,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--quick", action="store_true", help="3 seeds, 2 problems per set, 2 repeats")
     ap.add_argument("--out", type=Path, default=RESULTS / "toppra_driver")
     args = ap.parse_args(argv)
+    require_data(TARBALL)
     if args.quick:
         args.seeds, args.per_set, args.repeats = 3, 2, 2
     if min(args.seeds, args.per_set, args.repeats) < 1:
@@ -198,7 +198,7 @@ def main(argv: list[str] | None = None) -> int:
             progress.step(f"{family} path {len(results['runs'][family])}")
     summary = {family: summarise(rows) for family, rows in results["runs"].items() if rows}
     results["summary"] = summary
-    write_results(args.out, results, markdown(summary, args), lambda png: plot(results, png))
+    write_results(args.out, results, markdown(summary, args), lambda png: plot(results, png), quick=args.quick)
     return 0
 
 

@@ -42,7 +42,6 @@ sys.path.insert(0, str(ROOT))
 
 from maru_planner.collision import CollisionChecker  # noqa: E402
 from maru_planner.collision.certify import PathCertifier  # noqa: E402
-from maru_planner.paths import benchmarks_dir  # noqa: E402
 from maru_planner.planning import MotionPlanner, MotionRequest, PlannerConfig  # noqa: E402
 from maru_planner.planning.problems import PROBLEMS  # noqa: E402
 from maru_planner.robot import RobotModel  # noqa: E402
@@ -60,7 +59,9 @@ from maru_planner.trajectory import (  # noqa: E402
 )
 
 RESULTS = ROOT / "bench" / "results"
-TARBALL = benchmarks_dir() / "motionbenchmaker" / "vamp_panda_problems.tar.bz2"
+from _common import data_dir, require_data, results_dir  # noqa: E402
+
+TARBALL = data_dir("motionbenchmaker", "vamp_panda_problems.tar.bz2")
 PANDA_ARM = [f"panda_joint{i}" for i in range(1, 8)]
 TARGETS = {"maru13_toppra_over_trapezoid": 0.8, "parameterize_median_s": 0.005, "cruise_ratio_goal": 1.2}
 
@@ -337,6 +338,9 @@ def main() -> None:
     ap.add_argument("--mbm", type=int, default=100, help="MotionBenchMaker Panda problems (spread over the sets)")
     ap.add_argument("--deviation", type=float, default=None, help="blend deviation (rad); default: PlannerConfig's")
     args = ap.parse_args()
+    global RESULTS
+    RESULTS = results_dir(args.quick)  # --quick: bench/results/quick/, never the committed results
+    require_data(TARBALL)
     if args.quick:
         args.seeds, args.mbm = 3, 5
     config = PlannerConfig() if args.deviation is None else PlannerConfig(blend_deviation=args.deviation)

@@ -4,7 +4,7 @@ Example::
 
     maru-base-plan --map config/maps/paper002_medium.yaml --planner mspp \\
         --start 1 2 0 --goal 5 2 0 --footprint "0.45,0.15 -0.45,0.15 -0.45,-0.15 0.45,-0.15" \\
-        --json out.json --png out.png
+        --json demo_output/base.json --png demo_output/base.png   # demo_output/ must exist (mkdir -p)
 
 The footprint is one argument: polygon vertices ``x,y`` in metres (base_link)
 separated by spaces or ``;`` (write ``--footprint=...`` if the first is negative), or

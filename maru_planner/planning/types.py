@@ -144,8 +144,8 @@ class PlanStats:
     # the motion is proven collision-free on the exact model: the path, without the ends of its corners the trajectory
     # rounds with certified blends (MotionResult.corner_blends; docs/certification.md)
     certified: bool = False
-    # s spent certifying after time parameterisation (all attempts; 0 when the trajectory's whole curve was proven
-    # with its blends, MotionResult.curve_proof: that time is in parameterize_time)
+    # s spent certifying (all attempts); when the trajectory's whole curve was proven with its blends
+    # (MotionResult.curve_proof), the time of that proof, which parameterize_time includes
     certify_time: float = 0.0
     min_clearance: float = math.inf  # m: smallest distance measured while certifying the path and its blends
     repairs: int = 0  # segments that failed certification and were re-planned locally

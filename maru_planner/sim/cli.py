@@ -1,7 +1,7 @@
 """maru-reactive-sim: run the elastic strip in a simulated world and report the outcome.
 
     maru-reactive-sim --world config/worlds/goal_behind_obstacle.yaml --strip modified --seed 0 \\
-        --json out.json --png out.png [--gif out.gif]
+        --json demo_output/strip.json --png demo_output/strip.png [--gif demo_output/strip.gif]
 """
 
 from __future__ import annotations

@@ -7,7 +7,7 @@ from pathlib import Path
 
 TEST_DIR = Path(__file__).resolve().parents[1]
 PACKAGE_DIR = TEST_DIR.parent / "maru_planner"
-LANES = ("unit", "ros", "hostile", "architecture")
+LANES = ("unit", "ros", "hostile", "architecture", "docs")
 
 
 def test_every_test_module_is_in_a_lane():
