@@ -39,7 +39,8 @@ demo: setup
 # every lane, one pytest run each (a lane's failure does not skip the others), its time printed; each lane's
 # modules are spread over TEST_WORKERS processes (pytest-xdist, a module stays on one worker: its node fixtures)
 LANES := unit ros hostile architecture docs
-TEST_WORKERS ?= 2
+# one worker when the user exported ROS_DOMAIN_ID (the tests then share that domain), else two on free domains
+TEST_WORKERS ?= $(if $(ROS_DOMAIN_ID),1,2)
 test: setup
 	@status=0; for lane in $(LANES); do \
 		start=$$(date +%s); echo "[test] lane $$lane (test/$$lane)"; \

@@ -84,7 +84,8 @@ def _unused_domain_id() -> int:
 
 
 def pytest_configure(config):
-    configure_loopback_dds(domain_id=_unused_domain_id())
+    # the user's exported ROS_DOMAIN_ID is kept (make test then runs one worker per lane), else a free one
+    configure_loopback_dds(domain_id=None if os.environ.get("ROS_DOMAIN_ID") else _unused_domain_id())
     os.environ.setdefault("MPLBACKEND", "Agg")
 
 

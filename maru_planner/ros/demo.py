@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import subprocess
 import sys
 import time
@@ -37,7 +38,9 @@ def parse_args(argv=None) -> argparse.Namespace:
     parser.add_argument("--planners", nargs="+", default=list(PLANNERS), help="planner ids to run")
     parser.add_argument("--time", type=float, default=10.0, help="time budget per plan in seconds")
     parser.add_argument("--seed", type=int, default=1, help="planner seed (-1 = random)")
-    parser.add_argument("--domain-id", type=int, default=None, help="ROS_DOMAIN_ID (default: random)")
+    parser.add_argument(
+        "--domain-id", type=int, default=None, help="ROS_DOMAIN_ID (default: the exported one, else random)"
+    )
     return parser.parse_args(argv)
 
 
@@ -143,8 +146,8 @@ def main(argv=None) -> int:
     args = parse_args(argv)
     out_dir = Path(args.out)
     out_dir.mkdir(parents=True, exist_ok=True)
-    env = configure_loopback_dds(args.domain_id, random_domain=args.domain_id is None)
-    print(f"[demo] DDS on loopback only, ROS_DOMAIN_ID={env['ROS_DOMAIN_ID']}", flush=True)
+    configure_loopback_dds(args.domain_id, random_domain=True)
+    print(f"[demo] DDS on loopback only, ROS_DOMAIN_ID={os.environ['ROS_DOMAIN_ID']}", flush=True)
 
     # lazy: rclpy and its client load only once configure_loopback_dds has set the DDS environment
     import rclpy

@@ -47,10 +47,11 @@ def configure_loopback_dds(domain_id: int | None = None, *, random_domain: bool 
     """Set the loopback DDS variables in ``os.environ`` and return them (tests, demo, CI, benchmarks).
 
     The discovery range and profile are always forced (traffic to any other
-    address is never wanted). The domain id is taken from ``domain_id``, else a
-    random one in 1..100 when ``random_domain``, else left as inherited.
+    address is never wanted). The domain id is taken from ``domain_id``, else the
+    user's exported ``ROS_DOMAIN_ID``, else a random one in 1..100 when
+    ``random_domain``, else left unset.
     """
-    if domain_id is None and random_domain:
+    if domain_id is None and random_domain and not os.environ.get("ROS_DOMAIN_ID"):
         domain_id = random.SystemRandom().randint(1, 100)
     env = loopback_dds_environment(domain_id)
     os.environ.update(env)

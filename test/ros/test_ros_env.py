@@ -40,3 +40,14 @@ def test_any_user_setting_is_kept_and_nothing_is_added(no_network_settings, name
     line = env.network_from_environment()
     assert f"{name}={value}" in line
     assert env.user_network_settings() == {name: value}  # nothing changed, nothing added
+
+
+def test_our_runs_keep_an_exported_domain_id_and_otherwise_pick_one(no_network_settings):
+    no_network_settings.setenv("ROS_DOMAIN_ID", "42")
+    assert env.configure_loopback_dds(random_domain=True) == env.loopback_dds_environment()
+    assert os.environ["ROS_DOMAIN_ID"] == "42"
+    assert os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "LOCALHOST"
+    no_network_settings.delenv("ROS_DOMAIN_ID")
+    env.configure_loopback_dds(random_domain=True)
+    assert 1 <= int(os.environ["ROS_DOMAIN_ID"]) <= 100
+    assert env.configure_loopback_dds(7)["ROS_DOMAIN_ID"] == "7"
