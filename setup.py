@@ -49,6 +49,7 @@ setup(
             "maru-reactive-sim = maru_planner.sim.cli:main",
             "maru-base-plan = maru_planner.base.cli:main",
             "maru-demo = maru_planner.ros.demo:main",
+            "arm_sim_node = maru_planner.ros.arm_sim_node:main",
         ],
     },
 )

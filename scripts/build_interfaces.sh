@@ -10,6 +10,11 @@ stamp=$venv/.maru_interfaces.stamp
 py=$venv/bin/python3
 unset _ROS_WHEELS_BOOTSTRAP_COMPLETE
 
+# one build at a time (make setup, a colcon test, a helper): they share $build and the venv
+mkdir -p "$root/build"
+exec 9>"$root/build/.maru_interfaces.lock"
+flock 9
+
 hash=$(cd "$src" && cat CMakeLists.txt package.xml msg/*.msg srv/*.srv action/*.action | sha256sum | cut -d' ' -f1)
 if [ -f "$stamp" ] && [ "$(cat "$stamp")" = "$hash" ] \
    && "$py" -c "import maru_planner_interfaces.srv" 2>/dev/null; then

@@ -21,6 +21,7 @@ LAUNCH_FILES = {  # launch file -> (executable, its params file, its RViz config
     "planning": ("planning_node", "planner.yaml", "planning.rviz"),
     "base_planner": ("base_planner_node", "base_planner.yaml", "base_planner.rviz"),
     "reactive": ("reactive_node", "reactive.yaml", "reactive.rviz"),
+    "arm_sim": ("arm_sim_node", "arm_sim.yaml", "planning.rviz"),
 }
 COMMON_ARGUMENTS = {"use_sim_time": "false", "namespace": "", "autostart": "true", "rviz": "false"}
 
