@@ -11,10 +11,10 @@ STAMP := $(VENV)/.requirements.stamp
 unexport _ROS_WHEELS_BOOTSTRAP_COMPLETE
 export PIP_DISABLE_PIP_VERSION_CHECK := 1
 
-.PHONY: setup demo test test-fast docs-slow lint bench bench-deps interfaces clean
+.PHONY: setup demo test test-fast docs-slow lint browser bench bench-deps interfaces clean
 
 KERNELS := $(VENV)/.kernels.stamp
-setup: $(STAMP) interfaces $(KERNELS)
+setup: $(STAMP) interfaces $(KERNELS) browser
 
 $(STAMP): requirements.txt setup.py package.xml
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -30,6 +30,10 @@ $(KERNELS): $(STAMP) $(shell find maru_planner -name '*.py')
 	@$(PY) -m maru_planner.planning.warm_up
 	@touch $@
 
+# Debian's chromium for the browser tests (test/unit/web/); skipped with one line where it cannot be installed
+browser:
+	@sh scripts/install_browser.sh
+
 interfaces: $(STAMP)
 	@VENV=$(VENV) bash scripts/build_interfaces.sh
 
@@ -37,14 +41,16 @@ demo: setup
 	@$(PY) -m maru_planner.ros.demo
 
 # every lane, one pytest run each (a lane's failure does not skip the others), its time printed; each lane's
-# modules are spread over TEST_WORKERS processes (pytest-xdist, a module stays on one worker: its node fixtures)
+# modules are spread over TEST_WORKERS processes (pytest-xdist, a module stays on one worker: its node fixtures),
+# except the ros lane's: its burst, storm and admission tests load the machine on purpose, one module at a time
 LANES := unit ros hostile architecture docs
 # one worker when the user exported ROS_DOMAIN_ID (the tests then share that domain), else two on free domains
 TEST_WORKERS ?= $(if $(ROS_DOMAIN_ID),1,2)
 test: setup
 	@status=0; for lane in $(LANES); do \
 		start=$$(date +%s); echo "[test] lane $$lane (test/$$lane)"; \
-		$(PY) -m pytest -p no:cacheprovider -n $(TEST_WORKERS) --dist loadfile test/$$lane || status=1; \
+		workers=$(TEST_WORKERS); [ $$lane = ros ] && workers=0; \
+		$(PY) -m pytest -p no:cacheprovider -n $$workers --dist loadfile test/$$lane || status=1; \
 		echo "[test] lane $$lane: $$(( $$(date +%s) - start )) s"; \
 	done; exit $$status
 

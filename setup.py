@@ -50,6 +50,8 @@ setup(
             "maru-base-plan = maru_planner.base.cli:main",
             "maru-demo = maru_planner.ros.demo:main",
             "arm_sim_node = maru_planner.ros.arm_sim_node:main",
+            "maru-barn = maru_planner.barn.cli:main",
+            "maru-view = maru_planner.web.cli:main",
         ],
     },
 )

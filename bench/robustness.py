@@ -22,6 +22,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import random
 import sys
 import tempfile
@@ -34,6 +35,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "test"))  # the suite's generators and node helpers
 
 import hostile_inputs as hostile  # noqa: E402
+from _common import results_dir  # noqa: E402
 from conftest import NodeProcess, SpinningNode  # noqa: E402
 
 from maru_planner.errors import MaruError  # noqa: E402
@@ -328,10 +330,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=hostile.SEED)
     parser.add_argument("--write", action="store_true", help="write the results also after --quick")
     args = parser.parse_args(argv)
+    global RESULTS
+    RESULTS = results_dir(args.quick)  # --quick: bench/results/quick/, never the committed results
     scale = 0.25 if args.quick else args.scale
     if not (math.isfinite(scale) and scale > 0):
         parser.error(f"--scale must be > 0, got {scale}")
-    configure_loopback_dds(domain_id=random.SystemRandom().randint(101, 200))
+    user_domain = os.environ.get("ROS_DOMAIN_ID")
+    configure_loopback_dds(domain_id=None if user_domain else random.SystemRandom().randint(101, 200))
 
     import rclpy  # lazy: after the DDS environment is set
 

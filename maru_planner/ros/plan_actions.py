@@ -2,14 +2,17 @@
 
 :class:`PlanActionServer` accepts every goal (a managed node, :mod:`maru_planner.ros.lifecycle`,
 accepts them only while active), gives it a monitor and runs the node's plan coroutine with it.
-While the goal runs, a timer publishes the monitor's snapshot as feedback; a cancel request cancels
-the monitor, which stops the planner at once. The goal ends SUCCEEDED (the node's
+While goals run, one timer publishes each running goal's monitor snapshot as feedback (one callback for all
+goals, not a timer per goal: a storm of 32 goals costs the executor one wake-up per period); a cancel request
+cancels the monitor, which stops the planner at once -- or, for a goal still waiting for a worker, ends it at
+once (:meth:`~maru_planner.runtime.PlanningRuntime.plan`). The goal ends SUCCEEDED (the node's
 ``succeeded(result)``), CANCELED (cancelled and not successful) or ABORTED, always with the result
 the plan coroutine returned (the node's service response, as an action result).
 """
 
 from __future__ import annotations
 
+import threading
 import time
 from collections.abc import Awaitable, Callable
 from typing import Any
@@ -54,6 +57,10 @@ class PlanActionServer:
         self._period = period
         self._callback_group = callback_group
         self._monitors: dict[bytes, PlanMonitor] = {}
+        self._running: dict[bytes, tuple[ServerGoalHandle, PlanMonitor]] = {}  # executing: feedback goes out
+        self._running_lock = threading.Lock()  # goals start and end on several executor threads
+        self._feedback_timer = node.create_timer(period(), self._publish_feedback, callback_group=callback_group)
+        self._feedback_timer.cancel()  # runs only while goals do
         self.server = ActionServer(
             node,
             action_type,
@@ -64,6 +71,7 @@ class PlanActionServer:
             cancel_callback=self._on_cancel,
             goal_service_qos_profile=requests_qos,
             result_service_qos_profile=requests_qos,
+            cancel_service_qos_profile=requests_qos,  # a storm of cancels: rclpy's depth 10 dropped some
         )
 
     @property
@@ -82,20 +90,28 @@ class PlanActionServer:
             monitor.cancel()
         return CancelResponse.ACCEPT
 
+    def _publish_feedback(self) -> None:
+        with self._running_lock:
+            running = list(self._running.values())
+        for goal_handle, monitor in running:
+            goal_handle.publish_feedback(self._feedback(monitor.snapshot()))
+
     async def _execute(self, goal_handle: ServerGoalHandle) -> Any:
         key = bytes(goal_handle.goal_id.uuid)
         monitor = self._monitors[key]
-
-        def publish_feedback() -> None:
-            goal_handle.publish_feedback(self._feedback(monitor.snapshot()))
-
-        publish_feedback()
-        timer = self._node.create_timer(self._period(), publish_feedback, callback_group=self._callback_group)
+        goal_handle.publish_feedback(self._feedback(monitor.snapshot()))
+        with self._running_lock:
+            self._running[key] = (goal_handle, monitor)
+            if len(self._running) == 1:  # the first goal running: (re)start the timer at the period of now
+                self._feedback_timer.timer_period_ns = int(self._period() * 1e9)
+                self._feedback_timer.reset()
         try:
             result = await self._plan(goal_handle.request, monitor)
         finally:
-            self._node.destroy_timer(timer)
-            del self._monitors[key]
+            with self._running_lock:
+                del self._running[key], self._monitors[key]
+                if not self._running:
+                    self._feedback_timer.cancel()
         if self._succeeded(result):
             goal_handle.succeed()
         elif monitor.cancelled and _cancel_settled(goal_handle):

@@ -9,6 +9,13 @@ Call ``rclpy.init()`` first (or pass ``init=True``, which keeps the user's DDS n
 nodes do: ``maru_planner.ros.env.network_from_environment``). Every method returns the service response as is; a
 call that gets no answer within ``timeout`` raises ``TimeoutError``.
 
+Nothing lost in a burst: with Fast DDS every client of a service receives the replies to *all* clients on
+the service's one reply topic and keeps only the newest ``depth`` of them, so with rclpy's default (10) a
+client's own answer is evicted when more than 10 calls are answered at once (issue 36: 27 of 320 lost).
+The clients here use :data:`REPLY_QOS` (depth 256, the node's ``request_queue_depth``) for every service
+and the action's goal, result and cancel services; pass ``qos=`` for a deeper one. :meth:`PlanningClient.plan_async`
+returns the request id (the client's sequence number) with the pending answer.
+
 The ``plan_motion`` action, watched and cancellable::
 
     goal = client.plan_action(goal_joints, start=start, planner_id="RRT", feedback_callback=print)
@@ -29,6 +36,7 @@ from geometry_msgs.msg import Pose, PoseStamped
 from rclpy.action import ActionClient
 from rclpy.action.client import ClientGoalHandle
 from rclpy.executors import SingleThreadedExecutor
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.task import Future
 from sensor_msgs.msg import JointState
 
@@ -49,31 +57,53 @@ from maru_planner_interfaces.srv import (
 
 AnswerT = TypeVar("AnswerT")
 
+REPLY_DEPTH = 256  # >= the calls answered at once across every client of a service (module doc)
+REPLY_QOS = QoSProfile(
+    depth=REPLY_DEPTH,
+    history=HistoryPolicy.KEEP_LAST,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.VOLATILE,
+)
+FEEDBACK_QOS = QoSProfile(depth=100)  # every goal's feedback shares one topic; a lost one is only a late update
+
 
 class PlanningClient:
     """Clients of ``plan_motion`` (service and action), ``compute_ik``, ``apply_scene`` and ``get_scene``.
 
     ``node``: an existing node that someone else spins (an executor thread); if None the
     client makes its own node and spins it in a daemon thread. ``namespace``: where the
-    planning node's services live (``""`` = the root namespace).
+    planning node's services live (``""`` = the root namespace). ``qos``: of every service client and
+    the action's services (its depth >= the calls answered at once by the node, module doc).
     """
 
-    def __init__(self, node=None, namespace: str = "", *, node_name: str = "planning_client", init: bool = False):
+    def __init__(
+        self,
+        node=None,
+        namespace: str = "",
+        *,
+        node_name: str = "planning_client",
+        init: bool = False,
+        qos: QoSProfile = REPLY_QOS,
+    ):
         if init and not rclpy.ok():
             network_from_environment()
             rclpy.init()
         self._owns_node = node is None
         self.node = node if node is not None else rclpy.create_node(node_name)
         prefix = namespace.rstrip("/") + "/" if namespace else ""
-        self.plan_client = self.node.create_client(PlanMotion, prefix + "plan_motion")
-        self.ik_client = self.node.create_client(ComputeIK, prefix + "compute_ik")
-        self.apply_client = self.node.create_client(ApplyScene, prefix + "apply_scene")
-        self.scene_client = self.node.create_client(GetScene, prefix + "get_scene")
-        self.fk_client = self.node.create_client(ComputeFK, prefix + "compute_fk")
-        self.validity_client = self.node.create_client(CheckStateValidity, prefix + "check_state_validity")
-        self.planners_client = self.node.create_client(QueryPlanners, prefix + "query_planners")
-        self.cartesian_client = self.node.create_client(ComputeCartesianPath, prefix + "compute_cartesian_path")
-        self.plan_action_client = ActionClient(self.node, PlanMotionAction, prefix + "plan_motion")
+        self.plan_client = self.node.create_client(PlanMotion, prefix + "plan_motion", qos_profile=qos)
+        self.ik_client = self.node.create_client(ComputeIK, prefix + "compute_ik", qos_profile=qos)
+        self.apply_client = self.node.create_client(ApplyScene, prefix + "apply_scene", qos_profile=qos)
+        self.scene_client = self.node.create_client(GetScene, prefix + "get_scene", qos_profile=qos)
+        self.fk_client = self.node.create_client(ComputeFK, prefix + "compute_fk", qos_profile=qos)
+        self.validity_client = self.node.create_client(
+            CheckStateValidity, prefix + "check_state_validity", qos_profile=qos
+        )
+        self.planners_client = self.node.create_client(QueryPlanners, prefix + "query_planners", qos_profile=qos)
+        self.cartesian_client = self.node.create_client(
+            ComputeCartesianPath, prefix + "compute_cartesian_path", qos_profile=qos
+        )
+        self.plan_action_client = plan_action_client(self.node, prefix + "plan_motion", qos)
         self._executor = None
         if self._owns_node:
             self._executor = SingleThreadedExecutor()
@@ -116,6 +146,10 @@ class PlanningClient:
         """
         request = plan_request(goal_joints, **request_fields)
         return self.call(self.plan_client, request, timeout or request.allowed_planning_time + 30.0)
+
+    def plan_async(self, goal_joints: dict[str, float] | None = None, **request_fields) -> PendingCall:
+        """Send a plan request (:meth:`plan`'s fields) without waiting: its request id and pending answer."""
+        return send_request(self.plan_client, plan_request(goal_joints, **request_fields))
 
     def plan_action(
         self,
@@ -265,6 +299,44 @@ class PlanGoal:
         return response.status, response.result
 
 
+def plan_action_client(node, name: str = "plan_motion", qos: QoSProfile = REPLY_QOS) -> ActionClient:
+    """A ``plan_motion`` action client whose goal, result and cancel answers are never evicted (module doc)."""
+    return ActionClient(
+        node, PlanMotionAction, name, goal_service_qos_profile=qos, result_service_qos_profile=qos,
+        cancel_service_qos_profile=qos, feedback_sub_qos_profile=FEEDBACK_QOS,
+    )  # fmt: skip
+
+
+class PendingCall:
+    """A service request sent: its ``request_id`` (the client's sequence number, as the middleware numbers it)
+    and the answer to come (``result(timeout)``)."""
+
+    def __init__(self, client, request_id: int, future: Future):
+        self.client, self.request_id, self.future = client, request_id, future
+
+    def result(self, timeout: float = 60.0):
+        """The response; TimeoutError (the request forgotten by the client) if none within ``timeout``."""
+        try:
+            return wait_for_future(self.future, timeout, f"response from {self.client.srv_name}")
+        except TimeoutError:
+            self.client.remove_pending_request(self.future)
+            raise
+
+
+def send_request(client, request) -> PendingCall:
+    """What ``client.call_async(request)`` does (rclpy Jazzy), keeping the request's sequence number, which
+    call_async does not return (read back later, the answer may have removed it)."""
+    if not isinstance(request, client.srv_type.Request):
+        raise TypeError(f"{client.srv_name} takes {client.srv_type.Request.__name__}, got {type(request).__name__}")
+    with client._lock:  # the executor looks the answer's sequence number up under it
+        with client.handle:
+            request_id = client.handle.send_request(request)
+        future = Future()
+        client._pending_requests[request_id] = future
+        future.add_done_callback(client.remove_pending_request)
+    return PendingCall(client, request_id, future)
+
+
 def plan_goal(goal_joints: dict[str, float] | None = None, **request_fields) -> PlanMotionAction.Goal:
     """A ``PlanMotion`` action goal from plain Python values (:func:`plan_request`'s keywords)."""
     request = plan_request(goal_joints, **request_fields)
@@ -322,12 +394,7 @@ def call_service(client, request, timeout: float = 60.0):
     """Call ``client`` and wait for the answer; its node must be spun by an executor thread."""
     if not client.wait_for_service(timeout_sec=timeout):
         raise TimeoutError(f"service {client.srv_name} not available after {timeout} s")
-    future = client.call_async(request)
-    try:
-        return wait_for_future(future, timeout, f"response from {client.srv_name}")
-    except TimeoutError:
-        client.remove_pending_request(future)
-        raise
+    return send_request(client, request).result(timeout)
 
 
 def call_until_answered(client, request, timeout: float = 60.0):

@@ -1,12 +1,14 @@
 """``planning_node``: ROS 2 services around the planning runtime (:mod:`maru_planner.runtime`).
 
 A thin adapter: messages are converted in :mod:`planning_conversions` and :mod:`planning_requests`; the work is
-done by a :class:`~maru_planner.runtime.PlanningRuntime` (robot, versioned scene, admission with BUSY beyond
-``workers + queue_size``, worker threads and processes, warm-up, IK), built at configure, shut down at cleanup.
+done by a :class:`~maru_planner.runtime.PlanningRuntime` (robot, versioned scene, admission -- BUSY when a
+request's expected wait exceeds its budget or ``workers + queue_size`` wait --, worker threads and processes,
+warm-up, IK), built at configure, shut down at cleanup.
 Service callbacks are coroutines that ``await`` the runtime's answer, so no executor thread is held while a plan
-runs; the services' QoS queue (``request_queue_depth``) is deeper than the admission, so the middleware drops no
-request before the node has seen it. Parameters: :mod:`planning_parameters` (a run-time change is applied at once,
-rebuilding the runtime's planning contexts when a planner setting or ``workers`` changes, or rejected with a reason).
+runs; the services' QoS queues (``request_queue_depth``, also the action's goal, result and cancel services) hold
+a burst, so the middleware drops no request before the node has seen it. Parameters: :mod:`planning_parameters`
+(a run-time change is applied at once, rebuilding the runtime's planning contexts when a planner setting or
+``workers`` changes, or rejected with a reason).
 
 The ``plan_motion`` action plans the same way and answers with the service's response as its result; its
 :class:`~maru_planner.monitor.PlanMonitor` is published as feedback every ``feedback_period`` and a cancel request

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import importlib
 import math
+from typing import Literal
 
 import numpy as np
 from builtin_interfaces.msg import Duration, Time
@@ -127,6 +128,20 @@ def pose_stamped_msg(pose: Pose2D, frame_id: str, stamp_s: float) -> PoseStamped
     msg.pose.position.x, msg.pose.position.y = float(pose[0]), float(pose[1])
     msg.pose.orientation = quaternion_from_yaw(float(pose[2]))
     return msg
+
+
+def path_pose_count(raw: bytes) -> int:
+    """The pose count of a serialized nav_msgs/Path (little- or big-endian CDR), read without decoding the poses:
+    a node refuses an oversized plan at this cost. -1 if ``raw`` is too short to be a Path."""
+    if len(raw) < 20:
+        return -1
+    order: Literal["little", "big"] = "little" if raw[1] == 1 else "big"  # encapsulation 0x0001 CDR_LE, 0x0000 BE
+    frame_length = int.from_bytes(raw[12:16], order)  # after the 4-byte encapsulation and the 8-byte stamp
+    offset = 16 + frame_length
+    offset += -(offset - 4) % 4  # the count is 4-aligned, counted from after the encapsulation
+    if offset + 4 > len(raw):
+        return -1
+    return int.from_bytes(raw[offset : offset + 4], order)
 
 
 def path_points_from_msg(msg: Path) -> np.ndarray:

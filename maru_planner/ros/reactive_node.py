@@ -19,8 +19,13 @@ dropped with a throttled warning and counted, scans or odometry stamped more
 than ``future_tolerance`` ahead of the clock are dropped (never taken as
 "now"), a scan older than ``stale_scan_timeout`` stops the base (zero Twist),
 and a watchdog on the wall clock stops the base when no valid scan arrived
-for ``scan_timeout`` seconds, in both clock modes. An exception in a callback
-is logged on one line and stops the base; the node keeps serving.
+for ``scan_timeout`` seconds, in both clock modes.
+
+Bounded work and memory per message: a /plan arrives serialized and its pose count is read first, so one
+longer than ``max_plan_poses`` is refused (counted as ``oversized``) before rclpy builds a Python object per
+pose (100,000 poses took 1.7 s); the input queues hold one message each (the newest; best-effort scans,
+goals, plans), so the node is never more than one scan behind and holds at most queue depth x message size.
+An exception in a callback is logged on one line and stops the base; the node keeps serving.
 
 A managed node (:mod:`maru_planner.ros.lifecycle`): configure reads the parameters and creates the
 publishers; activate subscribes to the inputs and starts the watchdog, so the node commands the base
@@ -51,6 +56,7 @@ from nav_msgs.msg import Odometry, Path
 from rclpy.clock import Clock, ClockType, JumpThreshold, TimeJump
 from rclpy.duration import Duration
 from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.serialization import deserialize_message
 from rclpy.subscription import Subscription
 from rclpy.timer import Timer
 from sensor_msgs.msg import LaserScan
@@ -95,6 +101,12 @@ class NodeSettings:
     )
     status_period: float = param(
         30.0, "s of wall time between status lines in the log (0 = off)", lower=0.0, upper=86400.0
+    )
+    max_plan_poses: int = param(
+        5000,
+        "a /plan with more poses is refused before it is decoded (counted as oversized): bounded work per message",
+        lower=2,
+        upper=100_000,
     )
 
 
@@ -167,8 +179,9 @@ class ReactiveNode(ManagedNode):
         self.last_valid_scan = time.monotonic()
         self.base_stopped = True
         self.counts = dict.fromkeys(
-            ("scans", "updates", "dropped", "stale", "future", "bad_goals", "bad_plans", "bad_odometry", "errors"), 0
-        )
+            ("scans", "updates", "dropped", "stale", "future", "bad_goals", "bad_plans", "oversized", "bad_odometry",
+             "errors"), 0,
+        )  # fmt: skip
         self.update_ms: deque[float] = deque(maxlen=200)  # recent controller update times, for the status line
         self._goal_logged = False
         self._watchdog: Timer | None = None
@@ -222,15 +235,16 @@ class ReactiveNode(ManagedNode):
 
     def _subscribe_inputs(self) -> None:
         reliable = self.settings.scan_reliability == "reliable"
-        scan_qos = QoSProfile(
-            depth=5, reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT
+        scan_qos = QoSProfile(  # reliable (lock-step replays) keeps a few; live scans only the newest
+            depth=5 if reliable else 1,
+            reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
         )
         # Creation order matters: when several messages are ready at once the executor takes them in
         # this order, so a goal or plan that arrived with a scan is applied before that scan.
         self._inputs = [
             self.create_subscription(Odometry, "odom", self._guarded("odom", self.on_odom), 10),
-            self.create_subscription(PoseStamped, "goal_pose", self._guarded("goal_pose", self.on_goal), 10),
-            self.create_subscription(Path, "plan", self._guarded("plan", self.on_plan), 10),
+            self.create_subscription(PoseStamped, "goal_pose", self._guarded("goal_pose", self.on_goal), 1),
+            self.create_subscription(Path, "plan", self._guarded("plan", self.on_plan_bytes), 1, raw=True),
             self.create_subscription(LaserScan, "scan", self._guarded("scan", self.on_scan), scan_qos),
         ]
         self.odom_topic, self.scan_topic = self._inputs[0].topic_name, self._inputs[3].topic_name
@@ -293,7 +307,8 @@ class ReactiveNode(ManagedNode):
             ms = np.array(self.update_ms)
             parts.append(f"update median {np.median(ms):.2f} ms, max {ms.max():.2f} ms (last {len(ms)})")
         parts.append(
-            "future {future}, rejected goals {bad_goals}, plans {bad_plans}, odometry {bad_odometry}, "
+            "future {future}, rejected goals {bad_goals}, plans {bad_plans}, oversized {oversized}, "
+            "odometry {bad_odometry}, "
             "callback errors {errors}".format(**c)
         )
         return "; ".join(parts)
@@ -355,6 +370,15 @@ class ReactiveNode(ManagedNode):
             self.controller.set_goal(goal)
         self._goal_logged = False
         self.get_logger().info(f"goal ({goal[0]:.2f}, {goal[1]:.2f}, {goal[2]:.2f})")
+
+    def on_plan_bytes(self, raw: bytes) -> None:
+        """A serialized /plan: refused unread when longer than ``max_plan_poses``, else decoded and taken."""
+        count, most = conv.path_pose_count(raw), self.settings.max_plan_poses
+        if count > most:
+            self.counts["oversized"] += 1
+            self.warnings.warn("oversized", f"ignored /plan: {count} poses (max_plan_poses {most}), not decoded")
+            return
+        self.on_plan(deserialize_message(raw, Path))
 
     def on_plan(self, msg: Path) -> None:
         """The initial path; its last pose becomes the goal (eq. 36-44 deform it from here on)."""

@@ -6,7 +6,8 @@ scene, the robot's latest joint values, admission, worker threads and processes,
   made of XML text;
 - :mod:`~maru_planner.runtime.scene_store`: :class:`SceneStore` and its edits;
 - :mod:`~maru_planner.runtime.robot_state`: :class:`JointStateStore`, joint values by name -> configuration;
-- :mod:`~maru_planner.runtime.admission`: :class:`WorkerPool` (threads, BUSY beyond ``workers + queue_size``);
+- :mod:`~maru_planner.runtime.admission`: :class:`WorkerPool` (threads; BUSY when the expected wait exceeds the
+  budget, or beyond ``workers + queue_size``);
 - :mod:`~maru_planner.runtime.process_pool`: :class:`ProcessPool` (plans in worker processes);
 - :mod:`~maru_planner.runtime.worker_process`: what runs in one of those worker processes;
 - :mod:`~maru_planner.runtime.warm_up`: the kernels run once before the first request (``warm_up``, not

@@ -6,9 +6,10 @@ It owns the robot (loaded from a :class:`~maru_planner.runtime.robot_loading.Rob
 (:class:`~maru_planner.runtime.robot_state.JointStateStore`) and the workers. Every request runs on a
 :class:`~maru_planner.runtime.admission.WorkerPool` of ``workers`` threads, each owning its own robot model,
 collision checker and planner (pinocchio data and OMPL set-ups are not shared between threads); a request
-method returns a ``concurrent.futures.Future`` at once, or raises ``errors.Busy`` when ``workers +
-queue_size`` requests are already planning or waiting. Time spent waiting counts against the request's own
-budget. With ``worker_processes`` each thread hands its plan to one of ``workers`` worker processes
+method returns a ``concurrent.futures.Future`` at once, or raises ``errors.Busy`` when its expected wait exceeds
+its budget or ``workers + queue_size`` requests are already planning or waiting (:mod:`admission`). Time spent
+waiting counts against the request's own budget; a plan cancelled (its monitor) while it waits ends at once.
+With ``worker_processes`` each thread hands its plan to one of ``workers`` worker processes
 (:class:`~maru_planner.runtime.process_pool.ProcessPool`: own OMPL, model and scene, brought to the runtime's
 scene before the next plan), so concurrent plans run on every core; threads alone take turns in OMPL (one
 process-wide lock). Before it answers its first request, every planner has run its kernels once
@@ -17,6 +18,7 @@ process-wide lock). Before it answers its first request, every planner has run i
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import threading
 import time
@@ -27,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from maru_planner import errors
 from maru_planner.collision import sphere_model
 from maru_planner.monitor import PlanMonitor
 from maru_planner.planning.cartesian import CartesianRequest, CartesianResult
@@ -56,7 +59,7 @@ class RuntimeSettings:
     default_group: str = "upper_body"
     workers: int = 2
     worker_processes: bool = True
-    queue_size: int = 16
+    queue_size: int = 200
 
 
 class PlanningRuntime:
@@ -107,7 +110,12 @@ class PlanningRuntime:
     def plan(self, request: MotionRequest, monitor: PlanMonitor | None = None) -> Future[MotionResult]:
         """Plan ``request`` within its ``time_budget`` from now (``monitor``: progress and cancel)."""
         deadline = time.monotonic() + request.time_budget
-        return self._submit(requests.plan_in_context, request, deadline, monitor)
+        waiting = self._enqueue(requests.plan_in_context, request, deadline, monitor, budget=request.time_budget)
+        if monitor is not None:  # a cancel while it waits for a worker ends it now, not when a worker takes it
+            hook = contextlib.ExitStack()
+            hook.enter_context(monitor.attach(waiting))
+            waiting.future.add_done_callback(lambda _done: hook.close())
+        return waiting.future
 
     def cartesian_path(self, request: CartesianRequest) -> Future[CartesianResult]:
         return self._submit(requests.cartesian_in_context, request)
@@ -115,7 +123,7 @@ class PlanningRuntime:
     def compute_ik(self, request: IkRequest) -> Future[np.ndarray]:
         """A full configuration solving ``request`` within its ``timeout`` from now."""
         deadline = time.monotonic() + request.timeout
-        return self._submit(requests.ik_in_context, request, deadline)
+        return self._submit(requests.ik_in_context, request, deadline, budget=request.timeout)
 
     def compute_fk(self, values: dict[str, float], links: Sequence[str]) -> Future[dict[str, np.ndarray]]:
         """{link: 4x4 pose} at joint ``values`` (every name a robot joint); every link when ``links`` is empty."""
@@ -205,22 +213,30 @@ class PlanningRuntime:
 
     # ------------------------------------------------------------ inside
 
-    def _submit(self, fn: Callable[..., Any], *args: Any) -> Future:
-        """Run ``fn(context, *args)`` on a planning worker, the context brought to the latest scene first."""
-        future: Future = Future()
+    def _submit(self, fn: Callable[..., Any], *args: Any, budget: float | None = None) -> Future:
+        """Run ``fn(context, *args)`` on a planning worker, the context brought to the latest scene first
+        (``budget``: the request's seconds, for admission)."""
+        return self._enqueue(fn, *args, budget=budget).future
 
-        def job(context: WorkerContext) -> None:
-            if not future.set_running_or_notify_cancel():
-                return
+    def _enqueue(self, fn: Callable[..., Any], *args: Any, budget: float | None = None) -> _Waiting:
+        waiting = _Waiting()
+
+        def job(context: WorkerContext) -> bool:
+            """Whether its run time tells the next request's (not when cancelled)."""
+            if not waiting.start():
+                return False
             try:
                 self._sync_scene(context)
-                future.set_result(fn(context, *args))
+                result = fn(context, *args)
             except BaseException as exc:  # noqa: BLE001 - handed to whoever waits for the Future
-                future.set_exception(exc)
+                waiting.future.set_exception(exc)
+                return not isinstance(exc, errors.PlanningCancelled)
+            waiting.future.set_result(result)
+            return not isinstance(getattr(result, "error", None), errors.PlanningCancelled)
 
         with self._lock:
-            self._pool.submit(job)
-        return future
+            self._pool.submit(job, budget)
+        return waiting
 
     def _sync_scene(self, context: WorkerContext) -> None:
         """Bring the context's planner (and the worker processes) to the latest scene."""
@@ -273,3 +289,22 @@ class PlanningRuntime:
             self._processes.set_config(config)
             self._processes.resize(settings.workers)
         return self._processes
+
+
+class _Waiting:
+    """A request's Future while it waits for a worker; a :class:`~maru_planner.monitor.Terminable` that ends it
+    with PlanningCancelled at once (a running plan is stopped by its planner's own hook instead)."""
+
+    def __init__(self) -> None:
+        self.future: Future = Future()
+        self._lock = threading.Lock()
+
+    def start(self) -> bool:
+        """A worker takes the request: whether it still waits (not cancelled meanwhile)."""
+        with self._lock:
+            return not self.future.done() and self.future.set_running_or_notify_cancel()
+
+    def terminate(self) -> None:
+        with self._lock:
+            if not self.future.running() and not self.future.done():
+                self.future.set_exception(errors.PlanningCancelled("cancelled while waiting for a worker"))

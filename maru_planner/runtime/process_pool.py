@@ -338,6 +338,13 @@ class ProcessPool:
 
     def _start(self, worker: _Worker, job: _Job) -> None:
         """Send ``job`` to ``worker`` (its monitor's cancel now reaches the worker)."""
+        if _gone(worker):  # died while idle, its reader not yet run: the job waits for another worker instead
+            with self._lock:
+                if worker.job is job:  # else the reader took it already, and fails it
+                    worker.job = None
+                    job.queued = True
+                    self._pending.appendleft(job)
+            return
         with job.lock:
             if job.future.done() and not job.future.cancelled():
                 return  # the worker died before the plan went out: its reader failed the job
@@ -452,6 +459,15 @@ class ProcessPool:
             return [], ""
         orphans, self._pending = list(self._pending), deque()
         return orphans, unserved
+
+
+def _gone(worker: _Worker) -> bool:
+    """Whether an idle ``worker``'s pipe is at its end: it sends nothing while idle, so anything readable is the
+    EOF of a worker that died (its reader thread replaces it and fails nothing: it held no job)."""
+    try:
+        return worker.conn.poll()
+    except (OSError, ValueError):  # closed by its reader already
+        return True
 
 
 def _exit_description(exitcode: int | None) -> str:
