@@ -1,0 +1,283 @@
+"""How fast the browser view answers (issue 40): page ready after start, and goal drag -> plan -> first animated frame.
+
+    .venv/bin/python bench/view_latency.py [--runs 3] [--per-set 2] [--quick]
+
+- page ready: ``ViewApp`` started (robot, meshes, scene, server; the planner loads in the background), then a
+  headless Chromium (already running, software WebGL) opens the URL; ready = the canvas shows the robot (more than
+  1 % of its pixels drawn). Panda (meshes) and Maru-1 (its desk scene), ``--runs`` each.
+- drag -> first frame: the MotionBenchMaker Panda problems (``--per-set`` per set; the fingers at the profile's
+  0.04 m limit instead of 0.065 m), each scene loaded into the view, the start shown; the goal gizmo moved to the
+  goal's hand pose and "Plan" run: IK, the certified plan, the trajectory's first frame sent to the page
+  (server clock), and the first canvas screenshot that differs from the one before the plan ("seen", an upper
+  bound: a software-WebGL screenshot takes ~0.1-0.3 s).
+- peers beside the page: a bare viser server with one box in the same browser, with viser's default lighting
+  (image-based, shadows) and with the view's (neither): what viser's page costs alone.
+- baseline beside the plan: the PNG route the issue replaces (``maru-plan --png``): the same request planned on the same
+  runtime, then the picture drawn with matplotlib (``viz.plans.plot_plan``).
+
+Outputs bench/results/view_latency.{json,md,png} (``--quick``: bench/results/quick/) and the table on stdout.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from _common import RESULTS, Progress, fail, log, require_data, write_results  # noqa: E402
+from peers_arm import TARBALL, mbm_cases  # noqa: E402
+from playwright.sync_api import Page, sync_playwright  # noqa: E402
+
+from maru_planner.planning.problems import PROBLEMS  # noqa: E402
+from maru_planner.planning.types import MotionRequest  # noqa: E402
+from maru_planner.viz.plans import plot_plan  # noqa: E402
+from maru_planner.web import browser  # noqa: E402
+from maru_planner.web.server import ViewApp, ViewSettings, wait_ready  # noqa: E402
+from maru_planner.web.serving import serve  # noqa: E402
+
+READY_TARGET, FRAME_TARGET = 2.0, 0.300  # s (issue 40)
+BUDGET = 1.0  # s per plan, as bench/peers_arm.py gives ours
+PEER_DEFAULT, PEER_LEAN = "bare viser, its default lighting", "bare viser, the view's lighting"
+
+
+def page_ready(page: Page, robot: str, scene: str) -> dict:
+    t0 = time.monotonic()
+    app = ViewApp(ViewSettings(robot=robot, scene=scene, port=0))
+    started = time.monotonic() - t0
+    try:
+        page.goto(app.url)
+        drawn = browser.wait_drawn(page, timeout=60.0)
+        ready = time.monotonic() - t0
+        wait_ready(app, 120.0)
+        return {"robot": robot, "server_s": started, "page_ready_s": ready, "drawn": drawn,
+                "planner_ready_s": time.monotonic() - t0}  # fmt: skip
+    finally:
+        app.close()
+
+
+def bare_viser_ready(page: Page, lean: bool) -> dict:
+    """The peer: a bare viser server with one box in the same browser, with viser's default lighting (image-based,
+    shadows) or, ``lean``, with the view's (neither): what viser's page costs alone."""
+    t0 = time.monotonic()
+    server = serve("127.0.0.1", 0)
+    if lean:
+        server.scene.configure_environment_map(None)
+        server.scene.configure_default_lights(enabled=True, cast_shadow=False)
+    server.scene.add_box("/box", (200, 60, 60), (0.5, 0.5, 0.5))
+    try:
+        page.goto(f"http://127.0.0.1:{server.get_port()}")
+        drawn = browser.wait_drawn(page, timeout=60.0)
+        name = PEER_LEAN if lean else PEER_DEFAULT
+        return {"robot": name, "server_s": 0.0, "page_ready_s": time.monotonic() - t0, "drawn": drawn}
+    finally:
+        server.stop()
+
+
+def seen_in_page(page: Page, before: np.ndarray, t0: float, timeout: float = 5.0) -> float | None:
+    """Seconds from ``t0`` to the first screenshot differing from ``before`` (None: never within ``timeout``)."""
+    while time.monotonic() - t0 < timeout:
+        if np.mean(np.any(browser.canvas_image(page) != before, axis=-1)) > 1e-4:
+            return time.monotonic() - t0
+    return None
+
+
+def drag_to_frame(app: ViewApp, page: Page, case, png_dir: Path) -> dict:
+    robot = app.robot
+    app.set_scene(case.scene)
+    start = np.clip(_full(robot, case.start), robot.lower_limits, robot.upper_limits)
+    app.set_start(start)
+    goal = robot.frame_pose(_full(robot, {**case.start, **case.goal}), robot.end_effectors["hand"])
+    time.sleep(0.3)  # the new scene reaches the page
+    before = browser.canvas_image(page)
+    t0 = time.monotonic()
+    app.panel.set_goal("hand", goal)
+    result = app.plan()
+    planned = time.monotonic() - t0
+    row = {"case": case.name, "status": result.status.value if result else "BUSY", "plan_s": planned}
+    if result is not None and result.success:
+        while app.view.first_frame_time is None and time.monotonic() - t0 < 5.0:
+            time.sleep(0.001)
+        row["first_frame_s"] = (app.view.first_frame_time or float("nan")) - t0
+        row["seen_s"] = seen_in_page(page, before, t0)
+        app.view.wait_played(timeout=30.0)
+    hand = robot.end_effectors["hand"]
+    request = MotionRequest(
+        "arm", start=dict(zip(robot.joint_names, start)), goal_poses={hand: goal}, time_budget=BUDGET
+    )
+    t1 = time.monotonic()
+    baseline = app.runtime.plan(request).result() if app.runtime is not None else None
+    if baseline is not None and baseline.success:
+        plot_plan(robot, case.scene, baseline, png_dir / "plan.png", base_q=start)
+        row["png_route_s"] = time.monotonic() - t1
+    return row
+
+
+def screenshot(chromium, path: Path) -> None:
+    """The README's picture: Maru-1 planned around the desk box (paper problem maru13), shown half-way."""
+    app = ViewApp(ViewSettings(robot="maru1", scene="", port=0))
+    page = chromium.new_page(viewport={"width": 1200, "height": 720})
+    try:
+        page.goto(app.url)
+        wait_ready(app, 120.0)
+        problem, robot = PROBLEMS["maru13"], app.robot
+        names = robot.groups[problem.group]
+        app.set_start(problem.start_dict(names))
+        goal_q = _full(robot, problem.goal_dict(names))
+        for ee, frame in robot.end_effectors.items():
+            app.panel.set_goal(ee, robot.frame_pose(goal_q, frame))
+        result = app.plan()
+        if result is None or not result.success or result.trajectory is None:
+            fail(f"the screenshot's plan failed: {result.message if result else 'busy'}")
+        app.view.wait_played(timeout=30.0)
+        half = 0.5 * result.trajectory.duration
+        app.view.scrubber.value = half
+        app.view.robot_view.show(app.view.state_at(half))
+        browser.wait_drawn(page, timeout=60.0)
+        time.sleep(1.0)
+        notices = page.locator(".mantine-Notification-root button")  # the software-WebGL notice
+        if notices.count():
+            notices.first.click()
+        time.sleep(0.5)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        page.screenshot(path=str(path))
+        log(f"wrote {path}")
+    finally:
+        page.close()
+        app.close()
+
+
+def _full(robot, values: dict) -> np.ndarray:
+    q = robot.neutral()
+    names = [n for n in values if n in robot.joint_names]
+    q[robot.joint_indices(names)] = [values[n] for n in names]
+    return q
+
+
+def _stats(values: list[float]) -> dict:
+    v = np.array([x for x in values if x is not None and np.isfinite(x)])
+    if not len(v):
+        return {"n": 0}
+    return {"n": int(len(v)), "median": float(np.median(v)), "p95": float(np.percentile(v, 95)), "max": float(v.max())}
+
+
+def summarize(ready_rows: list[dict], frame_rows: list[dict]) -> dict:
+    ready = {r: _stats([x["page_ready_s"] for x in ready_rows if x["robot"] == r]) for r in ("panda", "maru1")}
+    bare = {p: _stats([x["page_ready_s"] for x in ready_rows if x["robot"] == p]) for p in (PEER_LEAN, PEER_DEFAULT)}
+    planner = {r: _stats([x.get("planner_ready_s") for x in ready_rows if x["robot"] == r]) for r in ("panda", "maru1")}
+    ok = [r for r in frame_rows if "first_frame_s" in r]
+    first = _stats([r["first_frame_s"] for r in ok])
+    return {
+        "page_ready_s": ready,
+        "planner_ready_s": planner,
+        "bare_viser_ready_s": bare,
+        "first_frame_s": first,
+        "seen_in_page_s": _stats([r.get("seen_s") for r in ok]),
+        "png_route_s": _stats([r.get("png_route_s") for r in frame_rows]),
+        "plans": len(frame_rows),
+        "succeeded": len(ok),
+        "page_ready_target_met": all(s.get("max", 1e9) <= READY_TARGET for s in ready.values()),
+        "first_frame_target_met": first.get("median", 1e9) <= FRAME_TARGET,
+    }
+
+
+def markdown(summary: dict) -> str:
+    def ms(s: dict) -> str:
+        return "n/a" if not s.get("n") else f"{1e3 * s['median']:.0f} / {1e3 * s['p95']:.0f} / {1e3 * s['max']:.0f}"
+
+    lines = [
+        "# View latency (bench/view_latency.py)",
+        "",
+        "| measure | n | median / p95 / max (ms) | target |",
+        "|---|---|---|---|",
+    ]
+    for robot, s in summary["page_ready_s"].items():
+        lines.append(f"| page ready after start, {robot} | {s.get('n', 0)} | {ms(s)} | <= {READY_TARGET * 1e3:.0f} |")
+    for peer, s in summary["bare_viser_ready_s"].items():
+        lines.append(f"| peer: {peer} (one box), same browser | {s.get('n', 0)} | {ms(s)} | |")
+    for robot, s in summary["planner_ready_s"].items():
+        lines.append(f"| planner ready after start, {robot} | {s.get('n', 0)} | {ms(s)} | |")
+    rows = [("goal drag -> plan -> first frame sent (ours)", "first_frame_s", f"<= {FRAME_TARGET * 1e3:.0f}"),
+            ("... first changed screenshot of the page", "seen_in_page_s", ""),
+            ("baseline: plan -> PNG picture (maru-plan --png)", "png_route_s", "")]  # fmt: skip
+    for label, key, target in rows:
+        lines.append(f"| {label} | {summary[key].get('n', 0)} | {ms(summary[key])} | {target} |")
+    lines += ["", f"{summary['succeeded']} of {summary['plans']} MotionBenchMaker plans succeeded.", ""]
+    return "\n".join(lines)
+
+
+def plot(summary: dict, frame_rows: list[dict], path: Path) -> None:
+    fig, ax = plt.subplots(figsize=(7, 3.5))
+    series = {
+        "first frame sent": [r["first_frame_s"] for r in frame_rows if "first_frame_s" in r],
+        "seen in page": [r["seen_s"] for r in frame_rows if r.get("seen_s") is not None],
+        "PNG route": [r["png_route_s"] for r in frame_rows if "png_route_s" in r],
+    }
+    labels = [k for k, v in series.items() if v]
+    ax.boxplot([np.array(series[k]) * 1e3 for k in labels], orientation="horizontal")
+    ax.set_yticks(range(1, len(labels) + 1), labels)
+    ax.axvline(FRAME_TARGET * 1e3, color="r", ls="--", label="target 300 ms")
+    ax.set_xlabel("ms from the goal drag (MotionBenchMaker Panda)")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--runs", type=int, default=3, help="page-ready runs per robot")
+    ap.add_argument("--per-set", type=int, default=2, help="MotionBenchMaker problems per set")
+    ap.add_argument("--quick", action="store_true", help="1 run per robot, 1 problem per set")
+    ap.add_argument("--out", type=Path, default=RESULTS / "view_latency")
+    ap.add_argument("--screenshot", type=Path, help="only write the README's screenshot to this PNG")
+    args = ap.parse_args()
+    if browser.missing_reason():
+        fail(browser.missing_reason() or "")
+    if args.screenshot:
+        with sync_playwright() as playwright:
+            screenshot(browser.launch(playwright), args.screenshot)
+        return
+    require_data(TARBALL)
+    runs, per_set = (1, 1) if args.quick else (args.runs, args.per_set)
+    cases = mbm_cases(None, per_set)
+    progress = Progress(4 * runs + len(cases))
+    with sync_playwright() as playwright, tempfile.TemporaryDirectory() as scratch:
+        chromium = browser.launch(playwright)
+        ready_rows = []
+        for robot, scene in [("panda", "none"), ("maru1", "")] * runs:
+            page = chromium.new_page(viewport=browser.VIEWPORT)
+            ready_rows.append(page_ready(page, robot, scene))
+            page.close()
+            progress.step(f"page ready {robot}")
+        for lean in [True, False] * runs:
+            page = chromium.new_page(viewport=browser.VIEWPORT)
+            ready_rows.append(bare_viser_ready(page, lean))
+            page.close()
+            progress.step("page ready, bare viser")
+        app = ViewApp(ViewSettings(robot="panda", scene="none", port=0))
+        page = chromium.new_page(viewport=browser.VIEWPORT)
+        page.goto(app.url)
+        browser.wait_drawn(page, timeout=60.0)
+        wait_ready(app, 120.0)
+        app.panel.budget.value = BUDGET
+        frame_rows = []
+        for case in cases:
+            frame_rows.append(drag_to_frame(app, page, case, Path(scratch)))
+            progress.step(case.name)
+        app.close()
+        chromium.close()
+    summary = summarize(ready_rows, frame_rows)
+    results = {"summary": summary, "page_ready": ready_rows, "drag_to_frame": frame_rows}
+    write_results(args.out, results, markdown(summary), lambda p: plot(summary, frame_rows, p), quick=args.quick)
+    log(f"page ready target met: {summary['page_ready_target_met']}, first frame: {summary['first_frame_target_met']}")
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,94 @@
+"""``maru-view``: the interactive planning view in a browser (no ROS needed).
+
+``maru-view --robot panda --scene my_scene.yaml`` prints the URL to open; Ctrl-C stops it. ``maru-view --bag DIR
+[--map YAML]`` replays a base run instead (path, trace, base, laser points). Bound to 127.0.0.1 unless ``--host``
+names another address. A bad robot, scene, bag, map or port: one line on stderr, exit 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from collections.abc import Sequence
+
+from maru_planner import errors
+from maru_planner.base.grid import OccupancyGrid
+from maru_planner.planning.config import COLLISION_MODELS, PlannerConfig
+from maru_planner.robot.robot_profile import PROFILES
+from maru_planner.web.base_view import BaseView, read_base_run
+from maru_planner.web.server import ViewApp, ViewSettings
+from maru_planner.web.serving import DEFAULT_HOST, serve
+
+EXIT_OK, EXIT_BAD_INPUT = 0, 2
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # type: ignore[override]
+        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {errors.one_line(message)} (see --help)\n")
+
+
+def parser() -> argparse.ArgumentParser:
+    p = _Parser(prog="maru-view", description="The interactive planning view (or a base run's replay) in a browser.")
+    p.add_argument("--robot", default="maru1", help=f"robot profile: {', '.join(sorted(PROFILES))} (default maru1)")
+    p.add_argument(
+        "--scene", default="", help="scene YAML (default: the package's desk scene for maru1, none for other robots)"
+    )
+    p.add_argument(
+        "--host", default=DEFAULT_HOST, help=f"address to serve on (default {DEFAULT_HOST}: this machine only)"
+    )
+    p.add_argument("--port", type=int, default=8080, help="port (default 8080, the next free one if taken; 0: any)")
+    p.add_argument(
+        "--collision-model",
+        choices=COLLISION_MODELS,
+        default=PlannerConfig.collision_model,
+        help="the planner's checker (spheres: a robot's first use fits its sphere model, minutes for TIAGo or Talos)",
+    )
+    p.add_argument("--bag", help="replay the base run of this rosbag2 directory (/odom, /scan, /plan, /goal_pose)")
+    p.add_argument("--map", help="with --bag: the occupancy grid's map YAML to draw under the run")
+    return p
+
+
+def settings_of(args: argparse.Namespace) -> ViewSettings:
+    """The view's settings; InvalidRequest for a port out of range."""
+    if not 0 <= args.port <= 65535:
+        raise errors.InvalidRequest(f"--port must be in [0, 65535], got {args.port}")
+    scene = args.scene or ("" if args.robot == "maru1" else "none")
+    return ViewSettings(args.robot, scene, args.host, args.port, args.collision_model)
+
+
+def base_view(args: argparse.Namespace) -> BaseView:
+    """The replay of ``--bag`` (over ``--map``) on its own server."""
+    settings = settings_of(args)
+    run = read_base_run(args.bag)
+    try:
+        grid = OccupancyGrid.from_yaml(args.map) if args.map else None
+    except (OSError, ValueError) as exc:
+        raise errors.InvalidRequest(f"--map {args.map}: {errors.one_line(exc, 160)}") from None
+    return BaseView(serve(settings.host, settings.port), run, grid)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = parser().parse_args(argv)
+    try:
+        view: ViewApp | BaseView = base_view(args) if args.bag else ViewApp(settings_of(args))
+    except errors.MaruError as exc:
+        print(f"maru-view: {exc.message}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    server = view.server
+    what = view.robot.name if isinstance(view, ViewApp) else f"the base run of {args.bag}"
+    print(f"maru-view: {what} at http://{server.get_host()}:{server.get_port()}", flush=True)
+    try:
+        while True:
+            time.sleep(1.0)
+    except KeyboardInterrupt:
+        return EXIT_OK
+    finally:
+        if isinstance(view, ViewApp):
+            view.close()
+        else:
+            server.stop()
+
+
+if __name__ == "__main__":
+    sys.exit(main())
