@@ -7,13 +7,15 @@ task x ``--seeds`` seeds, each planned by ``MotionPlanner`` (RRTConnect, sphere 
 time parameterisation: toppra and ruckig against the trapezoid baseline, at full velocity scaling. Each is
 executed from its start state by ``execution.executor.ArmController`` (joint_trajectory_controller's
 interpolation and tolerances: path 0.05 rad, goal 0.01 rad / 0.01 rad/s, MoveIt's duration monitor) on
-``physics.arm_model`` (1 kHz, position + velocity servo with the default :class:`ServoGains`, effort limits
-from the URDFs, the scene's obstacles as geoms).
+``physics.arm_model`` (1 kHz, effort limits from the URDFs, the scene's obstacles as geoms) twice: with the default
+:class:`ServoGains` (position + velocity feedback and the acceleration feedforward ``M(q) a``) and, the peer, with
+feedback only (no feedforward: what a bare position-controlled joint does).
 
 Per trajectory: max and RMS tracking error per joint, robot-obstacle contacts (MuJoCo's, with penetration
 depth), overrun of the planned duration (until the goal tolerances hold), torque saturation steps, the
 result code, and how far the planned points leave the joint limits (the arm's stops are in the simulation).
-Summary per robot and method. Writes bench/results/execution.{json,md,png} (the picture: planned and
+Summary per robot and method (``summary[robot][method]``, default servo; ``summary[robot]["feedback_only"]`` the
+peer). Writes bench/results/execution.{json,md,png} (the picture: planned and
 executed joint curves of one 13-DOF task); ``--quick`` (3 problems, 2 seeds) writes under bench/results/quick/.
 """
 
@@ -51,6 +53,7 @@ from maru_planner.scene.motion_bench_maker import iter_mbm_problems  # noqa: E40
 TARBALL = benchmarks_dir() / "motionbenchmaker" / "vamp_panda_problems.tar.bz2"
 PANDA_ARM = [f"panda_joint{i}" for i in range(1, 8)]
 METHODS = ("toppra", "ruckig", "trapezoid")  # trapezoid: the baseline
+SERVOS = {"default": ServoGains(), "feedback_only": ServoGains(acceleration_feedforward=False)}
 TARGETS = {"contacts": 0, "max_tracking_error_rad": 0.02, "max_overrun": 0.05, "goal_tolerance_violations": 0}
 
 
@@ -97,26 +100,28 @@ def limit_excess(task: Task, joint_names: list[str], positions: np.ndarray) -> f
     return float(max(0.0, np.max(below), np.max(above)))
 
 
-def run_task(task: Task, seed: int, arm: ArmModel, keep: dict) -> list[dict]:
+def run_task(task: Task, seed: int, arms: dict[str, ArmModel], keep: dict) -> list[dict]:
     rows = []
     task.planner.set_scene(task.scene)
     for method in METHODS:
         request = MotionRequest(task.group, start=task.start, goal_joints=task.goal, planner_id="RRTConnect",
                                 time_budget=10.0, seed=seed, time_parameterization=method)  # fmt: skip
         plan = task.planner.plan(request)
-        row: dict = {"robot": task.robot_name, "task": task.name, "seed": seed, "method": method}
-        if not plan.success or plan.trajectory is None:
-            rows.append(row | {"planned": False, "status": plan.status.value})
-            continue
-        tr = plan.trajectory
-        points = checked_points(tr.joint_names, tr.times, tr.positions, tr.velocities, tr.accelerations)
-        sim = ArmSim(arm)
-        sim.reset(task.q0)
-        t0 = time.perf_counter()
-        result = ArmController(sim).run(points)
-        rows.append(row | measured(result, time.perf_counter() - t0, limit_excess(task, tr.joint_names, tr.positions)))
-        if task.robot_name == "maru1" and method == "toppra" and "curve" not in keep:
-            keep["curve"] = (task.name, seed, result)
+        for servo, arm in arms.items():
+            row: dict = {"robot": task.robot_name, "task": task.name, "seed": seed, "method": method, "servo": servo}
+            if not plan.success or plan.trajectory is None:
+                rows.append(row | {"planned": False, "status": plan.status.value})
+                continue
+            tr = plan.trajectory
+            points = checked_points(tr.joint_names, tr.times, tr.positions, tr.velocities, tr.accelerations)
+            sim = ArmSim(arm)
+            sim.reset(task.q0)
+            t0 = time.perf_counter()
+            result = ArmController(sim).run(points)
+            excess = limit_excess(task, tr.joint_names, tr.positions)
+            rows.append(row | measured(result, time.perf_counter() - t0, excess))
+            if task.robot_name == "maru1" and method == "toppra" and servo == "default" and "curve" not in keep:
+                keep["curve"] = (task.name, seed, result)
     return rows
 
 
@@ -168,23 +173,15 @@ def _fmt(value) -> str:
     return f"{value:.4f}" if isinstance(value, float) else str(value)
 
 
-def markdown(summary: dict, gains: dict, args, checks: dict) -> str:
-    quick = " --quick" if args.quick else ""
+def _table(summary: dict, which: str) -> list[str]:
     lines = [
-        "# Trajectory execution in MuJoCo (issue 39)",
-        "",
-        f"Command: `.venv/bin/python bench/execution.py{quick} --mbm {args.mbm} --seeds {args.seeds}`. Planned by "
-        "MotionPlanner (RRTConnect, spheres, certified), full velocity scaling; executed with "
-        "joint_trajectory_controller's interpolation and tolerances (path 0.05 rad, goal 0.01 rad and 0.01 rad/s, "
-        "MoveIt's 1.2 x duration + 0.5 s monitor) at 1 kHz. Trapezoid is the baseline.",
-        "",
         "| robot | method | traj | ok | contacts | max err (rad) | p95 err | RMS err | max overrun | goal viol. "
         "| path viol. | sat. steps | beyond limits (max rad) |",
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
-    for robot, per_method in summary.items():
-        for method, s in per_method.items():
-            if method == "all":
+    for robot, per_servo in summary.items():
+        for method, s in (per_servo if which == "default" else per_servo[which]).items():
+            if method in ("all", "feedback_only"):
                 continue
             lines.append(
                 f"| {robot} | {method} | {s['trajectories']} | {s['successful']} | {s['contacts']} "
@@ -193,6 +190,28 @@ def markdown(summary: dict, gains: dict, args, checks: dict) -> str:
                 f"| {s['path_tolerance_violations']} | {s['torque_saturation_steps']} "
                 f"| {s['trajectories_leaving_joint_limits']} ({_fmt(s['max_limit_excess_rad'])}) |"
             )
+    return lines
+
+
+def markdown(summary: dict, gains: dict, args, checks: dict) -> str:
+    quick = " --quick" if args.quick else ""
+    lines = [
+        "# Trajectory execution in MuJoCo (issue 39)",
+        "",
+        f"Command: `.venv/bin/python bench/execution.py{quick} --mbm {args.mbm} --seeds {args.seeds}`. Planned by "
+        "MotionPlanner (RRTConnect, spheres, certified), full velocity scaling; executed with "
+        "joint_trajectory_controller's interpolation and tolerances (path 0.05 rad, goal 0.01 rad and 0.01 rad/s, "
+        "MoveIt's 1.2 x duration + 0.5 s monitor) at 1 kHz. Trapezoid is the baseline. Overrun: (time the goal "
+        "tolerances first hold - planned duration) / planned duration.",
+        "",
+        "Default servo (position + velocity feedback, acceleration feedforward):",
+        "",
+        *_table(summary, "default"),
+        "",
+        "Peer: the same trajectories on the same arms with feedback only (no acceleration feedforward):",
+        "",
+        *_table(summary, "feedback_only"),
+    ]
     lines += ["", "Servo (default `ServoGains`): " + "; ".join(f"{k}: {v}" for k, v in gains.items()), "",
               "Targets (all trajectories of a robot): " + ", ".join(f"{k} {'met' if v else 'NOT met'}"
                                                                    for k, v in checks.items())]  # fmt: skip
@@ -238,21 +257,25 @@ def main(argv: list[str] | None = None) -> int:
     progress, rows = Progress(len(tasks)), []
     keep: dict[str, Any] = {}
     gains: dict[str, Any] = {}
-    models: dict[str, ArmModel] = {}
+    models: dict[str, dict[str, ArmModel]] = {}
     for task, seed in tasks:
-        key = f"{task.name}"
-        if key not in models:
-            models = {key: build_arm_model(task.planner.robot, task.scene, ServoGains(), q0=task.q0)}
-        arm = models[key]
+        if task.name not in models:
+            robot = task.planner.robot
+            models = {task.name: {s: build_arm_model(robot, task.scene, g, q0=task.q0) for s, g in SERVOS.items()}}
+        arms = models[task.name]
+        arm = arms["default"]
         gains.setdefault(f"{task.robot_name} kp (N m/rad)", sorted(set(arm.kp.round(0).tolist())))
         gains.setdefault(f"{task.robot_name} kv at start (N m s/rad)", f"{arm.kv.min():.1f}..{arm.kv.max():.1f}")
-        rows += run_task(task, seed, arm, keep)
+        rows += run_task(task, seed, arms, keep)
         progress.step(f"{task.name} seed {seed}")
     summary: dict = {}
     for robot in dict.fromkeys(r["robot"] for r in rows):
-        mine = [r for r in rows if r["robot"] == robot]
+        mine = [r for r in rows if r["robot"] == robot and r["servo"] == "default"]
+        peer = [r for r in rows if r["robot"] == robot and r["servo"] == "feedback_only"]
         summary[robot] = {m: summarize([r for r in mine if r["method"] == m]) for m in METHODS}
         summary[robot]["all"] = summarize(mine)
+        summary[robot]["feedback_only"] = {m: summarize([r for r in peer if r["method"] == m]) for m in METHODS}
+        summary[robot]["feedback_only"]["all"] = summarize(peer)
     checks = {
         f"{robot}_{name}": (s["all"][name] is not None and s["all"][name] <= limit)
         for robot, s in summary.items()
@@ -262,6 +285,7 @@ def main(argv: list[str] | None = None) -> int:
     gains["damping_ratio"] = ServoGains().damping_ratio
     gains["armature (kg m^2)"] = ServoGains().armature
     gains["gravity_compensation"] = ServoGains().gravity_compensation
+    gains["acceleration_feedforward"] = ServoGains().acceleration_feedforward
     results = {"args": vars(args), "summary": summary, "targets": checks, "gains": gains, "rows": rows}
     write_results(RESULTS / "execution", results, markdown(summary, gains, args, checks),
                   lambda path: plot_curve(path, keep), quick=args.quick)  # fmt: skip

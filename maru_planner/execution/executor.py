@@ -159,9 +159,12 @@ class ArmController:
         outcome = self._check(execution, t, error_p, error_v)
         if outcome is not None:
             return outcome
-        command_p, command_v = self.sim.data.ctrl[: self.sim.arm.nq].copy(), np.zeros(self.sim.arm.nq)
+        n = self.sim.arm.nq
+        command_p, command_v, command_a = self.sim.data.ctrl[:n].copy(), np.zeros(n), np.zeros(n)
         command_p[execution.index], command_v[execution.index] = desired.positions[0], desired.velocities[0]
-        self.sim.command(command_p, command_v)
+        if t < execution.spline.duration:  # after it the set-point is the last point at rest: no acceleration to feed
+            command_a[execution.index] = desired.accelerations[0]
+        self.sim.command(command_p, command_v, command_a)
         execution.contacts.add(self.sim.step())
         execution.cycle += 1
         return None
@@ -250,6 +253,6 @@ class ArmController:
         return position, self._ramp_v + deceleration * s, deceleration if moving else np.zeros_like(deceleration)
 
     def _command_hold(self) -> None:
-        position, velocity, _ = self.ramp(self.sim.time - self._ramp_start)
+        position, velocity, acceleration = self.ramp(self.sim.time - self._ramp_start)
         arm = self.sim.arm
-        self.sim.command(np.clip(position, arm.lower_limits, arm.upper_limits), velocity)
+        self.sim.command(np.clip(position, arm.lower_limits, arm.upper_limits), velocity, acceleration)

@@ -5,8 +5,10 @@ same reduced model the planner uses, so locked joints stay locked and attached o
 planner puts them). Collision geometry is the planner's: primitives as MuJoCo primitives, meshes as
 meshes (MuJoCo collides their convex hulls). The scene's obstacles are static geoms of the world.
 
-Servo: every joint has a position actuator (``kp``) and a velocity actuator (``kv``, fed the desired
-velocity), i.e. ``tau = kp (q_d - q) + kv (v_d - v)``, the total clamped to the URDF's effort limit
+Servo: every joint has a position actuator (``kp``), a velocity actuator (``kv``, fed the desired
+velocity) and a torque actuator fed the acceleration feedforward ``M(q) a_d`` (the arm's inertia, armature
+included, times the desired accelerations, as model-based drives add), i.e.
+``tau = kp (q_d - q) + kv (v_d - v) + [M(q) a_d]_i``, the total clamped to the URDF's effort limit
 (``actfrcrange``), plus joint damping and a reflected rotor inertia (armature). ``kp`` is chosen per joint
 from its effort limit (:class:`ServoGains`), ``kv`` for a damping ratio from the joint's inertia at
 ``q0``. Physics at 1 kHz with the ``implicitfast`` integrator.
@@ -17,7 +19,7 @@ bits), so every MuJoCo contact is a robot-obstacle contact; self-collision is th
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import coal
@@ -43,6 +45,8 @@ class ServoGains:
     ``saturation_error``: the position error at which a joint's spring alone reaches its effort limit.
     ``armature``: reflected rotor inertia (kg m^2) added to every joint (MuJoCo Menagerie's Panda uses 0.1).
     ``damping``: joint damping (N m s/rad) where the URDF gives none.
+    ``acceleration_feedforward``: the servo adds ``M(q)`` times the desired accelerations (without it the
+    position error is what accelerates the arm: lag on the way, settling after the end).
     ``gravity_compensation``: the servo adds the links' gravity torques (as the drives of Franka's and UR's arms
     do); MuJoCo's ``gravcomp`` routed through the actuators (``actgravcomp``), so it counts against the effort limit.
     """
@@ -52,6 +56,7 @@ class ServoGains:
     armature: float = 0.1
     damping: float = 0.1
     gravity_compensation: bool = True
+    acceleration_feedforward: bool = True
 
     def __post_init__(self) -> None:
         for name in ("saturation_error", "damping_ratio"):
@@ -66,7 +71,8 @@ class ServoGains:
 
 @dataclass
 class ArmModel:
-    """A compiled MuJoCo arm: ``joint_names`` in the planner's order; actuators ``[position..., velocity...]``."""
+    """A compiled MuJoCo arm: ``joint_names`` in the planner's order; actuators ``[position..., velocity...,
+    feedforward torque...]``."""
 
     model: mujoco.MjModel
     joint_names: list[str]
@@ -80,6 +86,7 @@ class ArmModel:
     obstacle_names: list[str]
     qpos_index: np.ndarray  # MuJoCo qpos (= dof) address of each of joint_names
     geom_owners: list[str]  # per MuJoCo geom: its link, attached object or obstacle
+    acceleration_feedforward: bool = True  # ServoGains.acceleration_feedforward
 
     @property
     def nq(self) -> int:
@@ -106,11 +113,17 @@ class ArmModel:
 
 
 def build_arm_model(
-    robot: RobotModel, scene: Scene | None = None, gains: ServoGains | None = None, q0: np.ndarray | None = None
+    robot: RobotModel,
+    scene: Scene | None = None,
+    gains: ServoGains | None = None,
+    q0: np.ndarray | None = None,
+    payloads: Mapping[str, float] | None = None,
 ) -> ArmModel:
     """The arm of ``robot`` (with ``scene``'s attached objects) among ``scene``'s obstacles.
 
     ``q0``: the configuration the damping gains are tuned at (the robot's neutral one by default).
+    ``payloads``: mass (kg) of attached objects by name (uniform density; others weigh nothing). The servos'
+    gravity compensation does not know a payload (the drives are not told the load): the position loop holds it.
     """
     gains = gains or ServoGains()
     carrying = robot_with_attached(robot, scene)
@@ -119,9 +132,10 @@ def build_arm_model(
     spec.option.timestep = TIMESTEP
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     spec.compiler.degree = False  # URDF limits are radians
-    spec.compiler.inertiafromgeom = mujoco.mjtInertiaFromGeom.mjINERTIAFROMGEOM_FALSE
+    # links have explicit inertias; only a payload's body takes its inertia from its geom
+    spec.compiler.inertiafromgeom = mujoco.mjtInertiaFromGeom.mjINERTIAFROMGEOM_AUTO
     bodies = _add_links(spec, carrying, gains, (robot.lower_limits, robot.upper_limits))
-    owners = _add_robot_geoms(spec, carrying, bodies)
+    owners = _add_robot_geoms(spec, carrying, bodies, _checked_payloads(payloads or {}, scene))
     obstacle_names = _add_obstacles(spec, scene)
     owners.update({OBSTACLE_PREFIX + name: name for name in obstacle_names})
     effort = np.asarray(carrying.model.effortLimit, dtype=float)
@@ -134,13 +148,15 @@ def build_arm_model(
         spec.add_actuator(name=f"velocity/{name}", target=name, trntype=mujoco.mjtTrn.mjTRN_JOINT).set_to_velocity(
             kv=1.0
         )
+    for name in robot.joint_names:
+        spec.add_actuator(name=f"feedforward/{name}", target=name, trntype=mujoco.mjtTrn.mjTRN_JOINT).set_to_motor()
     model = spec.compile()
     qpos_index = np.array([model.jnt_qposadr[model.joint(name).id] for name in robot.joint_names], dtype=int)
     q_start = np.asarray(robot.neutral() if q0 is None else q0, dtype=float)
     kv = _damping_gains(model, kp, gains.damping_ratio, q_start, qpos_index)
     n = robot.nq
     model.actuator_gainprm[:n, 0], model.actuator_biasprm[:n, 1] = kp, -kp
-    model.actuator_gainprm[n:, 0], model.actuator_biasprm[n:, 2] = kv, -kv
+    model.actuator_gainprm[n : 2 * n, 0], model.actuator_biasprm[n : 2 * n, 2] = kv, -kv
     return ArmModel(
         model=model,
         joint_names=list(robot.joint_names),
@@ -154,6 +170,7 @@ def build_arm_model(
         obstacle_names=obstacle_names,
         qpos_index=qpos_index,
         geom_owners=[owners.get(model.geom(g).name, "") for g in range(model.ngeom)],
+        acceleration_feedforward=gains.acceleration_feedforward,
     )
 
 
@@ -215,15 +232,35 @@ def _full_inertia(inertia: np.ndarray, mass: float) -> list[float]:
     return [inertia[0, 0], inertia[1, 1], inertia[2, 2], inertia[0, 1], inertia[0, 2], inertia[1, 2]]
 
 
-def _add_robot_geoms(spec: mujoco.MjSpec, robot: RobotModel, bodies: list[mujoco.MjsBody]) -> dict[str, str]:
-    """The collision geometry (attached objects included); each geom's name -> its link's or object's name."""
+def _checked_payloads(payloads: Mapping[str, float], scene: Scene | None) -> dict[str, float]:
+    attached = set(scene.attached) if scene is not None else set()
+    for name, mass in payloads.items():
+        if name not in attached:
+            raise InvalidScene(f"payload '{name}': no attached object of that name (attached: {sorted(attached)})")
+        if not (np.isfinite(mass) and mass >= 0):
+            raise InvalidScene(f"payload '{name}': mass must be a finite number >= 0 kg, got {mass!r}")
+    return dict(payloads)
+
+
+def _add_robot_geoms(
+    spec: mujoco.MjSpec, robot: RobotModel, bodies: list[mujoco.MjsBody], payloads: Mapping[str, float]
+) -> dict[str, str]:
+    """The collision geometry (attached objects included); each geom's name -> its link's or object's name.
+
+    An attached object with a payload mass is a body of its own, welded to its link (its inertia from the geom)."""
     owners = {}
     for item in robot.collision_model.geometryObjects:
-        geom = _add_geom(spec, bodies[item.parentJoint], item.name, item.geometry, item.placement.homogeneous)
+        attached = item.name.removeprefix("attached/") if item.name.startswith("attached/") else None
+        body, pose = bodies[item.parentJoint], item.placement.homogeneous
+        if attached is not None and payloads.get(attached, 0.0) > 0:
+            body = body.add_body(name=f"payload/{attached}", pos=pose[:3, 3], quat=_quat(pose[:3, :3]))
+            body.gravcomp, pose = 0.0, np.eye(4)
+        geom = _add_geom(spec, body, item.name, item.geometry, pose)
+        if attached is not None:
+            geom.mass = payloads.get(attached, 0.0)
         geom.contype, geom.conaffinity = ROBOT_BITS
         geom.rgba = [0.7, 0.7, 0.75, 1.0]
-        link = robot.model.frames[item.parentFrame].name
-        owners[item.name] = item.name.removeprefix("attached/") if item.name.startswith("attached/") else link
+        owners[item.name] = attached or robot.model.frames[item.parentFrame].name
     return owners
 
 

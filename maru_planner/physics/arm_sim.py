@@ -79,14 +79,27 @@ class ArmSim:
         mujoco.mj_resetData(self.arm.model, self.data)
         self.data.qpos[self.arm.qpos_index] = q
         self.command(q, np.zeros(self._n))
-        mujoco.mj_forward(self.arm.model, self.data)
+        mujoco.mj_forward(self.arm.model, self.data)  # qM at q: for the feedforward of the first command
         self.contacts = ContactLog()
         self.saturated_steps = 0
 
-    def command(self, positions: np.ndarray, velocities: np.ndarray) -> None:
-        """The servo set-points of every joint (the arm's joint order)."""
-        self.data.ctrl[: self._n] = positions
-        self.data.ctrl[self._n :] = velocities
+    def command(self, positions: np.ndarray, velocities: np.ndarray, accelerations: np.ndarray | None = None) -> None:
+        """The servo set-points of every joint (the arm's joint order); ``accelerations`` feed forward ``M(q) a``
+        (when the arm's servo has it; None: zero)."""
+        n = self._n
+        self.data.ctrl[:n] = positions
+        self.data.ctrl[n : 2 * n] = velocities
+        self.data.ctrl[2 * n :] = 0.0
+        if accelerations is not None and self.arm.acceleration_feedforward:
+            self.data.ctrl[2 * n :] = self.inertia_torques(accelerations)
+
+    def inertia_torques(self, accelerations: np.ndarray) -> np.ndarray:
+        """``M(q) a``: the joint torques that give the arm ``accelerations`` (its inertia at the current state)."""
+        wanted = np.zeros(self.arm.model.nv)
+        wanted[self.arm.qpos_index] = accelerations
+        torques = np.zeros(self.arm.model.nv)
+        mujoco.mj_mulM(self.arm.model, self.data, torques, wanted)
+        return torques[self.arm.qpos_index]
 
     def step(self, steps: int = 1) -> list[Contact]:
         """Advance ``steps`` physics steps; the contacts of the last one (also logged in :attr:`contacts`)."""

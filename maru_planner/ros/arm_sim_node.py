@@ -65,6 +65,9 @@ class ArmSimConfig:
                                  read_only=True)  # fmt: skip
     gravity_compensation: bool = param(True, "servo adds the links' gravity torques (within the effort limits)",
                                        read_only=True)  # fmt: skip
+    acceleration_feedforward: bool = param(
+        True, "servo adds M(q) x the desired accelerations (false: feedback only)", read_only=True
+    )
     joint_state_rate: float = param(250.0, "joint_states rate (Hz)", lower=1.0, upper=1000.0, read_only=True)
     feedback_rate: float = param(25.0, "execute_trajectory feedback rate (Hz)", lower=1.0, upper=250.0)
     real_time_factor: float = param(1.0, "simulated seconds per wall-clock second", lower=0.01, upper=100.0)
@@ -117,8 +120,12 @@ class ArmSimNode(ManagedNode):
         robot = RobotModel.from_profile(config.robot)
         scene = Scene.from_yaml(config.scene_file) if config.scene_file else None
         q0 = self._initial_state(robot)
-        gains = ServoGains(config.saturation_error, config.damping_ratio,
-                           gravity_compensation=config.gravity_compensation)  # fmt: skip
+        gains = ServoGains(
+            config.saturation_error,
+            config.damping_ratio,
+            gravity_compensation=config.gravity_compensation,
+            acceleration_feedforward=config.acceleration_feedforward,
+        )
         sim = ArmSim(build_arm_model(robot, scene, gains, q0=q0))
         sim.reset(q0)
         self.controller = ArmController(sim)

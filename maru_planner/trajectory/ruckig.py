@@ -1,9 +1,12 @@
 """``ruckig``: a jerk-limited motion through the blended curve, one Ruckig trajectory per piece.
 
 It passes through the blend boundaries with toppra's speed there and zero acceleration (straight pieces are
-phase-synchronised and therefore straight). Its curve over a blend is Ruckig's, not the parabola: it is re-checked
-and its deviation measured; a corner where it collides or deviates more than allowed is shrunk like a toppra blend,
-and the last resort is to stop at that corner (straight, rest-to-rest).
+phase-synchronised and therefore straight). Its curve over a blend is Ruckig's, not the parabola: it is re-checked,
+its deviation measured and its joints' extremes found; a corner where it collides, deviates more than allowed or
+leaves the range of a joint over the path's waypoints (a joint turning near its limit: Ruckig's time-synchronised
+curve can swing past the turn, and the community Ruckig has no position limits) is shrunk like a toppra blend, and
+the last resort is to stop at that corner (straight, rest-to-rest). So the motion stays within the joint limits
+the waypoints keep.
 """
 
 from __future__ import annotations
@@ -179,12 +182,14 @@ def _reachable_speed(length: float, direction: np.ndarray, limits: Limits) -> fl
 
 
 def _failing_corners(timed, waypoints, half, max_deviation, check: Check, limits: Limits, report) -> list[int]:
-    """Interior waypoints whose Ruckig motion leaves the path by more than allowed or collides there.
+    """Interior waypoints whose Ruckig motion leaves the path by more than allowed, leaves the joints' range over
+    ``waypoints`` or collides there.
 
     A piece that stays on the path (a straight one) needs no check; one that leaves it is checked whole.
     """
     t0 = time.monotonic()
     failing = set()
+    low, high = waypoints.min(axis=0) - 1e-9, waypoints.max(axis=0) + 1e-9
     for pieces, blend_of in timed:
         for trajectory, corner in zip(pieces.trajectories, blend_of, strict=True):
             q, chords = _dense(trajectory, pieces, check.step, limits)
@@ -192,10 +197,22 @@ def _failing_corners(timed, waypoints, half, max_deviation, check: Check, limits
             if off_path.max() <= 1e-9:
                 continue
             report.certify_checks += len(q)
-            if off_path.max() > max_deviation + 1e-9 or not check(q, chords):
+            lowest, highest = _extremes(trajectory)
+            outside = bool(np.any(lowest < low) or np.any(highest > high))
+            if outside or off_path.max() > max_deviation + 1e-9 or not check(q, chords):
                 failing.add(int(corner) if corner >= 0 else _nearest_corner(q[off_path > 1e-9], waypoints))
     report.certify_time += time.monotonic() - t0
     return sorted(k for k in failing if 0 < k < len(waypoints) - 1)
+
+
+def _extremes(trajectory) -> tuple[np.ndarray, np.ndarray]:
+    """Each joint's lowest and highest position over a piece (Ruckig's exact extrema, not samples)."""
+    if isinstance(trajectory, _LinePiece):
+        ends = np.array([[e.min, e.max] for e in trajectory.trajectory.position_extrema][0])
+        q = trajectory.start[None] + ends[:, None] * trajectory.direction[None]
+        return q.min(axis=0), q.max(axis=0)
+    extrema = trajectory.position_extrema
+    return np.array([e.min for e in extrema]), np.array([e.max for e in extrema])
 
 
 def _nearest_corner(points: np.ndarray, waypoints: np.ndarray) -> int:
