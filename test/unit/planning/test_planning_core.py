@@ -188,7 +188,7 @@ def params_that_finish() -> dict[str, dict]:
 @pytest.mark.parametrize("planner_id", planner_ids())
 def test_every_planner_solves_the_maze(planner_id):
     mp = planner_for(planner_params=params_that_finish())
-    res = mp.plan(request(planner_id=planner_id))
+    res = mp.plan(request(planner_id=planner_id, time_budget=20.0))  # success, not speed: room for a loaded machine
     assert res.status is PlanStatus.SUCCESS, res.message
     assert res.success
     assert res.joint_names == ["j0", "j1"]
