@@ -52,6 +52,7 @@ setup(
             "arm_sim_node = maru_planner.ros.arm_sim_node:main",
             "maru-barn = maru_planner.barn.cli:main",
             "maru-view = maru_planner.web.cli:main",
+            "base_view = maru_planner.ros.plan_view_bridge:main",
         ],
     },
 )

@@ -33,9 +33,13 @@ from typing import Any, TypeVar
 import rclpy
 from action_msgs.msg import GoalStatus
 from geometry_msgs.msg import Pose, PoseStamped
+from lifecycle_msgs.msg import Transition  # type: ignore[import-untyped]
+from lifecycle_msgs.srv import ChangeState, GetState  # type: ignore[import-untyped]
+from rcl_interfaces.srv import GetParameters, SetParameters
 from rclpy.action import ActionClient
 from rclpy.action.client import ClientGoalHandle
 from rclpy.executors import SingleThreadedExecutor
+from rclpy.parameter import Parameter, parameter_value_to_python
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.task import Future
 from sensor_msgs.msg import JointState
@@ -73,7 +77,8 @@ class PlanningClient:
     ``node``: an existing node that someone else spins (an executor thread); if None the
     client makes its own node and spins it in a daemon thread. ``namespace``: where the
     planning node's services live (``""`` = the root namespace). ``qos``: of every service client and
-    the action's services (its depth >= the calls answered at once by the node, module doc).
+    the action's services (its depth >= the calls answered at once by the node, module doc). ``server_name``:
+    the node's name, for its lifecycle and parameter services (:meth:`change_state`, :meth:`set_parameters`).
     """
 
     def __init__(
@@ -84,6 +89,7 @@ class PlanningClient:
         node_name: str = "planning_client",
         init: bool = False,
         qos: QoSProfile = REPLY_QOS,
+        server_name: str = "planning_node",
     ):
         if init and not rclpy.ok():
             network_from_environment()
@@ -104,6 +110,9 @@ class PlanningClient:
             ComputeCartesianPath, prefix + "compute_cartesian_path", qos_profile=qos
         )
         self.plan_action_client = plan_action_client(self.node, prefix + "plan_motion", qos)
+        self._server = prefix + server_name  # the node's own services: lifecycle, parameters
+        self._qos = qos
+        self._node_clients: dict[str, Any] = {}  # made on first use
         self._executor = None
         if self._owns_node:
             self._executor = SingleThreadedExecutor()
@@ -161,8 +170,9 @@ class PlanningClient:
     ) -> PlanGoal:
         """Send a ``plan_motion`` action goal (``request_fields`` as for :meth:`plan`) and wait until it is accepted.
 
-        ``feedback_callback`` gets every feedback message (stage, elapsed, nodes, best_cost) in the
-        client's executor thread. Returns the running :class:`PlanGoal` (``cancel()``, ``result()``).
+        ``feedback_callback`` gets every feedback message (stage, elapsed, nodes, best_cost, tracking_error) in
+        the client's executor thread; ``execute=True`` also executes the plan (stage ``executing``). Returns the
+        running :class:`PlanGoal` (``cancel()``, ``result()``).
         """
         return send_plan_goal(
             self.plan_action_client, plan_goal(goal_joints, **request_fields), feedback_callback, timeout
@@ -262,6 +272,46 @@ class PlanningClient:
             request.start_state = _joint_state(start)
         return self.call(self.cartesian_client, request, timeout)
 
+    # ------------------------------------------------------------ the node's lifecycle and parameters
+
+    def get_state(self, timeout: float = 30.0) -> str:
+        """The node's lifecycle state: "unconfigured", "inactive", "active", "finalized" (``ros2 lifecycle get``)."""
+        return self.call(self._node_client(GetState, "get_state"), GetState.Request(), timeout).current_state.label
+
+    def change_state(self, transition: str, timeout: float = 60.0) -> bool:
+        """Trigger ``transition`` ("configure", "activate", "deactivate", "cleanup", "shutdown"; ``ros2 lifecycle
+        set``); whether the node made it. ValueError for another name."""
+        ids = {"configure": Transition.TRANSITION_CONFIGURE, "activate": Transition.TRANSITION_ACTIVATE,
+               "deactivate": Transition.TRANSITION_DEACTIVATE, "cleanup": Transition.TRANSITION_CLEANUP,
+               "shutdown": Transition.TRANSITION_INACTIVE_SHUTDOWN}  # fmt: skip
+        if transition not in ids:
+            raise ValueError(f"unknown transition {transition!r} (have {', '.join(ids)})")
+        request = ChangeState.Request(transition=Transition(id=ids[transition]))
+        return bool(self.call(self._node_client(ChangeState, "change_state"), request, timeout).success)
+
+    def get_parameters(self, *names: str, timeout: float = 30.0) -> dict[str, Any]:
+        """{name: value} of the node's parameters (``ros2 param get``); KeyError naming those the node lacks."""
+        client = self._node_client(GetParameters, "get_parameters")
+        values = self.call(client, GetParameters.Request(names=list(names)), timeout).values
+        if len(values) != len(names):  # rclpy answers nothing when one name is unknown: find which
+            lacking = [n for n in names if not self.call(client, GetParameters.Request(names=[n]), timeout).values]
+            raise KeyError(f"{self._server} has no parameter {', '.join(map(repr, lacking))}")
+        return {name: parameter_value_to_python(value) for name, value in zip(names, values)}
+
+    def set_parameters(self, timeout: float = 30.0, **values: Any) -> dict[str, str]:
+        """Set the node's parameters (``ros2 param set``); {name: reason} of those it rejected (empty: all set)."""
+        request = SetParameters.Request(
+            parameters=[Parameter(n, value=v).to_parameter_msg() for n, v in values.items()]
+        )
+        response = self.call(self._node_client(SetParameters, "set_parameters"), request, timeout)
+        return {name: r.reason for name, r in zip(values, response.results) if not r.successful}
+
+    def _node_client(self, srv_type: Any, service: str) -> Any:
+        if service not in self._node_clients:
+            name = f"{self._server}/{service}"
+            self._node_clients[service] = self.node.create_client(srv_type, name, qos_profile=self._qos)
+        return self._node_clients[service]
+
     # ------------------------------------------------------------ lifetime
 
     def close(self) -> None:
@@ -337,12 +387,14 @@ def send_request(client, request) -> PendingCall:
     return PendingCall(client, request_id, future)
 
 
-def plan_goal(goal_joints: dict[str, float] | None = None, **request_fields) -> PlanMotionAction.Goal:
-    """A ``PlanMotion`` action goal from plain Python values (:func:`plan_request`'s keywords)."""
+def plan_goal(
+    goal_joints: dict[str, float] | None = None, *, execute: bool = False, **request_fields
+) -> PlanMotionAction.Goal:
+    """A ``PlanMotion`` action goal from plain Python values (:func:`plan_request`'s keywords); ``execute``: the
+    node sends the certified trajectory to its ``execution_action`` (docs/real_robot.md)."""
     request = plan_request(goal_joints, **request_fields)
-    return PlanMotionAction.Goal(
-        **{name: getattr(request, name) for name in PlanMotionAction.Goal.get_fields_and_field_types()}
-    )
+    fields = {name: getattr(request, name) for name in PlanMotion.Request.get_fields_and_field_types()}
+    return PlanMotionAction.Goal(execute=execute, **fields)
 
 
 def send_plan_goal(

@@ -46,6 +46,9 @@ from maru_planner.ros import planning_requests as requests
 from maru_planner.ros.lifecycle import ManagedNode, run_node
 from maru_planner.ros.markers import MarkerPublisher
 from maru_planner.ros.plan_actions import PlanActionServer
+from maru_planner.ros.plan_execution import TrajectoryExecution, mark_not_run
+from maru_planner.ros.plan_execution import feedback_msg as plan_feedback_msg
+from maru_planner.ros.plan_view_bridge import PlanViewBridge, open_view
 from maru_planner.ros.planning_parameters import (
     NODE_PARAMS,
     PLANNER_PREFIX,
@@ -90,6 +93,7 @@ class PlanningNode(ManagedNode):
         self._joint_states = JointStateStore()  # /joint_states; its count of ignored names outlives a cleanup
         self._description_files = DescriptionFiles(prefix=f"{NODE_NAME}_")  # URDF/SRDF given as XML text
         parameters.add_on_set_parameters_callback(self, self._specs, self.when_configured(self._apply_parameters))
+        self._view: PlanViewBridge | None = None  # the view option's browser view
         self.start()
 
     @property
@@ -115,6 +119,7 @@ class PlanningNode(ManagedNode):
         self._robot = self.runtime.robot  # read-only use in the executor threads (names, markers)
         try:
             self._make_interfaces()
+            self._view = open_view(self, self.runtime, self.settings)
         except BaseException:
             self.runtime.shutdown()
             raise
@@ -130,6 +135,10 @@ class PlanningNode(ManagedNode):
             self._description_pub.publish(String(data=Path(self._robot_source.urdf).read_text()))
 
     def cleanup(self) -> None:
+        if self._view is not None:
+            self._view.close()
+            self._view = None
+        self._execution.destroy()  # an action client: not among the entities the lifecycle destroys
         self.runtime.shutdown()  # and forgets the joint values
         self._description_files.cleanup()
 
@@ -172,16 +181,18 @@ class PlanningNode(ManagedNode):
             self, PlanMotionAction, "plan_motion",
             plan=lambda goal, monitor: self._answer_plan(goal, PlanMotionAction.Result(), "plan_motion action",
                                                          monitor),
-            succeeded=lambda result: result.error.code == PlanningError.SUCCESS,
-            feedback=requests.feedback_msg, period=lambda: self.settings.feedback_period,
+            succeeded=_plan_goal_succeeded, feedback=plan_feedback_msg, period=lambda: self.settings.feedback_period,
             callback_group=services, requests_qos=requests_qos,
         )  # fmt: skip
+        self._execution = TrajectoryExecution(self, self.settings, services)  # for goals with execute
 
     def _apply_parameters(self, changes: dict[str, Any]) -> None:
         """Apply accepted parameter changes (read-only ones never get here: rclpy rejects them); what the
         runtime raises while rebuilding its planning contexts rejects the change, nothing applied."""
         settings = dataclasses.replace(self.settings, **{k: v for k, v in changes.items() if k in NODE_PARAMS})
         config = checked_config(lambda: planner_config(changes, self.config))
+        if "execution_action" in changes:
+            self._execution.retarget(settings)  # the next execute goal's server (a bad name: rejected)
         rebuilt = self.runtime.reconfigure(config, runtime_settings(settings))
         self.settings, self.config = settings, config
         self._marker_timer.timer_period_ns = int(settings.marker_period * 1e9)
@@ -256,11 +267,14 @@ class PlanningNode(ManagedNode):
             result = await self._awaitable(self.runtime.plan(motion_request, monitor))
         except Exception as exc:  # noqa: BLE001 - every failure becomes an error code
             return self._failed(name, answer, exc)
+        if self._view is not None:
+            self._view.show_result(result, motion_request.start)
         answer.error = conv.result_error_msg(result)
         answer.planning_time = float(getattr(result.stats, "total_time", 0.0) or 0.0)
         answer.stats = conv.stats_msg(result.stats)
         if not result.success:
             self._log_failure(name, answer.error)
+            mark_not_run(answer, "the plan failed")
             return answer
         stamp = self.get_clock().now().to_msg()
         answer.trajectory = conv.trajectory_msg(result.trajectory, self.settings.planning_frame, stamp)
@@ -272,6 +286,13 @@ class PlanningNode(ManagedNode):
             f"{len(answer.trajectory.points)} points, "
             f"core {answer.planning_time:.3f} s, in node {time.perf_counter() - started:.3f} s"
         )
+        if not getattr(request, "execute", False):
+            mark_not_run(answer, "execute not requested")
+        elif not answer.stats.certified:  # executed only when proven collision-free
+            mark_not_run(answer, "not executed: the plan is not certified (parameter certify is false)",
+                         PlanMotionAction.Result.EXECUTION_NOT_CERTIFIED)  # fmt: skip
+        else:
+            await self._execution.execute(answer.trajectory, answer, monitor, self.settings)
         return answer
 
     async def _on_compute_ik(self, request: srv.ComputeIK.Request, response: srv.ComputeIK.Response):
@@ -348,11 +369,18 @@ class PlanningNode(ManagedNode):
     def _failed(self, service: str, response: Any, exc: BaseException, source: str = "node") -> Any:
         """``response`` (or action result) with ``exc`` as its error, logged."""
         response.error = conv.error_msg(exc, source=source)
+        mark_not_run(response, "the plan failed")
         self._log_failure(service, response.error)
         return response
 
     def _log_failure(self, service: str, error: PlanningError) -> None:
         self.get_logger().warning(f"{service}: {conv.code_name(error.code)}: {error.message}")
+
+
+def _plan_goal_succeeded(result: PlanMotionAction.Result) -> bool:
+    """A plan goal succeeded: planned, and executed when asked to (not run: not asked)."""
+    executed = result.execution_error_code in (0, PlanMotionAction.Result.EXECUTION_NOT_RUN)
+    return result.error.code == PlanningError.SUCCESS and executed
 
 
 class BackgroundPlanningNode:

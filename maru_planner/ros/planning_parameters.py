@@ -21,6 +21,8 @@ from maru_planner.ros import parameters
 from maru_planner.runtime import RuntimeSettings
 
 PLANNER_PREFIX = "planners"
+EXECUTE_TRAJECTORY = "maru_planner_interfaces/action/ExecuteTrajectory"
+FOLLOW_JOINT_TRAJECTORY = "control_msgs/action/FollowJointTrajectory"
 
 
 @dataclass
@@ -107,6 +109,38 @@ class NodeSettings:
     feedback_period: float = param(
         0.1, "seconds between plan_motion action feedback messages (at most 0.2: at least 5 Hz)", lower=0.01, upper=0.2
     )
+    execution_action: str = param(
+        "execute_trajectory",
+        "FollowJointTrajectory-compatible action a plan_motion goal with execute sends its trajectory to "
+        "(arm_sim_node's, or e.g. /joint_trajectory_controller/follow_joint_trajectory on a robot)",
+    )
+    execution_action_type: str = param(
+        EXECUTE_TRAJECTORY,
+        "the type of execution_action: ours (arm_sim_node) or control_msgs' (ros2_control; needs control_msgs)",
+        choices=(EXECUTE_TRAJECTORY, FOLLOW_JOINT_TRAJECTORY),
+        read_only=True,
+    )
+    execution_server_timeout: float = param(
+        2.0, "s an execute goal waits for the execution action server before failing", lower=0.0, upper=60.0
+    )
+    execution_duration_scaling: float = param(
+        1.2,
+        "an execution without a result after duration x this + execution_duration_margin is cancelled "
+        "(MoveIt's allowed_execution_duration_scaling)",
+        lower=1.0,
+        upper=100.0,
+    )
+    execution_duration_margin: float = param(
+        0.5, "s added to the scaled duration (MoveIt's allowed_goal_duration_margin)", lower=0.0, upper=600.0
+    )
+    view: bool = param(
+        False, "serve the live scene, start state and plans to a browser (maru_planner/ros/plan_view_bridge.py)",
+        read_only=True,
+    )  # fmt: skip
+    view_host: str = param("127.0.0.1", "address the view is served on (another than this machine's only by choice)",
+                           read_only=True)  # fmt: skip
+    view_port: int = param(8080, "the view's port (the next free one if taken; 0: any)", lower=0, upper=65535,
+                           read_only=True)  # fmt: skip
 
 
 NODE_PARAMS: dict[str, ParamSpec] = dataclass_params(NodeSettings)

@@ -21,6 +21,7 @@ from maru_planner.bag.rosbag_io import BagError, read_messages
 from maru_planner.bag.tf import planar_pose_of
 from maru_planner.base.grid import OccupancyGrid
 from maru_planner.reactive.scan import LaserScanData, scan_to_points, to_world
+from maru_planner.web.base_live import add_barn_world
 
 BASE_RADIUS = 0.25  # m: the disc drawn for the base
 TOPICS = ("/odom", "/scan", "/plan", "/goal_pose", "/tf")
@@ -101,7 +102,9 @@ def _segments(points: np.ndarray, z: float) -> np.ndarray:
 class BaseView:
     """A base run in a viser server (module doc)."""
 
-    def __init__(self, server: viser.ViserServer, run: BaseRun, grid: OccupancyGrid | None = None):
+    def __init__(
+        self, server: viser.ViserServer, run: BaseRun, grid: OccupancyGrid | None = None, barn: np.ndarray | None = None
+    ):
         self.server, self.run = server, run
         server.scene.configure_environment_map(None)
         server.scene.configure_default_lights(enabled=True, cast_shadow=False)
@@ -109,7 +112,7 @@ class BaseView:
         server.initial_camera.position = (x0 - 1.0, y0 - 4.0, 4.0)
         server.initial_camera.look_at = (x0 + 2.0, y0, 0.0)
         server.scene.add_grid("/ground", 20.0, 20.0, cell_size=1.0, position=(x0, y0, 0.0), shadow_opacity=0.0)
-        self.map_cells = 0
+        self.map_cells = add_barn_world(server, barn) if barn is not None else 0
         if grid is not None:
             cells = grid.cells_to_world(np.argwhere(grid.occupied))
             self.map_cells = len(cells)

@@ -1,8 +1,9 @@
 """``maru-view``: the interactive planning view in a browser (no ROS needed).
 
 ``maru-view --robot panda --scene my_scene.yaml`` prints the URL to open; Ctrl-C stops it. ``maru-view --bag DIR
-[--map YAML]`` replays a base run instead (path, trace, base, laser points). Bound to 127.0.0.1 unless ``--host``
-names another address. A bad robot, scene, bag, map or port: one line on stderr, exit 2.
+[--map YAML | --barn N]`` replays a base run instead (path, trace, base, laser points); ``--barn N`` alone draws
+BARN world N. Bound to 127.0.0.1 unless ``--host`` names another address. A bad robot, scene, bag, map, world or
+port: one line on stderr, exit 2.
 """
 
 from __future__ import annotations
@@ -14,8 +15,10 @@ from collections.abc import Sequence
 
 from maru_planner import errors
 from maru_planner.base.grid import OccupancyGrid
+from maru_planner.physics import barn_world
 from maru_planner.planning.config import COLLISION_MODELS, PlannerConfig
 from maru_planner.robot.robot_profile import PROFILES
+from maru_planner.web.base_live import LiveBaseView
 from maru_planner.web.base_view import BaseView, read_base_run
 from maru_planner.web.server import ViewApp, ViewSettings
 from maru_planner.web.serving import DEFAULT_HOST, serve
@@ -46,6 +49,7 @@ def parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--bag", help="replay the base run of this rosbag2 directory (/odom, /scan, /plan, /goal_pose)")
     p.add_argument("--map", help="with --bag: the occupancy grid's map YAML to draw under the run")
+    p.add_argument("--barn", type=int, metavar="N", help="draw BARN world N's cylinders (alone, or under --bag's run)")
     return p
 
 
@@ -57,26 +61,31 @@ def settings_of(args: argparse.Namespace) -> ViewSettings:
     return ViewSettings(args.robot, scene, args.host, args.port, args.collision_model)
 
 
-def base_view(args: argparse.Namespace) -> BaseView:
-    """The replay of ``--bag`` (over ``--map``) on its own server."""
+def base_view(args: argparse.Namespace) -> BaseView | LiveBaseView:
+    """The replay of ``--bag`` (over ``--map`` or ``--barn``), or BARN world ``--barn`` alone, on its own server."""
     settings = settings_of(args)
-    run = read_base_run(args.bag)
+    run = read_base_run(args.bag) if args.bag else None
     try:
         grid = OccupancyGrid.from_yaml(args.map) if args.map else None
     except (OSError, ValueError) as exc:
         raise errors.InvalidRequest(f"--map {args.map}: {errors.one_line(exc, 160)}") from None
-    return BaseView(serve(settings.host, settings.port), run, grid)
+    world = getattr(args, "barn", None)  # (a Namespace made by hand may lack it)
+    barn = barn_world.world_grid(world) if world is not None else None
+    server = serve(settings.host, settings.port)
+    return BaseView(server, run, grid, barn) if run is not None else LiveBaseView(server, grid, barn)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = parser().parse_args(argv)
     try:
-        view: ViewApp | BaseView = base_view(args) if args.bag else ViewApp(settings_of(args))
+        base = args.bag or args.barn is not None
+        view: ViewApp | BaseView | LiveBaseView = base_view(args) if base else ViewApp(settings_of(args))
     except errors.MaruError as exc:
         print(f"maru-view: {exc.message}", file=sys.stderr)
         return EXIT_BAD_INPUT
     server = view.server
-    what = view.robot.name if isinstance(view, ViewApp) else f"the base run of {args.bag}"
+    what = view.robot.name if isinstance(view, ViewApp) else f"the base run of {args.bag}" if args.bag else None
+    what = what or f"BARN world {args.barn}"
     print(f"maru-view: {what} at http://{server.get_host()}:{server.get_port()}", flush=True)
     try:
         while True:

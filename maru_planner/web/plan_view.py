@@ -71,6 +71,7 @@ class PlanView:
         self.scene_view = SceneView(server, self.robot_view.link_node)
         self._lock = threading.Lock()
         self._playback = 0  # bumped to stop the playing thread
+        self._playing = -1  # the ticket of the thread that is playing (-1: none)
         self.trajectory: Trajectory | None = None
         self.start = robot.neutral()
         self._columns = np.zeros(0, dtype=int)
@@ -138,8 +139,13 @@ class PlanView:
         """Play the current trajectory from its start in a thread (a new call or a scrub stops it)."""
         with self._lock:
             self._playback += 1
-            ticket = self._playback
+            ticket = self._playing = self._playback
         threading.Thread(target=self._play, args=(ticket,), daemon=True, name="maru-view-play").start()
+
+    @property
+    def playing(self) -> bool:
+        """Whether a trajectory is being played now."""
+        return self._playing == self._playback
 
     def state_at(self, t: float) -> np.ndarray:
         """The configuration the trajectory puts the robot in at ``t`` (the start when there is none)."""
@@ -168,16 +174,17 @@ class PlanView:
         return np.asarray(values, dtype=float).copy()
 
     def _play(self, ticket: int) -> None:
-        trajectory = self.trajectory
-        if trajectory is None:
-            return
-        t0 = time.monotonic()
-        while ticket == self._playback:
-            t = min(time.monotonic() - t0, trajectory.duration)
-            self._show_time(t)
-            if t >= trajectory.duration:
-                return
-            time.sleep(FRAME_PERIOD)
+        trajectory, t0 = self.trajectory, time.monotonic()
+        try:
+            while trajectory is not None and ticket == self._playback:
+                t = min(time.monotonic() - t0, trajectory.duration)
+                self._show_time(t)
+                if t >= trajectory.duration:
+                    return
+                time.sleep(FRAME_PERIOD)
+        finally:
+            if self._playing == ticket:
+                self._playing = -1
 
     def _show_time(self, t: float) -> None:
         q = self.state_at(t)

@@ -78,13 +78,11 @@ class PlanningPanel:
             self.budget = gui.add_number("time budget (s)", 2.0, min=0.1, max=60.0, step=0.1)
             self.plan_button = gui.add_button("Plan", disabled=True, hint="IK to the goals, plan, play the trajectory")
             self.message = gui.add_markdown("loading the planner ...")
+        # one planner's parameter folder at a time, made when it is first chosen: fewer controls for a new page
+        self._gui = gui
         self.params: dict[str, dict[str, Control]] = {}
         self._folders: dict[str, viser.GuiFolderHandle] = {}
-        for planner_id, spec in PLANNERS.items():
-            with gui.add_folder(f"{planner_id} parameters", visible=False, expand_by_default=False) as folder:
-                self._folders[planner_id] = folder
-                self.params[planner_id] = {name: param_control(gui, p) for name, p in spec.params.items()}
-        self._folders[self.planner.value].visible = True
+        self._show_params()
         self.planner.on_update(lambda _: self._show_params())
         self.plan_button.on_click(lambda _: on_plan())
         self.goals = {
@@ -93,13 +91,20 @@ class PlanningPanel:
         }
 
     def _show_params(self) -> None:
+        chosen = self.planner.value
+        if chosen not in self._folders:
+            order = next(iter(self._folders.values())).order if self._folders else None  # where the first one is
+            with self._gui.add_folder(f"{chosen} parameters", order=order, expand_by_default=False) as folder:
+                self._folders[chosen] = folder
+                self.params[chosen] = {name: param_control(self._gui, p) for name, p in get_spec(chosen).params.items()}
         for planner_id, folder in self._folders.items():
-            folder.visible = planner_id == self.planner.value
+            folder.visible = planner_id == chosen
 
     def planner_params(self) -> dict[str, Any]:
         """The chosen planner's parameters that differ from the registry defaults."""
         planner_id = self.planner.value
         specs = get_spec(planner_id).params
+        self._show_params()  # its controls exist (a chosen planner's are made by the dropdown's callback)
         values = {name: control_value(specs[name], c) for name, c in self.params[planner_id].items()}
         return {name: v for name, v in values.items() if v != specs[name].default}
 

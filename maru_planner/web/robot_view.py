@@ -7,6 +7,9 @@ its parent frame by name, so the parts follow the planning model (whose locked j
 
 from __future__ import annotations
 
+import hashlib
+import json
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -16,6 +19,7 @@ import pinocchio as pin
 import trimesh
 import viser
 
+from maru_planner.collision.sphere_model import cache_dir as sphere_cache_dir
 from maru_planner.robot import RobotModel
 from maru_planner.robot.robot_profile import profile
 from maru_planner.runtime import RobotSource
@@ -24,6 +28,7 @@ ROOT = "/robot"
 MESH_CELL = 0.006  # m: a detailed mesh's vertices closer than this merge (Panda: 135k triangles -> 37k)
 SIMPLIFY_ABOVE = 2000  # triangles: smaller meshes (primitives, coarse parts) are drawn as they are
 DEFAULT_COLOR = (200, 200, 210)
+PARTS_CACHE_VERSION = 1  # bump when what a kept part holds changes
 
 
 @dataclass(frozen=True)
@@ -85,17 +90,31 @@ def _color(rgba: np.ndarray) -> tuple[int, int, int]:
 
 
 def visual_parts(source: RobotSource) -> list[VisualPart]:
-    """The visual meshes of ``source``'s URDF (its collision geometry when it has no visuals)."""
+    """The visual meshes of ``source``'s URDF (its collision geometry when it has no visuals), simplified; kept
+    on disk (:func:`parts_cache_path`): reading and simplifying Panda's meshes takes ~2.5 s, the kept copy ~10 ms."""
     urdf, package_dirs = source_files(source)
+    path = parts_cache_path(urdf, package_dirs)
+    cached = _load_parts(path)
+    if cached is not None:
+        return cached
+    parts, mesh_files = read_parts(urdf, package_dirs)
+    _save_parts(path, parts, mesh_files)
+    return parts
+
+
+def read_parts(urdf: Path, package_dirs: list[str]) -> tuple[list[VisualPart], list[str]]:
+    """The parts read from the URDF's meshes, and the mesh files they came from."""
     model = pin.buildModelFromUrdf(str(urdf))
     geometry = pin.buildGeomFromUrdf(model, str(urdf), pin.VISUAL, package_dirs=package_dirs)
     if not geometry.geometryObjects:
         geometry = pin.buildGeomFromUrdf(model, str(urdf), pin.COLLISION, package_dirs=package_dirs)
-    parts = []
+    parts, mesh_files = [], []
     for item in geometry.geometryObjects:
         triangles = _triangles(item.geometry)
         if triangles is None:
             continue
+        if item.meshPath and os.path.isfile(item.meshPath):
+            mesh_files.append(str(item.meshPath))
         frame = model.frames[item.parentFrame]
         local = (frame.placement.inverse() * item.placement).homogeneous
         vertices, faces = triangles  # coal applied the URDF's mesh scale
@@ -104,7 +123,64 @@ def visual_parts(source: RobotSource) -> list[VisualPart]:
         if np.linalg.det(np.diag(np.asarray(item.meshScale, dtype=float))) < 0:
             faces = faces[:, ::-1].copy()  # a mirrored mesh: keep its faces outward
         parts.append(VisualPart(frame.name, local, vertices, faces, _color(item.meshColor)))
-    return parts
+    return parts, mesh_files
+
+
+def parts_cache_path(urdf: Path, package_dirs: list[str]) -> Path:
+    """Where the simplified parts of ``urdf`` are kept (keyed by its text, package directories and simplification)."""
+    key = hashlib.sha1(f"{PARTS_CACHE_VERSION}|{MESH_CELL}|{SIMPLIFY_ABOVE}|{package_dirs}|".encode())
+    key.update(Path(urdf).read_bytes())
+    return sphere_cache_dir().parent / "view_meshes" / f"{key.hexdigest()}.npz"
+
+
+def _mesh_stamps(files: list[str]) -> str:
+    return json.dumps([[f, os.stat(f).st_mtime_ns, os.stat(f).st_size] for f in files])
+
+
+def _save_parts(path: Path, parts: list[VisualPart], mesh_files: list[str]) -> None:
+    """Keep ``parts`` at ``path`` (quietly nothing when the cache cannot be written)."""
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_suffix(f".{os.getpid()}.tmp.npz")
+        np.savez(
+            tmp,
+            frames=np.array([p.frame for p in parts], dtype=str),
+            locals=np.array([p.local for p in parts]).reshape(-1, 4, 4),
+            colors=np.array([p.color for p in parts], dtype=np.int32).reshape(-1, 3),
+            vertex_counts=np.array([len(p.vertices) for p in parts], dtype=np.int64),
+            face_counts=np.array([len(p.faces) for p in parts], dtype=np.int64),
+            vertices=np.concatenate([p.vertices for p in parts]) if parts else np.zeros((0, 3), np.float32),
+            faces=np.concatenate([p.faces for p in parts]) if parts else np.zeros((0, 3), np.int32),
+            stamps=np.array(_mesh_stamps(mesh_files)),
+        )
+        os.replace(tmp, path)
+    except OSError:
+        pass
+
+
+def _load_parts(path: Path) -> list[VisualPart] | None:
+    """The parts kept at ``path``; None when there are none or a mesh file changed since."""
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            if _mesh_stamps(_stamped_files(str(data["stamps"]))) != str(data["stamps"]):
+                return None
+            vertex_ends, face_ends = np.cumsum(data["vertex_counts"]), np.cumsum(data["face_counts"])
+            vertices, faces = data["vertices"], data["faces"]
+            return [
+                VisualPart(str(frame), local, vertices[v_end - nv : v_end], faces[f_end - nf : f_end],
+                           (int(color[0]), int(color[1]), int(color[2])))
+                for frame, local, color, v_end, nv, f_end, nf in zip(
+                    data["frames"], data["locals"], data["colors"], vertex_ends, data["vertex_counts"], face_ends,
+                    data["face_counts"], strict=True,
+                )
+            ]  # fmt: skip
+    except (OSError, ValueError, KeyError):
+        return None
+
+
+def _stamped_files(stamps: str) -> list[str]:
+    """The mesh files named in a cache's stamps."""
+    return [entry[0] for entry in json.loads(stamps)]
 
 
 def wxyz_position(pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -48,12 +48,22 @@ def test_planning_error_constants_follow_moveit():
 
 @pytest.mark.parametrize("name", ["PlanMotion", "PlanBasePath"])
 def test_action_goal_and_result_mirror_the_service(name):
-    """The actions are the services plus feedback: a field added to one must be added to the other."""
+    """The actions are the services plus feedback (and PlanMotion's execution, an action-only option): a field
+    added to one must be added to the other."""
     import importlib
 
     srv = getattr(importlib.import_module("maru_planner_interfaces.srv"), name)
     action = getattr(importlib.import_module("maru_planner_interfaces.action"), name)
-    assert action.Goal.get_fields_and_field_types() == srv.Request.get_fields_and_field_types()
-    assert action.Result.get_fields_and_field_types() == srv.Response.get_fields_and_field_types()
+    extra_goal = {"PlanMotion": {"execute": "boolean"}}.get(name, {})
+    extra_result = {
+        "PlanMotion": {
+            "execution_error_code": "int32",
+            "execution_error_string": "string",
+            "execution_tracking_error": "double",
+            "execution_time": "double",
+        }
+    }.get(name, {})
+    assert action.Goal.get_fields_and_field_types() == {**srv.Request.get_fields_and_field_types(), **extra_goal}
+    assert action.Result.get_fields_and_field_types() == {**srv.Response.get_fields_and_field_types(), **extra_result}
     feedback = action.Feedback.get_fields_and_field_types()
     assert feedback["stage"] == "string" and feedback["elapsed"] == "double"
