@@ -19,7 +19,8 @@ from conftest import PAPER_GOAL, PAPER_START, BaseNodeClient, connected_planning
 
 from maru_planner.ros.reactive_conversions import pose_stamped_msg
 
-pytestmark = pytest.mark.ros
+# serial: its bursts, storms and admission timings load the machine on purpose (make test runs it alone)
+pytestmark = [pytest.mark.ros, pytest.mark.serial]
 
 # Plain RRT (no goal bias) does not solve the 13-DOF paper problem: it searches for its whole budget.
 HARD = dict(start=PAPER_START, planner_id="RRT", time_budget=10.0)

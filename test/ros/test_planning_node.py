@@ -21,7 +21,8 @@ import numpy as np
 import pytest
 from conftest import GROUP_JOINTS, PAPER_GOAL, PAPER_START, connected_planning_client
 
-pytestmark = pytest.mark.ros
+# serial: its bursts, storms and admission timings load the machine on purpose (make test runs it alone)
+pytestmark = [pytest.mark.ros, pytest.mark.serial]
 
 NODE = "/planning_node"
 # Fixed seeds keep the test quick and repeatable (the core is deterministic per seed); the
