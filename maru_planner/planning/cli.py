@@ -24,11 +24,12 @@ import os
 import sys
 import time
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import Any
 
 import numpy as np
 
 from maru_planner import errors
+from maru_planner.cli_parser import CliError, OneLineParser
 from maru_planner.collision import sphere_model
 from maru_planner.planning.cartesian import CartesianRequest, CartesianResult, default_link
 from maru_planner.planning.config import COLLISION_MODELS, TIME_PARAMETERIZATIONS, PlannerConfig
@@ -53,18 +54,6 @@ EXIT_CODES = f"""exit codes:
        or an output path that cannot be written (one line on stderr; the JSON too once planning started)
   {EXIT_INTERNAL}    internal error (a bug: one line on stderr)
   {EXIT_INTERRUPTED}  interrupted (Ctrl-C)"""
-
-
-class CliError(errors.InvalidRequest):
-    """A bad command-line value or output path."""
-
-    source = "cli"
-
-
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> NoReturn:
-        """One line on stderr (argparse's usage block is in --help)."""
-        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {errors.one_line(message)} (see --help)\n")
 
 
 def _positive(text: str) -> float:
@@ -117,7 +106,7 @@ def problems_help() -> str:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = _Parser(
+    p = OneLineParser(
         prog=PROG,
         description="Plan an arm motion with OMPL and write the path, trajectory and stats as JSON.",
         epilog="\n\n".join([planners_help(), problems_help(), EXIT_CODES]),

@@ -11,9 +11,9 @@ import json
 import os
 import sys
 from pathlib import Path
-from typing import NoReturn
 
-from maru_planner.errors import InvalidRequest, MaruError, one_line
+from maru_planner.cli_parser import CliError, OneLineParser
+from maru_planner.errors import MaruError, one_line
 from maru_planner.sim.runner import run_world
 from maru_planner.sim.world import MAX_SIM_TIME, World
 
@@ -25,20 +25,8 @@ EXIT_CODES = f"""exit codes:
   {EXIT_INTERRUPTED}  interrupted (Ctrl-C)"""
 
 
-class CliError(InvalidRequest):
-    """A bad command-line value or output path."""
-
-    source = "cli"
-
-
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> NoReturn:
-        """One line on stderr (argparse's usage block is in --help)."""
-        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {one_line(message)} (see --help)\n")
-
-
 def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(
+    parser = OneLineParser(
         prog=PROG,
         description=__doc__.splitlines()[0],
         epilog=EXIT_CODES,

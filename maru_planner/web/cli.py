@@ -15,6 +15,7 @@ from collections.abc import Sequence
 
 from maru_planner import errors
 from maru_planner.base.grid import OccupancyGrid
+from maru_planner.cli_parser import OneLineParser
 from maru_planner.physics import barn_world
 from maru_planner.planning.config import COLLISION_MODELS, PlannerConfig
 from maru_planner.robot.robot_profile import PROFILES
@@ -26,13 +27,10 @@ from maru_planner.web.serving import DEFAULT_HOST, serve
 EXIT_OK, EXIT_BAD_INPUT = 0, 2
 
 
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> None:  # type: ignore[override]
-        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {errors.one_line(message)} (see --help)\n")
-
-
 def parser() -> argparse.ArgumentParser:
-    p = _Parser(prog="maru-view", description="The interactive planning view (or a base run's replay) in a browser.")
+    p = OneLineParser(
+        prog="maru-view", description="The interactive planning view (or a base run's replay) in a browser."
+    )
     p.add_argument("--robot", default="maru1", help=f"robot profile: {', '.join(sorted(PROFILES))} (default maru1)")
     p.add_argument(
         "--scene", default="", help="scene YAML (default: the package's desk scene for maru1, none for other robots)"
