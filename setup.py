@@ -50,6 +50,7 @@ setup(
             "maru-base-plan = maru_planner.base.cli:main",
             "maru-demo = maru_planner.ros.demo:main",
             "arm_sim_node = maru_planner.ros.arm_sim_node:main",
+            "mujoco_sim_node = maru_planner.ros.mujoco_sim_node:main",
             "maru-barn = maru_planner.barn.cli:main",
             "maru-view = maru_planner.web.cli:main",
             "base_view = maru_planner.ros.plan_view_bridge:main",

@@ -1,6 +1,6 @@
 """The BARN Challenge in MuJoCo: our base stack on the 300 public worlds, scored like the challenge (issue 38).
 
-    .venv/bin/python bench/barn_mujoco.py [--quick] [--trials 3] [--workers 2] [--world-step 1] [--no-kinematic]
+    .venv/bin/python bench/barn_mujoco.py [--quick] [--trials 3] [--processes 2] [--world-step 1] [--no-kinematic]
 
 In-process runs (the stack's core code, no DDS): no prior map, the challenge's start, goal, clock and metric
 (clip 2-8). Beside them: the published DWA and DRL-VO figures and our 2-D kinematic simulator (paper 001's
@@ -11,6 +11,7 @@ Writes bench/results/barn_mujoco.{json,md,png}; --quick: 6 worlds x 2 trials und
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import sys
 import time
@@ -18,7 +19,7 @@ from multiprocessing import get_context
 from pathlib import Path
 
 import numpy as np
-from _common import Progress, data_dir, log, require_data, write_results
+from _common import Progress, data_dir, log, require_data, result_path, write_results
 
 from maru_planner.barn.scoring import RunScore, barn_metric, summarise
 from maru_planner.barn.stack import run_barn
@@ -86,6 +87,11 @@ def physics_realtime_factor(seconds: float = 20.0) -> float:
 def _pool_map(func, tasks: list, workers: int, label) -> list:
     progress = Progress(len(tasks))
     out = []
+    if workers == 1:  # one process: no pool, the runs in this process
+        for task in tasks:
+            out.append(func(task))
+            progress.step(label(out[-1]))
+        return out
     with get_context("spawn").Pool(workers) as pool:
         for item in pool.imap_unordered(func, tasks):
             out.append(item)
@@ -145,6 +151,16 @@ def markdown(meta: dict, summary: dict, kin: dict | None, hits: list[dict], fail
             f"{kin['collision_rate']:.3f} | {kin['timeout_rate']:.3f} | {kin['mean_metric']:.4f} | "
             "generator's path given (prior map), 0.5 m/s |"
         )
+    ros = summary.get("through_ros")
+    if ros:
+        lines.append(
+            f"| ours, MuJoCo through ROS (4 processes, lock-step) | {ros['worlds']} x 1 "
+            f"(of {ros.get('planned_worlds', ros['worlds'])}) | {ros['success_rate']:.3f} | "
+            f"{ros['collision_rate']:.3f} | {ros['timeout_rate']:.3f} | {ros['mean_metric']:.4f} | "
+            f"the challenge's test worlds (0, 6, ...); {ros['realtime_factor']}x real time "
+            f"(wall, load {ros['load_average']}); "
+            f"{ros['errors']} runs not carried out |"
+        )
     for name, values in PUBLISHED.items():
         cells = [
             f"{values[k]:.3f}" if values[k] is not None else "-"
@@ -159,7 +175,11 @@ def markdown(meta: dict, summary: dict, kin: dict | None, hits: list[dict], fail
     ]
     if not failures:
         lines.append("- none")
-    lines += ["", "Not run here: the through-ROS half (`summary.through_ros`, mujoco_sim_node) -- not built yet."]
+    if not ros:
+        lines += [
+            "",
+            "Not run here: the through-ROS half (`summary.through_ros`): `bench/barn_mujoco.py --through-ros`.",
+        ]
     return "\n".join(lines) + "\n"
 
 
@@ -199,13 +219,17 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help=f"worlds {QUICK_WORLDS} x 2 trials")
     parser.add_argument("--trials", type=int, default=3)
-    parser.add_argument("--workers", type=int, default=2, choices=(1, 2))
+    parser.add_argument("--processes", "--workers", dest="workers", type=int, default=2, choices=(1, 2))
     parser.add_argument("--world-step", type=int, default=1)
     parser.add_argument("--no-kinematic", action="store_true", help="skip the 2-D kinematic simulator peer")
+    parser.add_argument("--through-ros", action="store_true", help="only the 50 test worlds x 1 through ROS, merged")
+    parser.add_argument("--combine", action="store_true", help="only merge <out>_through_ros.json into <out>.json")
     parser.add_argument("--out", default=str(REPO / "bench" / "results" / "barn_mujoco"))
     args = parser.parse_args(argv)
     require_data(data_dir("barn", "grid_files"))
     sys.path.insert(0, str(Path(__file__).resolve().parent))
+    if args.through_ros or args.combine:
+        return through_ros_main(args)
     worlds = QUICK_WORLDS if args.quick else list(range(0, WORLD_COUNT, args.world_step))
     trials = 2 if args.quick else args.trials
     t0 = time.time()
@@ -246,6 +270,34 @@ def main(argv: list[str] | None = None) -> int:
         lambda path: plot(path, summary, kin, pictures),
         quick=args.quick,
     )
+    return 0
+
+
+def through_ros_main(args: argparse.Namespace) -> int:
+    """--through-ros: run the test worlds through ROS into <out>_through_ros.json; then (and --combine) merge it
+    into <out>.json and rewrite <out>.md (the figure stays the in-process run's)."""
+    import barn_through_ros  # lazy: a bench module beside this one, only for the through-ROS half
+
+    out = result_path(Path(args.out), args.quick)
+    ros_path = out.parent / f"{out.name}_through_ros.json"
+    if args.through_ros:
+        worlds = barn_through_ros.QUICK_TEST_WORLDS if args.quick else barn_through_ros.TEST_WORLDS
+        ros_path.parent.mkdir(parents=True, exist_ok=True)
+        ros = barn_through_ros.through_ros(worlds, ros_path)
+        ros_path.write_text(json.dumps(ros, indent=1))
+        log(f"wrote {ros_path}: {ros['summary']}")
+    main_json = out.with_suffix(".json")
+    if not main_json.is_file() or not ros_path.is_file():
+        log(f"nothing merged: {main_json} or {ros_path} is missing")
+        return 0
+    results = barn_through_ros.merge(json.loads(main_json.read_text()), json.loads(ros_path.read_text()))
+    main_json.write_text(json.dumps(results, indent=1))
+    summary, runs = results["summary"], [RunScore(**r) for r in results["runs"]]
+    failures = [r.to_json() for r in runs if not r.success]
+    text = markdown(results["meta"], summary, summary.get("kinematic_2d"), results["targets"], failures)
+    out.with_suffix(".md").write_text(text)
+    print(text)
+    log(f"merged summary.through_ros into {main_json} and {out.with_suffix('.md')}")
     return 0
 
 

@@ -2,15 +2,20 @@
 
 maru-barn --world 0 --trials 3 --seed 0 --json out.json --png out.png
 maru-barn --grid my_grid.npy            (any 30 x 30 uint8 grid, 1 = cylinder)
+maru-barn --world 0 --through-ros       (every node its own process, lock-step over ROS topics)
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import subprocess
 import sys
+import tempfile
 from pathlib import Path
 from typing import NoReturn
+
+import numpy as np
 
 from maru_planner.barn.scoring import RunScore, grid_optimal_time, summarise
 from maru_planner.barn.stack import RunTrace, run_barn
@@ -19,10 +24,11 @@ from maru_planner.physics.barn_world import WORLD_COUNT, cylinder_centres, load_
 from maru_planner.sim.cli import check_writable
 
 PROG = "maru-barn"
-EXIT_OK, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 2, 130
+EXIT_OK, EXIT_RUN_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 MAX_TRIALS = 100
 EXIT_CODES = f"""exit codes:
   {EXIT_OK}    every run finished (whatever its outcome; see the JSON)
+  {EXIT_RUN_FAILED}    --through-ros: the ROS graph could not carry a run out (a node died, a timeout)
   {EXIT_BAD_INPUT}    bad input: an option, the grid file (shape, dtype, no free path) or an output path
   {EXIT_INTERRUPTED}  interrupted (Ctrl-C)"""
 
@@ -52,6 +58,12 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--seed", type=int, default=0, help="first seed (laser and odometry noise), >= 0")
     parser.add_argument("--json", help="write the runs and their summary here")
     parser.add_argument("--png", help="write a top view of the runs here (world, global path, trajectory, contacts)")
+    parser.add_argument(
+        "--through-ros",
+        action="store_true",
+        help="mujoco_sim_node, base_planner_node and reactive_node as processes, lock-step over topics "
+        "(default: in-process, the same core code without DDS)",
+    )
     parser.add_argument("--quiet", action="store_true", help="no progress on stderr")
     return parser
 
@@ -80,7 +92,10 @@ def run(args: argparse.Namespace) -> dict:
     for seed in range(args.seed, args.seed + args.trials):
         if not args.quiet:
             print(f"[{PROG}] {name} seed {seed} ...", file=sys.stderr, flush=True)
-        score, trace = run_barn(grid, optimal, seed=seed, world_name=name)
+        if args.through_ros:
+            score, trace = run_through_ros(args, optimal, seed, name)
+        else:
+            score, trace = run_barn(grid, optimal, seed=seed, world_name=name)
         runs.append(score)
         traces.append(trace)
         if not args.quiet:
@@ -98,6 +113,32 @@ def run(args: argparse.Namespace) -> dict:
     if args.png:
         save_picture(args.png, grid, runs, traces)
     return payload
+
+
+def run_through_ros(args: argparse.Namespace, optimal: float, seed: int, name: str) -> tuple[RunScore, RunTrace]:
+    """One run by ``maru_planner.ros.barn_ros_run`` in a process of its own (this layer imports no ROS)."""
+    source = ["--world", str(args.world)] if args.world is not None else ["--grid", str(Path(args.grid).resolve())]
+    with tempfile.TemporaryDirectory(prefix="maru_barn_") as scratch:
+        out = Path(scratch) / "run.json"
+        command = [sys.executable, "-m", "maru_planner.ros.barn_ros_run", *source, "--seed", str(seed)]
+        command += ["--name", name, "--optimal-time", repr(optimal), "--json", str(out)]
+        done = subprocess.run(command, capture_output=True, text=True)
+        if done.returncode != 0 or not out.is_file():
+            reason = (done.stderr.strip().splitlines() or ["no output"])[-1]
+            raise RosRunFailed(f"the run through ROS failed: {reason}")
+        payload = json.loads(out.read_text())
+    trace = RunTrace(
+        np.array(payload["trajectory"]).reshape(-1, 3),
+        np.array(payload["global_path"]).reshape(-1, 2),
+        [tuple(c) for c in payload["contacts"]],
+    )
+    return RunScore(**payload["run"]), trace
+
+
+class RosRunFailed(MaruError):
+    """The ROS graph could not carry the run out (a node died, a timeout)."""
+
+    source = "ros"
 
 
 def save_picture(path: str, grid, runs: list[RunScore], traces: list[RunTrace]) -> None:
@@ -122,6 +163,9 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
         payload = run(args)
+    except RosRunFailed as exc:
+        print(f"{PROG}: error: {one_line(exc)}", file=sys.stderr)
+        return EXIT_RUN_FAILED
     except (MaruError, OSError) as exc:
         print(f"{PROG}: error: {one_line(exc)}", file=sys.stderr)
         return EXIT_BAD_INPUT

@@ -105,3 +105,30 @@ def summarise(runs: list[RunScore]) -> dict:
         "realtime_factor": round(sim / wall, 2) if wall > 0 else None,
         "realtime_factor_cpu": round(sim / cpu, 2) if cpu > 0 else None,
     }
+
+
+class RunJudge:
+    """The challenge's clock and outcome from the ground truth, one control period at a time."""
+
+    def __init__(self, start: tuple[float, float], goal: tuple[float, float], time_limit: float, max_wait: float):
+        self.start, self.goal = start, goal
+        self.time_limit, self.max_wait = time_limit, max_wait
+        self.t_start: float | None = None
+        self.outcome: str | None = None  # goal | collision | timeout, once decided
+
+    def update(self, now: float, x: float, y: float, collided: bool) -> str | None:
+        """The outcome once the run is over (goal, collision, timeout), else None."""
+        if self.t_start is None and math.hypot(x - self.start[0], y - self.start[1]) >= MOVE_THRESHOLD:
+            self.t_start = now
+        if collided:
+            self.outcome = "collision"
+        elif math.hypot(x - self.goal[0], y - self.goal[1]) <= GOAL_RADIUS:
+            self.outcome = "goal"
+        elif (self.t_start is not None and now - self.t_start >= self.time_limit) or (
+            self.t_start is None and now >= self.max_wait
+        ):
+            self.outcome = "timeout"
+        return self.outcome
+
+    def elapsed(self, now: float) -> float | None:
+        return None if self.t_start is None else now - self.t_start

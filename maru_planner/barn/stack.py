@@ -22,7 +22,7 @@ import numpy as np
 
 from maru_planner.barn.online_map import OnlineMap
 from maru_planner.barn.safety import SafetyFilter, StuckMonitor
-from maru_planner.barn.scoring import GOAL_RADIUS, MOVE_THRESHOLD, TIME_LIMIT, RunScore, barn_metric
+from maru_planner.barn.scoring import TIME_LIMIT, RunJudge, RunScore, barn_metric
 from maru_planner.base.astar import GridAStarPlanner
 from maru_planner.physics.barn_world import GOAL
 from maru_planner.physics.base_sim import BaseSim
@@ -138,14 +138,24 @@ class BarnStack:
         self._retrace_target: np.ndarray | None = None
 
     def tick(self, now: float, odom: np.ndarray, scan: Scan) -> tuple[float, float]:
+        override, body_points = self.observe(now, odom, scan)
+        if override is not None:
+            return override
+        if self.replan_due(now):
+            self._replan(odom)
+        out = self.controller.update(odom, _laser_scan(scan))
+        return self.guard(out.v, out.w, body_points)
+
+    def observe(self, now: float, odom: np.ndarray, scan: Scan) -> tuple[tuple[float, float] | None, np.ndarray]:
+        """The scan into the map, the trail, the recovery: a command that overrides the strip's (or None) and
+        the points the safety check sees (the scan, and the mapped cells near the robot for the blind sector)."""
         self.map.add_scan(odom, scan)
-        # the map near the robot covers the laser's blind sector behind it
         body_points = np.vstack([self.map.scan_points(np.zeros(3), scan), self.map.near_obstacles(odom, 0.8)])
         self._trail_add(odom)
         if now < self._backup_until:
             command = self._retrace(odom, body_points)
             if command is not None:
-                return command
+                return command, body_points
             self._backup_until = -math.inf
         if self.stuck.update(now, float(odom[0]), float(odom[1])):
             self.recoveries += 1
@@ -154,12 +164,19 @@ class BarnStack:
             self._last_plan = -math.inf
             self._backup_until = now + self.config.backup_time
             self._retrace_target = self._trail_point(self.config.backup_distance)
-            return 0.0, 0.0
-        if now - self._last_plan >= self.config.replan_period:
-            self._replan(odom)
-            self._last_plan = now
-        out = self.controller.update(odom, _laser_scan(scan))
-        v, w, _ = self.safety.filter(out.v, out.w, body_points)
+            return (0.0, 0.0), body_points
+        return None, body_points
+
+    def replan_due(self, now: float) -> bool:
+        """True (and the clock of the last plan reset) every ``replan_period``."""
+        if now - self._last_plan < self.config.replan_period:
+            return False
+        self._last_plan = now
+        return True
+
+    def guard(self, v: float, w: float, body_points: np.ndarray) -> tuple[float, float]:
+        """The strip's twist through the footprint safety check."""
+        v, w, _ = self.safety.filter(v, w, body_points)
         return v, w
 
     def _trail_add(self, odom: np.ndarray) -> None:
@@ -223,25 +240,14 @@ def run_barn(
     stack = BarnStack(config, _to_odom(start, GOAL), sim.laser_spec.x, half_size)
     period = 1.0 / config.control_rate
     trajectory = [sim.true_pose()]
-    t_start: float | None = None
+    judge = RunJudge(start[:2], GOAL, config.time_limit, config.max_wait)
     min_clear = sim.clearance()
-    outcome = "timeout"
     while True:
         sim.advance(period)
         x, y, yaw = sim.true_pose()
         trajectory.append((x, y, yaw))
         min_clear = min(min_clear, sim.clearance())
-        if t_start is None and math.hypot(x - start[0], y - start[1]) >= MOVE_THRESHOLD:
-            t_start = sim.time
-        if sim.collided:
-            outcome = "collision"
-            break
-        if math.hypot(x - GOAL[0], y - GOAL[1]) <= GOAL_RADIUS:
-            outcome = "goal"
-            break
-        if (t_start is not None and sim.time - t_start >= config.time_limit) or (
-            t_start is None and sim.time >= config.max_wait
-        ):
+        if judge.update(sim.time, x, y, sim.collided) is not None:
             break
         assert sim.latest_scan is not None
         command = stack.tick(sim.time, sim.odometry.pose.copy(), sim.latest_scan)
@@ -249,7 +255,8 @@ def run_barn(
             sim.command(*command)
         if progress is not None:
             progress(sim.time, (x, y, yaw))
-    elapsed = None if t_start is None else sim.time - t_start
+    outcome = judge.outcome
+    elapsed = judge.elapsed(sim.time)
     success = outcome == "goal"
     score = RunScore(
         world=world_name,

@@ -43,7 +43,7 @@ from lifecycle_msgs.msg import State, Transition  # type: ignore[import-untyped]
 from lifecycle_msgs.srv import ChangeState  # type: ignore[import-untyped]
 from rclpy.action import ActionServer, GoalResponse
 from rclpy.client import Client
-from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor, SingleThreadedExecutor
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from rclpy.lifecycle import Publisher as LifecyclePublisher
 from rclpy.node import Node
@@ -56,6 +56,7 @@ from maru_planner.errors import MaruError, excerpt, one_line
 from maru_planner.params import ParamSpec
 from maru_planner.ros import parameters
 from maru_planner.ros.env import network_from_environment
+from maru_planner.ros.executor import MultiThreadedExecutor
 from maru_planner_interfaces.msg import PlanningError
 
 AUTOSTART = ParamSpec(

@@ -46,6 +46,7 @@ from sensor_msgs.msg import JointState
 
 from maru_planner.ros import planning_conversions as conv
 from maru_planner.ros.env import network_from_environment
+from maru_planner.ros.plan_actions import DrainingActionClient
 from maru_planner_interfaces.action import PlanMotion as PlanMotionAction
 from maru_planner_interfaces.msg import SceneObstacle
 from maru_planner_interfaces.srv import (
@@ -351,7 +352,7 @@ class PlanGoal:
 
 def plan_action_client(node, name: str = "plan_motion", qos: QoSProfile = REPLY_QOS) -> ActionClient:
     """A ``plan_motion`` action client whose goal, result and cancel answers are never evicted (module doc)."""
-    return ActionClient(
+    return DrainingActionClient(
         node, PlanMotionAction, name, goal_service_qos_profile=qos, result_service_qos_profile=qos,
         cancel_service_qos_profile=qos, feedback_sub_qos_profile=FEEDBACK_QOS,
     )  # fmt: skip

@@ -28,7 +28,6 @@ from pathlib import Path
 from typing import Any
 
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
-from rclpy.executors import MultiThreadedExecutor
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.task import Future
@@ -43,6 +42,7 @@ from maru_planner.planning.queries import query_planners
 from maru_planner.ros import manipulation, parameters
 from maru_planner.ros import planning_conversions as conv
 from maru_planner.ros import planning_requests as requests
+from maru_planner.ros.executor import MultiThreadedExecutor
 from maru_planner.ros.lifecycle import ManagedNode, run_node
 from maru_planner.ros.markers import MarkerPublisher
 from maru_planner.ros.plan_actions import PlanActionServer

@@ -23,7 +23,7 @@ import logging
 import threading
 import time
 from collections.abc import Callable, Iterable, Sequence
-from concurrent.futures import Future
+from concurrent.futures import Future, wait
 from dataclasses import dataclass
 from typing import Any
 
@@ -231,7 +231,16 @@ class PlanningRuntime:
             except BaseException as exc:  # noqa: BLE001 - handed to whoever waits for the Future
                 waiting.future.set_exception(exc)
                 return not isinstance(exc, errors.PlanningCancelled)
-            waiting.future.set_result(result)
+            if isinstance(result, Future):  # a worker process plans it: the pool's reader thread answers the caller
+                result.add_done_callback(waiting.forward)
+                wait([result])  # this thread stays taken meanwhile (admission counts it)
+                if result.cancelled():
+                    return False
+                if (error := result.exception()) is not None:
+                    return not isinstance(error, errors.PlanningCancelled)
+                result = result.result()
+            else:
+                waiting.future.set_result(result)
             return not isinstance(getattr(result, "error", None), errors.PlanningCancelled)
 
         with self._lock:
@@ -308,3 +317,12 @@ class _Waiting:
         with self._lock:
             if not self.future.running() and not self.future.done():
                 self.future.set_exception(errors.PlanningCancelled("cancelled while waiting for a worker"))
+
+    def forward(self, done: Future) -> None:
+        """End the request as ``done`` (a worker process's Future) ended."""
+        if done.cancelled():
+            self.future.set_exception(errors.PlanningCancelled("the planning workers stopped"))
+        elif (error := done.exception()) is not None:
+            self.future.set_exception(error)
+        else:
+            self.future.set_result(done.result())

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from concurrent.futures import Future
 from dataclasses import dataclass
 
 import numpy as np
@@ -54,10 +55,13 @@ def ik_timeout(value: float, default: float, maximum: float) -> float:
 
 def plan_in_context(
     context: WorkerContext, request: MotionRequest, deadline: float, monitor: PlanMonitor | None
-) -> MotionResult:
-    budget = time_left(deadline, "allowed_planning_time")
-    planner = context.processes or context.planner
-    return planner.plan(dataclasses.replace(request, time_budget=budget), monitor)
+) -> MotionResult | Future[MotionResult]:
+    """The thread's plan, or the Future of a worker process's (its pool's reader thread completes it: the caller
+    hears of the result one thread hand-off sooner than through this thread)."""
+    request = dataclasses.replace(request, time_budget=time_left(deadline, "allowed_planning_time"))
+    if context.processes is not None:
+        return context.processes.submit(request, monitor)
+    return context.planner.plan(request, monitor)
 
 
 def ik_in_context(context: WorkerContext, request: IkRequest, deadline: float) -> np.ndarray:

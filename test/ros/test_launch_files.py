@@ -22,6 +22,7 @@ LAUNCH_FILES = {  # launch file -> (executable, its params file, its RViz config
     "base_planner": ("base_planner_node", "base_planner.yaml", "base_planner.rviz"),
     "reactive": ("reactive_node", "reactive.yaml", "reactive.rviz"),
     "arm_sim": ("arm_sim_node", "arm_sim.yaml", "planning.rviz"),
+    "mujoco_sim": ("mujoco_sim_node", "mujoco_sim.yaml", "reactive.rviz"),
 }
 COMMON_ARGUMENTS = {"use_sim_time": "false", "namespace": "", "autostart": "true", "rviz": "false"}
 

@@ -125,13 +125,13 @@ def test_cancel_stops_the_search_long_before_its_budget_median_over_20(client):
 STORM = 32
 STORM_CLIENTS = 4
 STORM_BUDGET = 20.0  # s, generous: admission by expected wait must not refuse a goal even on a loaded machine
-STORM_CANCEL_BOUND = 2.0  # s, p95 of cancel -> result for 16 goals at once (10x below their budget; 0.3-0.5 s measured)
+STORM_CANCEL_BOUND = 0.5  # s, p95 of cancel -> result, 16 goals at once (40-180 ms measured at load 4-9)
 
 
 def test_a_storm_of_32_goals_is_answered_in_full_and_queued_goals_cancel_at_once(client, tester):
     """4 clients send 32 goals at once: 32 goal responses and 32 results. Half are endless (plain RRT) and
     cancelled right after acceptance, two of them running and the rest waiting for a worker: each ends CANCELED
-    long before its budget (p95 < 2 s asserted; the issue asks 100 ms, for a quiet machine); the others succeed."""
+    long before its budget (p95 < 0.5 s asserted; the issue asks 100 ms, for a quiet machine); the others succeed."""
     from maru_planner.ros.planning_client import plan_action_client, plan_goal, wait_for_future
 
     # 4 clients, 8 goals each: every client's readers still see all 32 answers (one reply topic per service), and

@@ -115,7 +115,7 @@ def test_bag_records_decode_to_rclpy_messages():
     back = conv.decode_bag_record("nav_msgs/msg/Odometry", serialize_message(odom))
     assert conv.pose_from_odom(back) == pytest.approx((1.0, 2.0, 0.5))
     with pytest.raises(ValueError, match="no rclpy class"):
-        conv.decode_bag_record("tf2_msgs/msg/TFMessage", b"")
+        conv.decode_bag_record("no_such_msgs/msg/Nothing", b"")
     with pytest.raises(ValueError, match="not of the form"):
         conv.message_class("nav_msgs/Odometry")
     assert conv.message_class("visualization_msgs/msg/MarkerArray").__name__ == "MarkerArray"
