@@ -84,8 +84,11 @@ def _unused_domain_id() -> int:
 
 
 def pytest_configure(config):
-    # the user's exported ROS_DOMAIN_ID is kept (make test then runs one worker per lane), else a free one
-    configure_loopback_dds(domain_id=None if os.environ.get("ROS_DOMAIN_ID") else _unused_domain_id())
+    # The user's exported ROS_DOMAIN_ID is kept (make test then runs one worker per lane), else each pytest process
+    # takes a free one: xdist workers inherit the controller's environment, so what the user exported is passed on
+    # apart from the domain the controller chose for itself.
+    user_domain = os.environ.setdefault("MARU_USER_ROS_DOMAIN_ID", os.environ.get("ROS_DOMAIN_ID", ""))
+    configure_loopback_dds(domain_id=int(user_domain) if user_domain.isdigit() else _unused_domain_id())
     os.environ.setdefault("MPLBACKEND", "Agg")
 
 

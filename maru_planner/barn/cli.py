@@ -13,13 +13,13 @@ import subprocess
 import sys
 import tempfile
 from pathlib import Path
-from typing import NoReturn
 
 import numpy as np
 
 from maru_planner.barn.scoring import RunScore, grid_optimal_time, summarise
 from maru_planner.barn.stack import RunTrace, run_barn
-from maru_planner.errors import InvalidRequest, MaruError, one_line
+from maru_planner.cli_parser import CliError, OneLineParser
+from maru_planner.errors import MaruError, one_line
 from maru_planner.physics.barn_world import WORLD_COUNT, cylinder_centres, load_grid, optimal_time, world_grid
 from maru_planner.sim.cli import check_writable
 
@@ -33,19 +33,8 @@ EXIT_CODES = f"""exit codes:
   {EXIT_INTERRUPTED}  interrupted (Ctrl-C)"""
 
 
-class CliError(InvalidRequest):
-    """A bad command-line value or output path."""
-
-    source = "cli"
-
-
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> NoReturn:
-        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {one_line(message)} (see --help)\n")
-
-
 def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(
+    parser = OneLineParser(
         prog=PROG,
         description=__doc__.splitlines()[0],
         epilog=EXIT_CODES,

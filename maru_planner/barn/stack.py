@@ -99,7 +99,8 @@ def _to_world(start: tuple[float, float, float], points: np.ndarray) -> np.ndarr
     return np.column_stack([start[0] + c * pts[:, 0] - s * pts[:, 1], start[1] + s * pts[:, 0] + c * pts[:, 1]])
 
 
-def _laser_scan(scan: Scan) -> LaserScanData:
+def laser_scan_data(scan: Scan) -> LaserScanData:
+    """The elastic strip's view of a simulated scan."""
     return LaserScanData(
         angle_min=scan.angle_min,
         angle_increment=scan.angle_increment,
@@ -143,7 +144,7 @@ class BarnStack:
             return override
         if self.replan_due(now):
             self._replan(odom)
-        out = self.controller.update(odom, _laser_scan(scan))
+        out = self.controller.update(odom, laser_scan_data(scan))
         return self.guard(out.v, out.w, body_points)
 
     def observe(self, now: float, odom: np.ndarray, scan: Scan) -> tuple[tuple[float, float] | None, np.ndarray]:

@@ -17,9 +17,9 @@ from sensor_msgs.msg import LaserScan
 from std_msgs.msg import String
 from tf2_msgs.msg import TFMessage  # type: ignore[import-untyped]
 
+from maru_planner.barn.stack import laser_scan_data
 from maru_planner.physics.base_sim import BaseSim
 from maru_planner.physics.laser import Scan
-from maru_planner.reactive import LaserScanData
 from maru_planner.ros.reactive_conversions import odom_msg, quaternion_from_yaw, s_to_stamp, scan_msg
 
 
@@ -28,15 +28,7 @@ def clock_msg(seconds: float) -> Clock:
 
 
 def laser_msg(scan: Scan, frame_id: str, scan_time: float) -> LaserScan:
-    data = LaserScanData(
-        angle_min=scan.angle_min,
-        angle_increment=scan.angle_increment,
-        ranges=scan.ranges,
-        range_min=scan.range_min,
-        range_max=scan.range_max,
-        stamp=scan.stamp,
-    )
-    return scan_msg(data, frame_id, scan_time)
+    return scan_msg(laser_scan_data(scan), frame_id, scan_time)
 
 
 def odometry_msg(sim: BaseSim, odom_frame: str, base_frame: str) -> Odometry:
