@@ -269,6 +269,7 @@ class BaseNodeClient:
         from nav_msgs.msg import OccupancyGrid
         from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
+        from maru_planner.ros.planning_client import call_until_answered
         from maru_planner_interfaces.srv import PlanBasePath
 
         self.spinning, self.proc = spinning, proc
@@ -277,6 +278,8 @@ class BaseNodeClient:
         )
         self.map_pub = spinning.node.create_publisher(OccupancyGrid, f"{namespace}/map", self.latched)
         self.plan_client = spinning.node.create_client(PlanBasePath, f"{namespace}/plan_base_path")
+        # both directions matched before a test's first call (an empty request changes nothing)
+        call_until_answered(self.plan_client, PlanBasePath.Request(), 120.0)
 
     def publish_map(self, msg, expect_log: str, timeout: float = 20.0) -> None:
         """Publish ``msg`` and wait until the node's log says ``expect_log`` once more."""

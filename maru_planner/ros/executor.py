@@ -35,6 +35,13 @@ class MultiThreadedExecutor(executors.MultiThreadedExecutor):
             executors.ConditionReachedException,
         ):
             return
+        except RuntimeError as exc:  # rcl's RCLError
+            # an action server destroyed by a lifecycle transition in another thread while the wait set was
+            # being built: the next round builds it without that server
+            if "invalid" not in str(exc):
+                raise
+            self._cb_iter = None
+            return
         self._executor.submit(handler)
         self._dispatched[id(handler)] = handler
         for key, task in list(self._dispatched.items()):
