@@ -151,10 +151,10 @@ def summarize(values_s: np.ndarray) -> dict:
 
 def run(calls: int, paper_calls: int) -> dict:
     import rclpy
-    from rclpy.action import ActionClient
     from rclpy.executors import MultiThreadedExecutor
     from std_srvs.srv import Trigger
 
+    from maru_planner.ros.plan_actions import DrainingActionClient as ActionClient
     from maru_planner_interfaces.action import PlanMotion as PlanMotionAction
     from maru_planner_interfaces.msg import PlanningError
     from maru_planner_interfaces.srv import GetScene, PlanMotion

@@ -180,10 +180,31 @@ class _DrainingActionServer(ActionServer):
 
 
 class DrainingActionClient(ActionClient):
-    """rclpy's ActionClient taking every waiting goal, cancel and result response at each wake-up, not one.
+    """rclpy's ActionClient taking every waiting goal, cancel and result response at each wake-up, not one,
+    and without rclpy's lost-response race.
 
     A client with 8 goals of a storm otherwise needs 8 wake-ups of its executor to see their 8 results.
+    rclpy (ros2/rclpy#1123, fixed upstream after our wheels) sends a request before it records the request's
+    sequence number: an executor thread that takes the response in between drops it ("Ignoring unexpected
+    goal response") and the caller's future never completes. Sending and recording hold one lock, and so does
+    matching a response to its request.
     """
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        self._requests_lock = threading.RLock()
+        super().__init__(*args, **kwargs)
+
+    def send_goal_async(self, *args: Any, **kwargs: Any) -> Any:
+        with self._requests_lock:
+            return super().send_goal_async(*args, **kwargs)
+
+    def _cancel_goal_async(self, goal_handle: Any) -> Any:
+        with self._requests_lock:
+            return super()._cancel_goal_async(goal_handle)
+
+    def _get_result_async(self, goal_handle: Any) -> Any:
+        with self._requests_lock:
+            return super()._get_result_async(goal_handle)
 
     def take_data(self) -> dict:
         data = super().take_data()
@@ -200,7 +221,8 @@ class DrainingActionClient(ActionClient):
     async def execute(self, taken_data: dict) -> None:
         for key in ("goal", "cancel", "result"):
             for one in taken_data.pop(key, ()):
-                await super().execute({key: one})
+                with self._requests_lock:  # rclpy's execute only sets futures for these: it never suspends
+                    await super().execute({key: one})
         await super().execute(taken_data)  # feedback and status, one of each as rclpy takes them
 
 

@@ -32,6 +32,7 @@ from maru_planner import errors
 from maru_planner.errors import one_line
 from maru_planner.monitor import PlanMonitor, Progress
 from maru_planner.ros import planning_requests as requests
+from maru_planner.ros.plan_actions import DrainingActionClient
 from maru_planner.ros.planning_parameters import NodeSettings
 from maru_planner_interfaces.action import PlanMotion as PlanMotionAction
 
@@ -90,13 +91,15 @@ class TrajectoryExecution:
         self._retired: list[ActionClient] = []  # clients of earlier targets: a goal may still be executing on one
         self._type = action_type(settings.execution_action_type)
         self.action_name = settings.execution_action
-        self.client = ActionClient(node, self._type, self.action_name, callback_group=callback_group)
+        self.client = DrainingActionClient(node, self._type, self.action_name, callback_group=callback_group)
 
     def retarget(self, settings: NodeSettings) -> None:
         """Send the next goals to ``settings``' execution action (InvalidParameter for a bad name)."""
         kind = action_type(settings.execution_action_type)
         try:
-            client = ActionClient(self._node, kind, settings.execution_action, callback_group=self._callback_group)
+            client = DrainingActionClient(
+                self._node, kind, settings.execution_action, callback_group=self._callback_group
+            )
         except ValueError as exc:  # rclpy's: a bad name, with rcl's source location
             raise errors.InvalidParameter(f"parameter 'execution_action': {str(exc).split(', at ')[0]}") from None
         self._retired.append(self.client)

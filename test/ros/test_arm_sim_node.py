@@ -11,12 +11,12 @@ import time
 import numpy as np
 import pytest
 from builtin_interfaces.msg import Duration
-from rclpy.action import ActionClient
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from maru_planner.execution.tolerances import ResultCode
 from maru_planner.paths import config_path
+from maru_planner.ros.plan_actions import DrainingActionClient as ActionClient
 from maru_planner_interfaces.action import ExecuteTrajectory
 from maru_planner_interfaces.msg import JointTolerance
 

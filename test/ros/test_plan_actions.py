@@ -274,8 +274,7 @@ class BaseClient(BaseNodeClient):
     """The base node's service and action clients and a latched /map publisher (on the module's tester)."""
 
     def __init__(self, tester, proc):
-        from rclpy.action import ActionClient
-
+        from maru_planner.ros.plan_actions import DrainingActionClient as ActionClient
         from maru_planner_interfaces.action import PlanBasePath as PlanBasePathAction
 
         super().__init__(tester, proc)

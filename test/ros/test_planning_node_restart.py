@@ -111,8 +111,13 @@ def _bring_up(tester, proc) -> None:
     from lifecycle_msgs.msg import Transition
     from lifecycle_msgs.srv import ChangeState
 
+    from maru_planner.ros.planning_client import call_until_answered
+
     change_state = tester.node.create_client(ChangeState, "/planning_node/change_state")
     try:
+        # a transition no state has is refused and changes nothing: its answer proves both directions, so the
+        # configure below is not sent while the new node cannot yet answer this client (the answer would be lost)
+        call_until_answered(change_state, ChangeState.Request(transition=Transition(id=99)), 120.0)
         for transition in (Transition.TRANSITION_CONFIGURE, Transition.TRANSITION_ACTIVATE):
             answer = tester.call(change_state, ChangeState.Request(transition=Transition(id=transition)), 120.0)
             assert answer.success, f"transition {transition} failed:\n" + proc.log()
