@@ -13,7 +13,7 @@ from typing import Any
 from ament_index_python.packages import get_package_share_directory
 from launch.actions import DeclareLaunchArgument
 from launch.conditions import IfCondition
-from launch.substitutions import LaunchConfiguration
+from launch.substitutions import LaunchConfiguration, PythonExpression
 from launch_ros.actions import Node
 
 PACKAGE = "maru_planner"
@@ -40,6 +40,34 @@ def common_arguments(
 def common_overrides() -> dict[str, Any]:
     """The node parameters the common arguments set: ``use_sim_time`` and ``autostart``."""
     return {"use_sim_time": LaunchConfiguration("use_sim_time"), "autostart": LaunchConfiguration("autostart")}
+
+
+def node_with_scene_argument(executable: str) -> list[Any]:
+    """``scene_file`` declared and the node ``executable`` started with the params file and the common overrides;
+    a non-empty ``scene_file`` overrides the params file's scene (an empty one keeps it)."""
+    scene_file = LaunchConfiguration("scene_file")
+    overrides = common_overrides()
+    node = {
+        "package": PACKAGE,
+        "executable": executable,
+        "name": executable,
+        "namespace": LaunchConfiguration("namespace"),
+        "output": "screen",
+    }
+    params_file = LaunchConfiguration("params_file")
+    return [
+        DeclareLaunchArgument("scene_file", default_value="", description="scene YAML (empty: from params)"),
+        Node(
+            **node,
+            parameters=[params_file, overrides],
+            condition=IfCondition(PythonExpression(["'", scene_file, "' == ''"])),
+        ),
+        Node(
+            **node,
+            parameters=[params_file, {**overrides, "scene_file": scene_file}],
+            condition=IfCondition(PythonExpression(["'", scene_file, "' != ''"])),
+        ),
+    ]
 
 
 def rviz_node(rviz_config: str) -> Node:
