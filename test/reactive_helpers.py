@@ -34,6 +34,28 @@ def reactive_params_file(tmp_path: Path, **overrides) -> Path:
     return path
 
 
+def start_namespaced_node(node_process, tmp_path: Path, namespace: str, **overrides):
+    """reactive_node on sim time in ``namespace`` (its /clock remapped there), config/reactive.yaml + ``overrides``."""
+    params = reactive_params_file(tmp_path, scan_reliability="reliable", use_sim_time=True, **overrides)
+    remaps = ["-r", f"__ns:={namespace}", "-r", f"/clock:={namespace}/clock"]
+    return node_process(NODE_MODULE, ["--ros-args", *remaps, "--params-file", str(params)])
+
+
+def client_with_goal(name: str, namespace: str, process, goal=(4.0, 0.0, 0.0)):
+    """A connected ReactiveClient on a new spinning node ``name`` whose ``goal`` the node at ``process`` confirmed;
+    a generator for module fixtures (the spinning node is destroyed after the yield)."""
+    from conftest import SpinningNode
+
+    from maru_planner.ros import reactive_conversions as conv
+
+    spinning = SpinningNode(name)
+    client = ReactiveClient(spinning, namespace=namespace, process=process)
+    client.wait_connected()
+    client.send_and_confirm(client.goal_pub, conv.pose_stamped_msg(goal, "odom", 0.0), process, "goal (")
+    yield client
+    spinning.destroy()
+
+
 def shipped_params() -> dict:
     return yaml.safe_load(config_path("reactive.yaml").read_text())[NODE_KEY]["ros__parameters"]
 

@@ -14,7 +14,13 @@ import re
 import numpy as np
 import pytest
 from hostile_inputs import rss_mb
-from reactive_helpers import NODE_MODULE, OBSTACLE, ReactiveClient, odom, reactive_params_file, synthetic_scan
+from reactive_helpers import (
+    OBSTACLE,
+    client_with_goal,
+    odom,
+    start_namespaced_node,
+    synthetic_scan,
+)
 
 pytestmark = pytest.mark.ros
 
@@ -29,27 +35,19 @@ _stamps = (10.0 + 0.1 * k for k in itertools.count())
 
 @pytest.fixture(scope="module")
 def node(node_process, tmp_path_factory):
-    params = reactive_params_file(
-        tmp_path_factory.mktemp("bounds_params"), scan_reliability="reliable", status_period=0.3, use_sim_time=True,
-        scan_timeout=600.0, warn_throttle_period=0.0,
-    )  # fmt: skip
-    return node_process(
-        NODE_MODULE, ["--ros-args", "-r", f"__ns:={NS}", "-r", f"/clock:={NS}/clock", "--params-file", str(params)]
+    return start_namespaced_node(
+        node_process,
+        tmp_path_factory.mktemp("bounds_params"),
+        NS,
+        status_period=0.3,
+        scan_timeout=600.0,
+        warn_throttle_period=0.0,
     )
 
 
 @pytest.fixture(scope="module")
 def client(node, rclpy_session):
-    from conftest import SpinningNode
-
-    from maru_planner.ros import reactive_conversions as conv
-
-    spinning = SpinningNode("bounds_client")
-    client = ReactiveClient(spinning, namespace=NS, process=node)
-    client.wait_connected()
-    client.send_and_confirm(client.goal_pub, conv.pose_stamped_msg(GOAL, "odom", 0.0), node, "goal (")
-    yield client
-    spinning.destroy()
+    yield from client_with_goal("bounds_client", NS, node, GOAL)
 
 
 def _counter(node, name: str) -> int:

@@ -14,12 +14,11 @@ import re
 import numpy as np
 import pytest
 from reactive_helpers import (
-    NODE_MODULE,
     OBSTACLE,
-    ReactiveClient,
+    client_with_goal,
     odom,
-    reactive_params_file,
     shipped_params,
+    start_namespaced_node,
     synthetic_scan,
 )
 
@@ -32,31 +31,19 @@ _stamps = (10.0 + 0.1 * k for k in itertools.count())
 
 @pytest.fixture(scope="module")
 def node(node_process, tmp_path_factory):
-    params = reactive_params_file(
+    return start_namespaced_node(
+        node_process,
         tmp_path_factory.mktemp("hostile_params"),
-        scan_reliability="reliable",
+        NS,
         status_period=0.3,
-        use_sim_time=True,
         scan_timeout=600.0,
         warn_throttle_period=0.0,
-    )
-    return node_process(
-        NODE_MODULE, ["--ros-args", "-r", f"__ns:={NS}", "-r", f"/clock:={NS}/clock", "--params-file", str(params)]
     )
 
 
 @pytest.fixture(scope="module")
 def client(node, rclpy_session):
-    from conftest import SpinningNode
-
-    from maru_planner.ros import reactive_conversions as conv
-
-    spinning = SpinningNode("hostile_client")
-    client = ReactiveClient(spinning, namespace=NS, process=node)
-    client.wait_connected()
-    client.send_and_confirm(client.goal_pub, conv.pose_stamped_msg(GOAL, "odom", 0.0), node, "goal (")
-    yield client
-    spinning.destroy()
+    yield from client_with_goal("hostile_client", NS, node, GOAL)
 
 
 def counter(node, name: str) -> int:

@@ -6,7 +6,13 @@ from __future__ import annotations
 import itertools
 
 import pytest
-from reactive_helpers import NODE_MODULE, OBSTACLE, ReactiveClient, odom, reactive_params_file, synthetic_scan
+from reactive_helpers import (
+    OBSTACLE,
+    client_with_goal,
+    odom,
+    start_namespaced_node,
+    synthetic_scan,
+)
 
 pytestmark = pytest.mark.ros
 
@@ -18,30 +24,14 @@ _stamps = (10.0 + 0.1 * k for k in itertools.count())
 
 @pytest.fixture(scope="module")
 def node(node_process, tmp_path_factory):
-    params = reactive_params_file(
-        tmp_path_factory.mktemp("param_params"),
-        scan_reliability="reliable",
-        use_sim_time=True,
-        scan_timeout=600.0,
-        max_linear=FILE_MAX_LINEAR,
-    )
-    return node_process(
-        NODE_MODULE, ["--ros-args", "-r", f"__ns:={NS}", "-r", f"/clock:={NS}/clock", "--params-file", str(params)]
+    return start_namespaced_node(
+        node_process, tmp_path_factory.mktemp("params_params"), NS, scan_timeout=600.0, max_linear=FILE_MAX_LINEAR
     )
 
 
 @pytest.fixture(scope="module")
 def client(node, rclpy_session):
-    from conftest import SpinningNode
-
-    from maru_planner.ros import reactive_conversions as conv
-
-    spinning = SpinningNode("params_client")
-    client = ReactiveClient(spinning, namespace=NS, process=node)
-    client.wait_connected()
-    client.send_and_confirm(client.goal_pub, conv.pose_stamped_msg((4.0, 0.0, 0.0), "odom", 0.0), node, "goal (")
-    yield client
-    spinning.destroy()
+    yield from client_with_goal("params_client", NS, node)
 
 
 def call(client, service_type, name: str, request):
