@@ -10,10 +10,16 @@
   error, overrun, contacts with obstacles, torque saturation). A new goal preempts the running one (which
   ends ABORTED, INVALID_GOAL, "preempted by a new goal"); a cancel brings the arm to rest within its
   acceleration limits (the goal ends CANCELED).
+- offers the same executor as ``follow_joint_trajectory`` (control_msgs/action/FollowJointTrajectory, the action a
+  real robot's joint_trajectory_controller serves; parameter ``follow_joint_trajectory_action``, '' = not served):
+  the same tolerances, codes, preemption and cancel, control_msgs' result and feedback
+  (:mod:`maru_planner.ros.follow_joint_trajectory`). Without control_msgs installed only ``execute_trajectory``
+  is served (one log line).
 
 Parameters: :class:`ArmSimConfig` (``config/arm_sim.yaml``). The robot, scene, start state and servo gains are
 read at configure; tolerances and rates at every goal. Physics runs on its own thread at ``real_time_factor``
-while the node is active (deactivating cancels a running goal and pauses the arm).
+while the node is active (deactivating cancels a running goal and pauses the arm; a signal stops it before the
+publisher goes).
 """
 
 from __future__ import annotations
@@ -30,9 +36,9 @@ from builtin_interfaces.msg import Duration
 from rclpy.action import ActionServer, CancelResponse
 from rclpy.callback_groups import ReentrantCallbackGroup
 from sensor_msgs.msg import JointState
-from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+from trajectory_msgs.msg import JointTrajectory
 
-from maru_planner.errors import InvalidJointNames, InvalidRequest, MaruError, one_line
+from maru_planner.errors import InvalidJointNames, InvalidRequest, MaruError
 from maru_planner.execution.executor import ArmController, ExecutionResult
 from maru_planner.execution.interpolation import TrajectoryPoints, checked_points
 from maru_planner.execution.tolerances import ResultCode, Tolerances, tolerances
@@ -42,6 +48,12 @@ from maru_planner.physics.arm_sim import ArmSim
 from maru_planner.robot import RobotModel
 from maru_planner.robot.robot_profile import PROFILES
 from maru_planner.ros import parameters
+from maru_planner.ros.follow_joint_trajectory import (
+    ActionShape,
+    ExecuteTrajectoryShape,
+    FollowJointTrajectoryShape,
+    follow_joint_trajectory_type,
+)
 from maru_planner.ros.lifecycle import ManagedNode, run_node
 from maru_planner.scene import Scene
 from maru_planner_interfaces.action import ExecuteTrajectory
@@ -75,6 +87,9 @@ class ArmSimConfig:
     goal_tolerance: float = param(0.01, "default goal position tolerance (rad)", lower=0.0)
     goal_velocity_tolerance: float = param(0.01, "default goal velocity tolerance (rad/s)", lower=0.0)
     start_tolerance: float = param(0.01, "largest distance of the first point from the arm (rad; 0 = any)", lower=0.0)
+    follow_joint_trajectory_action: str = param(
+        "follow_joint_trajectory", "name of the control_msgs FollowJointTrajectory server ('' = none)", read_only=True
+    )
 
 
 SPECS = dataclass_params(ArmSimConfig)
@@ -131,14 +146,25 @@ class ArmSimNode(ManagedNode):
         self.controller = ArmController(sim)
         self.joint_states = self.create_lifecycle_publisher(JointState, "joint_states", 10)
         group = ReentrantCallbackGroup()
-        self.action_server = ActionServer(
-            self, ExecuteTrajectory, "execute_trajectory", self._execute, goal_callback=self.goal_when_active,
-            cancel_callback=lambda _goal: CancelResponse.ACCEPT, callback_group=group,
-        )  # fmt: skip
+        self._serve("execute_trajectory", ExecuteTrajectoryShape(), group)
+        if config.follow_joint_trajectory_action:
+            kind = follow_joint_trajectory_type()
+            if kind is None:
+                self.get_logger().warn(
+                    "control_msgs is not installed: no FollowJointTrajectory server (execute_trajectory only)"
+                )
+            else:
+                self._serve(config.follow_joint_trajectory_action, FollowJointTrajectoryShape(kind), group)
         self.get_logger().info(
             f"{robot.name}: {robot.nq} joints, {len(scene.obstacles) if scene else 0} obstacles, "
             f"kp {sorted(set(sim.arm.kp.round(0).tolist()))} N m/rad"
         )
+
+    def _serve(self, name: str, shape: ActionShape, group: ReentrantCallbackGroup) -> None:
+        ActionServer(
+            self, shape.kind, name, lambda handle: self._execute(handle, shape), goal_callback=self.goal_when_active,
+            cancel_callback=lambda _goal: CancelResponse.ACCEPT, callback_group=group,
+        )  # fmt: skip
 
     def _initial_state(self, robot: RobotModel) -> np.ndarray:
         name = self.config.initial_state
@@ -159,6 +185,13 @@ class ArmSimNode(ManagedNode):
             if result is not None and self._goal is not None:
                 self._goal.finish(result)
                 self._goal = None
+        self._stop_physics()
+
+    def cleanup(self) -> None:
+        # after a signal there is no deactivate: the thread must not publish on a publisher being destroyed
+        self._stop_physics()
+
+    def _stop_physics(self) -> None:
         self._stop.set()
         if self._thread is not None:
             self._thread.join(timeout=2.0)
@@ -179,7 +212,8 @@ class ArmSimNode(ManagedNode):
                         self._goal.finish(result)
                         self._goal = None
                 state = sim.state()
-            self._publish_state(state.positions, state.velocities, state.efforts)
+            if not self._publish_state(state.positions, state.velocities, state.efforts):
+                return
             next_time += steps * sim.timestep / self.config.real_time_factor
             delay = next_time - time.monotonic()
             if delay > 0:
@@ -187,30 +221,38 @@ class ArmSimNode(ManagedNode):
             elif delay < -0.1:  # fell behind (a slow machine): do not try to catch up
                 next_time = time.monotonic()
 
-    def _publish_state(self, positions: np.ndarray, velocities: np.ndarray, efforts: np.ndarray) -> None:
+    def _publish_state(self, positions: np.ndarray, velocities: np.ndarray, efforts: np.ndarray) -> bool:
+        """Publish one joint state; False when a signal shut the context down meanwhile (the node is exiting)."""
         msg = JointState()
         msg.header.stamp = self.get_clock().now().to_msg()
         msg.name = list(self.controller.sim.arm.joint_names)
         msg.position, msg.velocity, msg.effort = positions.tolist(), velocities.tolist(), efforts.tolist()
-        self.joint_states.publish(msg)
+        try:
+            self.joint_states.publish(msg)
+        except Exception:  # rcl's RCLError "context is invalid", rclpy's InvalidHandle
+            if self._stop.is_set() or not self.context.ok():
+                return False
+            raise
+        return True
 
     # --------------------------------------------------------------------------------------------- action --
-    def _execute(self, handle: Any) -> ExecuteTrajectory.Result:
+    def _execute(self, handle: Any, shape: ActionShape) -> Any:
         request = handle.request
         try:
+            shape.check(request)
             points = points_from_msg(request.trajectory)
             tol = self._tolerances(request, points)
             self._wait_for_start(handle, request.trajectory, points)
         except _OldHeader as exc:
-            return _refuse(handle, R.OLD_HEADER_TIMESTAMP, str(exc))
+            return _refuse(handle, shape.refused(R.OLD_HEADER_TIMESTAMP, str(exc)))
         except MaruError as exc:
-            return _refuse(handle, _code_of(exc), str(exc))
+            return _refuse(handle, shape.refused(_code_of(exc), str(exc)))
         goal = _Goal(handle)
         with self._lock:
             try:
                 self.controller.start(points, tol)
             except MaruError as exc:
-                return _refuse(handle, _code_of(exc), str(exc))
+                return _refuse(handle, shape.refused(_code_of(exc), str(exc)))
             previous, self._goal = self._goal, goal
             if previous is not None and self.controller.preempted is not None:
                 previous.finish(self.controller.preempted, preempted=True)
@@ -224,24 +266,18 @@ class ArmSimNode(ManagedNode):
                         goal.finish(result)
                         self._goal = None
                 break
-            self._feedback(handle)
+            self._feedback(handle, shape)
         goal.done.wait()
         assert goal.result is not None
-        return _finish(handle, goal.result, goal.preempted)
+        return _finish(handle, shape, goal.result, goal.preempted)
 
-    def _feedback(self, handle: Any) -> None:
+    def _feedback(self, handle: Any, shape: ActionShape) -> None:
         with self._lock:
             sample = self.controller.latest_sample()
         if sample is None:
             return
         _, names, desired, actual = sample
-        feedback = ExecuteTrajectory.Feedback()
-        feedback.header.stamp = self.get_clock().now().to_msg()
-        feedback.joint_names = list(names)
-        feedback.desired = JointTrajectoryPoint(positions=desired.tolist())
-        feedback.actual = JointTrajectoryPoint(positions=actual.tolist())
-        feedback.error = JointTrajectoryPoint(positions=(desired - actual).tolist())
-        handle.publish_feedback(feedback)
+        handle.publish_feedback(shape.feedback(self.get_clock().now().to_msg(), list(names), desired, actual))
 
     def _tolerances(self, request: Any, points: TrajectoryPoints) -> Tolerances:
         c, names = self.config, points.joint_names
@@ -317,22 +353,14 @@ def _code_of(exc: MaruError) -> int:
     return next(code for kind, code in ERROR_CODES if isinstance(exc, kind))
 
 
-def _refuse(handle: Any, code: int, message: str) -> ExecuteTrajectory.Result:
+def _refuse(handle: Any, result: Any) -> Any:
     handle.abort()
-    return R(error_code=code, error_string=one_line(message), overrun=-1.0)
+    return result
 
 
-def _finish(handle: Any, result: ExecutionResult, preempted: bool) -> ExecuteTrajectory.Result:
-    msg = R(
-        error_code=int(ResultCode.INVALID_GOAL if preempted else result.code),
-        error_string=one_line(result.message),
-        max_tracking_error=float(np.max(result.max_error)) if len(result.times) else 0.0,
-        overrun=-1.0 if result.overrun is None else float(result.overrun),
-        contact_links=[c.link for c in result.contacts],
-        contact_obstacles=[c.obstacle for c in result.contacts],
-        contact_depths=[float(c.depth) for c in result.contacts],
-        saturated_steps=int(result.saturated_steps),
-    )
+def _finish(handle: Any, shape: ActionShape, result: ExecutionResult, preempted: bool) -> Any:
+    code = int(ResultCode.INVALID_GOAL if preempted else result.code)
+    msg = shape.finished(code, result.message, result)
     if result.cancelled and not preempted and handle.is_cancel_requested:
         handle.canceled()
     elif result.success:

@@ -413,6 +413,11 @@ def run_node(
     except (KeyboardInterrupt, ExternalShutdownException, StartupInterrupted):  # stopped while starting
         shut_down_context()
         return 0
+    except RuntimeError:  # rcl's RCLError: a signal shut the context down while the node was being made
+        if rclpy.ok():
+            raise
+        shut_down_context()
+        return 0
     node.get_logger().info(network)
     executor = (
         MultiThreadedExecutor(num_threads=executor_threads(node)) if executor_threads else SingleThreadedExecutor()
