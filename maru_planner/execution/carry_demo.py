@@ -1,6 +1,7 @@
 """The demo that moves something: Maru-1 carries a box with both hands from the right of the desk to the left.
 
     python -m maru_planner.execution.carry_demo [--out docs/images/execution_carry.png] [--seed 1]
+    python -m maru_planner.execution.carry_demo --through-ros [--out PNG] [--seed 1]
 
 The box (:data:`BOX_SIZE`) is attached to ``r_hand`` between the hands (the wrists and hands touch it), on the desk
 of the paper-000 scene (its standing box removed: this one is carried instead). The motion is the dual-arm carry of
@@ -11,33 +12,52 @@ arms lift and tilt the box) with the waist turning from :data:`START_WAIST` to :
 simulation has no closed chains) by :class:`ArmController` like
 joint_trajectory_controller would. Prints the tracking error, contacts, overrun and how well the *executed* motion
 kept the hands' grip (the relative-pose error of the simulated arm), and draws the executed motion.
+
+``--through-ros``: the carry through the nodes (:mod:`maru_planner.ros.carry_demo_run` in a process of its own:
+this layer imports no ROS). arm_sim_node and planning_node run as processes with the box attached
+(:func:`through_ros_scene`); two ``plan_motion`` goals with ``execute: true`` move the arm from home to the carry's
+start, then carry. planning_node's ``PathConstraints`` message has no relative-pose constraint, so the carry
+through the nodes is the one that needs none: the arms hold their joints (so the grip) while the waist turns the
+box across the desk (:func:`carry_goals`). arm_sim_node takes no payload mass: the box weighs nothing there. The
+numbers come from what the nodes report and what this process recorded: the tracking error is the arm's
+(its result and feedback), contacts are MuJoCo's at every recorded /joint_states sample (the same model, the box
+as geometry), the overrun is when /joint_states first stayed within 0.01 rad of the goal.
 """
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
+import json
+import subprocess
 import sys
+import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from maru_planner.cli_parser import CliError, OneLineParser
 from maru_planner.execution.executor import ArmController, ExecutionResult
 from maru_planner.execution.interpolation import checked_points
+from maru_planner.execution.tolerances import ResultCode
 from maru_planner.physics.arm_model import ServoGains, build_arm_model
-from maru_planner.physics.arm_sim import ArmSim
+from maru_planner.physics.arm_sim import ArmSim, Contact
 from maru_planner.planning import MotionPlanner
 from maru_planner.planning.dual_arm import DUAL_CARRY, DualArmProblem, relative_pose_error
-from maru_planner.planning.types import MotionResult
+from maru_planner.planning.types import MotionResult, PlanStatus
 from maru_planner.robot import RobotModel
 from maru_planner.scene import Scene
 from maru_planner.scene.obstacle import Obstacle
+from maru_planner.sim.cli import check_writable
+from maru_planner.trajectory import Trajectory
 
 BOX = "carried_box"
 BOX_SIZE = (0.26, 0.12, 0.12)  # m: along the hands' axis, across, up
 BOX_MASS = 1.0  # kg: carried by the right hand's servos in the simulation (a closed chain is not simulated)
 GRIP_LINKS = ("r_hand", "l_hand", "r_arm_link5", "l_arm_link5")  # touch the box without colliding
+# through the nodes the box is attached from the start (home), where it lies in the torso: base_link may touch it
+THROUGH_ROS_TOUCH = (*GRIP_LINKS, "base_link")
+ARRIVAL_TOLERANCE = 0.01  # rad: the arm has arrived when every joint stays this close to the goal
 START_WAIST, GOAL_WAIST = -1.3, 0.3  # rad: the box over the desk's right part, then its left part
 DEFAULT_OUT = Path("docs/images/execution_carry.png")
 
@@ -51,6 +71,19 @@ class CarryRun:
     scene: Scene
     plan: MotionResult
     execution: ExecutionResult | None
+    # through the nodes: /joint_states recorded while the carry executed (times from its start, group rows)
+    joint_states: tuple[np.ndarray, np.ndarray] | None = None
+    reported_tracking: float | None = None  # through the nodes: the arm's own max tracking error (every step)
+    goal_status: str | None = None  # through the nodes: how the carry's plan_motion goal ended
+    approach_grip: float | None = None  # through the nodes: the carry's start's hands, m from the nominal grip
+
+    @property
+    def executed(self) -> tuple[np.ndarray, np.ndarray]:
+        """The executed motion: (times, group rows), /joint_states through the nodes, else the arm's samples."""
+        if self.joint_states is not None:
+            return self.joint_states
+        assert self.execution is not None
+        return self.execution.times, self.execution.actual
 
     def q_full(self, row: np.ndarray) -> np.ndarray:
         """The robot's full configuration with the group at ``row``."""
@@ -77,7 +110,7 @@ def carry_problem() -> DualArmProblem:
     )
 
 
-def carry_scene(robot: RobotModel, problem: DualArmProblem) -> Scene:
+def carry_scene(robot: RobotModel, problem: DualArmProblem, touch_links: tuple[str, ...] = GRIP_LINKS) -> Scene:
     """The desk, and the box attached to ``r_hand`` midway between the hands at the start, along their axis."""
     scene = problem.scene()
     scene.remove("box")
@@ -92,8 +125,22 @@ def carry_scene(robot: RobotModel, problem: DualArmProblem) -> Scene:
     box[:3, :3] = np.column_stack([along, np.cross(up, along), up])
     box[:3, 3] = (right[:3, 3] + left[:3, 3]) / 2.0
     obstacle = Obstacle(BOX, "box", np.linalg.solve(right, box), size=list(BOX_SIZE))
-    scene.attach(BOX, "r_hand", obstacle=obstacle, touch_links=list(GRIP_LINKS))
+    scene.attach(BOX, "r_hand", obstacle=obstacle, touch_links=list(touch_links))
     return scene
+
+
+def through_ros_scene() -> Scene:
+    """Both nodes' scene: :func:`carry_scene` where ``base_link`` may touch the box (:data:`THROUGH_ROS_TOUCH`)."""
+    return carry_scene(RobotModel.maru1(), carry_problem(), THROUGH_ROS_TOUCH)
+
+
+def carry_goals() -> tuple[dict[str, float], dict[str, float]]:
+    """The goals through the nodes: the carry's start (from home), then the waist at :data:`GOAL_WAIST`, the arms
+    as they were (the arms' joints held: the grip kept without a relative-pose constraint)."""
+    problem = carry_problem()
+    names = RobotModel.maru1().groups[problem.group]
+    start = dict(zip(names, problem.start, strict=True))
+    return start, {**start, names[0]: GOAL_WAIST}
 
 
 def run_carry(seed: int = 1, gains: ServoGains | None = None) -> CarryRun:
@@ -114,30 +161,154 @@ def run_carry(seed: int = 1, gains: ServoGains | None = None) -> CarryRun:
     return run
 
 
+class ThroughRosFailed(Exception):
+    """The run through the nodes failed (its one line is on stderr already)."""
+
+
+def run_through_ros(seed: int = 1, real_time_factor: float = 1.0) -> CarryRun:
+    """The carry through arm_sim_node and planning_node (:mod:`maru_planner.ros.carry_demo_run`, a process)."""
+    with tempfile.TemporaryDirectory(prefix="maru_carry_") as scratch:
+        out = Path(scratch) / "run.json"
+        command = [sys.executable, "-m", "maru_planner.ros.carry_demo_run", "--json", str(out), "--seed", str(seed)]
+        done = subprocess.run([*command, "--real-time-factor", repr(real_time_factor)], stdin=subprocess.DEVNULL)
+        if done.returncode != 0 or not out.is_file():
+            raise ThroughRosFailed(f"the run through the nodes failed (exit code {done.returncode})")
+        record = json.loads(out.read_text())
+    return carry_from_record(record)
+
+
+def carry_from_record(record: dict) -> CarryRun:
+    """The :class:`CarryRun` of a recorded run through the nodes (``carry_demo_run``'s JSON)."""
+    robot, problem = RobotModel.maru1(), carry_problem()
+    scene = through_ros_scene()
+    names, plan = list(record["joint_names"]), record["plan"]
+    trajectory = Trajectory(
+        names, *(np.asarray(plan[k], dtype=float) for k in ("times", "positions", "velocities", "accelerations"))
+    )
+    motion = MotionResult(PlanStatus.SUCCESS, f"{plan['planner']}, {plan['waypoints']} waypoints", joint_names=names)
+    motion.trajectory = trajectory
+    feedback = sorted(record["feedback"], key=lambda f: f["stamp"])
+    desired = np.array([_ordered(f["names"], f["desired"], names) for f in feedback]).reshape(-1, len(names))
+    actual = np.array([_ordered(f["names"], f["actual"], names) for f in feedback]).reshape(-1, len(names))
+    rate = float(record["real_time_factor"])  # stamps are wall-clock: simulated time = wall time x this
+    feedback_times = np.array([f["stamp"] for f in feedback]) * rate
+    start = _start_time(trajectory, feedback_times, desired)
+    states = sorted(record["joint_states"], key=lambda s: s["stamp"])
+    state_times = np.array([s["stamp"] for s in states]) * rate - start
+    state_rows = np.array([_ordered(s["names"], s["positions"], names) for s in states]).reshape(-1, len(names))
+    carrying = state_times >= -0.01  # from the execution's start (before it: the arm settling after the approach)
+    state_times, state_rows = state_times[carrying], state_rows[carrying]
+    execution = record["execution"]
+    # the grip is measured from the carry's own start: the approach ends within the arm's goal tolerance (0.01 rad
+    # a joint) of the nominal start, which can leave the hands a centimetre or two from its relative pose
+    approach_grip, _ = relative_pose_error(robot, problem, trajectory.positions[:1])
+    problem = dataclasses.replace(problem, start=tuple(float(v) for v in trajectory.positions[0]))
+    run = CarryRun(robot, problem, scene, motion, None, (state_times, state_rows))
+    run.approach_grip = float(approach_grip[0])
+    run.execution = ExecutionResult(
+        ResultCode(execution["code"]), execution["message"], names, duration=trajectory.duration,
+        finished_at=_arrival(state_times, state_rows, trajectory.positions[-1]),
+        times=feedback_times - start, desired=desired, actual=actual,
+        contacts=_replayed_contacts(run, state_rows),
+    )  # fmt: skip
+    run.reported_tracking, run.goal_status = float(execution["tracking_error"]), record["goal_status"]
+    return run
+
+
+def _ordered(have: list[str], values: list[float], names: list[str]) -> list[float]:
+    index = {name: i for i, name in enumerate(have)}
+    return [values[index[name]] for name in names]
+
+
+def _start_time(trajectory: Trajectory, stamps: np.ndarray, desired: np.ndarray) -> float:
+    """When the execution started (stamp clock): each feedback sample's desired point is found on the plan
+    (the nearest of a fine sampling), its stamp minus that time; the median over the samples inside the motion."""
+    grid = np.linspace(0.0, trajectory.duration, 4000)
+    curve = np.column_stack([np.interp(grid, trajectory.times, column) for column in trajectory.positions.T])
+    at = np.array([grid[np.argmin(np.abs(curve - row).sum(axis=1))] for row in desired])
+    inside = (at > 0.0) & (at < trajectory.duration)
+    if not inside.any():
+        raise ThroughRosFailed("no execute_trajectory feedback was recorded while the arm moved")
+    return float(np.median(stamps[inside] - at[inside]))
+
+
+def _arrival(times: np.ndarray, rows: np.ndarray, goal: np.ndarray) -> float | None:
+    """The first time after which every joint stays within :data:`ARRIVAL_TOLERANCE` of ``goal``."""
+    away = np.nonzero(np.abs(rows - goal).max(axis=1) > ARRIVAL_TOLERANCE)[0]
+    if len(away) == len(rows):
+        return None
+    first = 0 if len(away) == 0 else int(away[-1]) + 1
+    return float(times[first]) if first < len(times) else None
+
+
+def _replayed_contacts(run: CarryRun, rows: np.ndarray) -> list[Contact]:
+    """MuJoCo's robot-obstacle contacts at every recorded state: the deepest per (link, obstacle)."""
+    sim = ArmSim(build_arm_model(run.robot, run.scene, ServoGains(), q0=run.q_full(rows[0])))
+    deepest: dict[tuple[str, str], Contact] = {}
+    for row in rows:
+        sim.reset(run.q_full(row))
+        for contact in sim.current_contacts():
+            key = (contact.link, contact.obstacle)
+            if key not in deepest or contact.depth > deepest[key].depth:
+                deepest[key] = contact
+    return list(deepest.values())
+
+
 def summary(run: CarryRun) -> str:
     """One line: the plan, the execution's outcome, tracking error, contacts, overrun and grip errors."""
     if run.execution is None:
         return f"{run.problem.name}: not planned: {run.plan.status.value}: {run.plan.message}"
     result, tr = run.execution, run.plan.trajectory
     assert tr is not None
-    planned, executed = run.grip_error(tr.positions), run.grip_error(result.actual)
+    planned, executed = run.grip_error(tr.positions), run.grip_error(run.executed[1])
     overrun = "never reached" if result.overrun is None else f"{100 * result.overrun:.2f} %"
-    waypoints = 0 if run.plan.path is None else len(run.plan.path)
+    if run.joint_states is None:
+        waypoints = 0 if run.plan.path is None else len(run.plan.path)
+        how, tracking = f"({waypoints} waypoints)", float(result.max_error.max())
+        saturated = f", {result.saturated_steps} saturated steps"
+    else:
+        how = (
+            f"by planning_node ({run.plan.message}) from where the approach left the arm (hands "
+            f"{1e3 * (run.approach_grip or 0.0):.2f} mm from the nominal grip), executed by arm_sim_node"
+        )
+        tracking, saturated = float(run.reported_tracking or 0.0), ""
     return (
-        f"{run.problem.name}: planned {tr.duration:.2f} s ({waypoints} waypoints); executed: "
-        f"{result.code.name}, max tracking error {result.max_error.max():.4f} rad, {len(result.contacts)} contacts, "
-        f"overrun {overrun}, {result.saturated_steps} saturated steps; hands' relative pose held to "
+        f"{run.problem.name}: planned {tr.duration:.2f} s {how}; executed: "
+        f"{result.code.name}, max tracking error {tracking:.4f} rad, {len(result.contacts)} contacts, "
+        f"overrun {overrun}{saturated}; hands' relative pose held to "
         f"{1e3 * planned[0]:.2f} mm / {planned[1]:.4f} rad planned, {1e3 * executed[0]:.2f} mm / "
         f"{executed[1]:.4f} rad executed"
     )
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser = OneLineParser(prog="carry_demo", description=__doc__.split("\n\n")[0])
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="the picture (PNG)")
     parser.add_argument("--seed", type=int, default=1, help="the planner's seed")
+    parser.add_argument(
+        "--through-ros", action="store_true", help="arm_sim_node and planning_node as processes (plan_motion, execute)"
+    )
+    parser.add_argument(
+        "--real-time-factor", type=float, default=1.0, help="--through-ros: arm_sim_node's real_time_factor"
+    )
     args = parser.parse_args(argv)
-    run = run_carry(args.seed)
+    if not 0.01 <= args.real_time_factor <= 100.0:
+        parser.error(f"--real-time-factor must be in [0.01, 100], got {args.real_time_factor}")
+    if args.out.suffix.lower() != ".png":
+        parser.error(f"--out {args.out}: the file name must end in .png")
+    try:
+        args.out.parent.mkdir(parents=True, exist_ok=True)
+        check_writable(args.out, "--out")
+    except (OSError, CliError) as exc:
+        parser.error(f"--out {args.out}: {exc}" if isinstance(exc, OSError) else str(exc))
+    if args.through_ros:
+        try:
+            run = run_through_ros(args.seed, args.real_time_factor)
+        except ThroughRosFailed as exc:
+            print(f"carry_demo: {exc}", file=sys.stderr)
+            return 1
+    else:
+        run = run_carry(args.seed)
     print(summary(run))
     if run.execution is None:
         return 1

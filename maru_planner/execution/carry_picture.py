@@ -37,6 +37,10 @@ class CarryRun(Protocol):
     scene: Scene
     plan: MotionResult
     execution: ExecutionResult | None
+    joint_states: tuple[np.ndarray, np.ndarray] | None
+
+    @property
+    def executed(self) -> tuple[np.ndarray, np.ndarray]: ...
 
     def q_full(self, row: np.ndarray) -> np.ndarray: ...
 
@@ -56,11 +60,13 @@ def draw_carry(run: CarryRun, out: Path) -> Path:
     for j, name in enumerate(result.joint_names):
         error_ax.plot(result.times, 1e3 * result.error[:, j], lw=0.8, label=name)
     error_ax.set_ylabel("planned - executed (mrad)")
-    error_ax.set_title(f"tracking error per joint (max {1e3 * result.max_error.max():.2f} mrad)", fontsize=9)
+    source = "" if run.joint_states is None else ", arm_sim_node's feedback"
+    error_ax.set_title(f"tracking error per joint{source} (max {1e3 * result.max_error.max():.2f} mrad)", fontsize=9)
     error_ax.legend(fontsize=5, ncol=4, loc="lower left")
+    executed_times, executed = run.executed
     for positions, times, style, label in (
         (trajectory.positions, trajectory.times, "C0--", "planned"),
-        (result.actual, result.times, "C3-", "executed"),
+        (executed, executed_times, "C3-", "executed"),
     ):
         translation, rotation = relative_pose_error(run.robot, run.problem, positions)
         grip_ax.plot(times, 1e3 * translation, style, lw=1.2, label=f"{label}: position (mm)")
@@ -69,8 +75,9 @@ def draw_carry(run: CarryRun, out: Path) -> Path:
     grip_ax.set_xlabel("time (s)")
     grip_ax.legend(fontsize=6)
     overrun = "-" if result.overrun is None else f"{100 * result.overrun:.2f} %"
+    where = "MuJoCo" if run.joint_states is None else "arm_sim_node (MuJoCo), planned by planning_node"
     fig.suptitle(
-        f"Maru-1 carries a box across the desk, executed in MuJoCo: {result.code.name}, {len(result.contacts)} "
+        f"Maru-1 carries a box across the desk, executed in {where}: {result.code.name}, {len(result.contacts)} "
         f"contacts, planned {trajectory.duration:.2f} s, overrun {overrun}",
         fontsize=10,
     )
@@ -89,15 +96,16 @@ def _draw_motion(ax, run: CarryRun, carrying) -> None:
         faces = clip_faces(obstacle.faces(), LIMITS)
         if faces:
             ax.add_collection3d(Poly3DCollection(faces, alpha=0.15, facecolor="tan", edgecolor="k", linewidth=0.3))
-    instants = np.linspace(0, len(result.times) - 1, SNAPSHOTS).round().astype(int)
+    times, executed = run.executed
+    instants = np.linspace(0, len(times) - 1, SNAPSHOTS).round().astype(int)
     colours = plt.get_cmap("viridis")(np.linspace(0.0, 0.85, SNAPSHOTS))
     for k, colour in zip(instants, colours, strict=True):
-        q = run.q_full(result.actual[k])
+        q = run.q_full(executed[k])
         draw_configuration(ax, carrying, None, q, colour, highlight=(BOX,), alpha=0.3)
-        ax.text(*_box_centre(carrying, q) + [0, 0, 0.1], f"{result.times[k]:.2f} s", fontsize=7)
+        ax.text(*_box_centre(carrying, q) + [0, 0, 0.1], f"{times[k]:.2f} s", fontsize=7)
     for positions, style, label in (
         (trajectory.positions, "k--", "box centre planned"),
-        (result.actual, "r-", "executed"),
+        (executed, "r-", "executed"),
     ):
         centres = np.array([_box_centre(carrying, run.q_full(row)) for row in positions])
         ax.plot(centres[:, 0], centres[:, 1], centres[:, 2], style, lw=2.0, label=label)
