@@ -135,7 +135,9 @@ def markdown(meta: dict, summary: dict, kin: dict | None, hits: list[dict], fail
         "# BARN in MuJoCo (issue 38)",
         "",
         f"Command: `{meta['command']}`; {ours['worlds']} worlds x {meta['trials']} trials, {meta['workers']} "
-        f"processes, wall {meta['wall_time_s']} s. Physics {meta['timestep_s']} s, laser 720 beams (UST-10-like), "
+        f"processes, wall {meta['wall_time_s']} s, load average {meta.get('load_average', '?')} (1 min, "
+        "start / end: the wall-clock real-time factor is per process and falls with the load). "
+        f"Physics {meta['timestep_s']} s, laser 720 beams (UST-10-like), "
         "no prior map. Metric = success x OT / clip(T, 2 OT, 8 OT).",
         "",
         "| planner | worlds x runs | success | collision | timeout | metric | note |",
@@ -233,6 +235,7 @@ def main(argv: list[str] | None = None) -> int:
     worlds = QUICK_WORLDS if args.quick else list(range(0, WORLD_COUNT, args.world_step))
     trials = 2 if args.quick else args.trials
     t0 = time.time()
+    load_start = round(os.getloadavg()[0], 1)
     physics_rtf = round(physics_realtime_factor(), 2)
     log(f"physics + laser alone: {physics_rtf}x real time")
     tasks = [(w, s) for w in worlds for s in range(trials)]
@@ -260,6 +263,7 @@ def main(argv: list[str] | None = None) -> int:
         "timestep_s": 0.005,
         "physics_realtime_factor": physics_rtf,
         "wall_time_s": round(time.time() - t0, 1),
+        "load_average": f"{load_start} / {round(os.getloadavg()[0], 1)}",
     }
     hits = targets(summary["in_process"])
     payload = {"meta": meta, "summary": summary, "targets": hits, "runs": [r.to_json() for r in runs]}

@@ -16,8 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from maru_planner.barn.scoring import RunScore, grid_optimal_time, summarise
-from maru_planner.barn.stack import RunTrace, run_barn
+from maru_planner.barn.scoring import RunScore, RunTrace, grid_optimal_time, summarise
 from maru_planner.cli_parser import CliError, OneLineParser
 from maru_planner.errors import MaruError, one_line
 from maru_planner.physics.barn_world import WORLD_COUNT, cylinder_centres, load_grid, optimal_time, world_grid
@@ -84,6 +83,9 @@ def run(args: argparse.Namespace) -> dict:
         if args.through_ros:
             score, trace = run_through_ros(args, optimal, seed, name)
         else:
+            # lazy: the stack (numba's A*, the strip) is not needed when the nodes run it (--through-ros)
+            from maru_planner.barn.stack import run_barn
+
             score, trace = run_barn(grid, optimal, seed=seed, world_name=name)
         runs.append(score)
         traces.append(trace)

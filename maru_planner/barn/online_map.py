@@ -36,17 +36,30 @@ class OnlineMap:
         self.laser_pose = laser_pose
         self.hits = np.zeros((round(size[1] / resolution), round(size[0] / resolution)), dtype=np.int32)
         self._last_points = np.zeros((0, 2))
+        self._beams: tuple[tuple[float, float, int], np.ndarray, np.ndarray, np.ndarray] | None = None
+
+    def _beam_angles(self, scan: Scan) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The scan's beam angles and their cosines and sines (every scan of a run has the same beams)."""
+        key = (scan.angle_min, scan.angle_increment, len(scan.ranges))
+        if self._beams is None or self._beams[0] != key:
+            angles = scan.angle_min + scan.angle_increment * np.arange(len(scan.ranges))
+            self._beams = (key, angles, np.cos(angles), np.sin(angles))
+        return self._beams[1], self._beams[2], self._beams[3]
 
     def scan_points(self, pose: np.ndarray, scan: Scan) -> np.ndarray:
         """The scan's returns within ``max_range`` as odom-frame (x, y)."""
-        angles = scan.angle_min + scan.angle_increment * np.arange(len(scan.ranges))
-        keep = np.isfinite(scan.ranges) & (scan.ranges <= self.max_range) & (scan.ranges >= scan.range_min)
-        r, a = scan.ranges[keep], angles[keep]
+        angles, cos0, sin0 = self._beam_angles(scan)
+        ranges = scan.ranges
+        keep = np.isfinite(ranges) & (ranges <= self.max_range) & (ranges >= scan.range_min)
+        r = ranges[keep]
         x, y, yaw = float(pose[0]), float(pose[1]), float(pose[2])
         c, s = math.cos(yaw), math.sin(yaw)
         lx = x + c * self.laser_pose[0] - s * self.laser_pose[1]
         ly = y + s * self.laser_pose[0] + c * self.laser_pose[1]
-        return np.column_stack([lx + r * np.cos(yaw + a), ly + r * np.sin(yaw + a)])
+        if yaw == 0.0:  # the robot's own frame (the safety check's points): the beams' cosines as they are
+            return np.column_stack([lx + r * cos0[keep], ly + r * sin0[keep]])
+        a = yaw + angles[keep]
+        return np.column_stack([lx + r * np.cos(a), ly + r * np.sin(a)])
 
     def add_scan(self, pose: np.ndarray, scan: Scan) -> None:
         points = self.scan_points(pose, scan)

@@ -39,15 +39,23 @@ class SafetyFilter:
 
     def swept_clearance(self, v: float, w: float, points: np.ndarray, steps: int = 6) -> float:
         """The smallest :meth:`clearance` while driving (v, w) for the horizon."""
+        if len(points) == 0:
+            return math.inf
         x = y = th = 0.0
         dt = self.horizon / steps
-        worst = math.inf
-        for _ in range(steps):
+        poses = np.empty((steps, 4))  # x, y, cos, sin of each pose along the arc
+        for i in range(steps):
             x += v * math.cos(th + 0.5 * w * dt) * dt
             y += v * math.sin(th + 0.5 * w * dt) * dt
             th += w * dt
-            worst = min(worst, self.clearance(points, (x, y, th)))
-        return worst
+            poses[i] = (x, y, math.cos(th), math.sin(th))
+        # every pose at once: the same arithmetic as clearance() per pose, one row each
+        c, s = poses[:, 2:3], poses[:, 3:4]
+        dx, dy = points[None, :, 0] - poses[:, :1], points[None, :, 1] - poses[:, 1:2]
+        gap_x = np.abs(c * dx + s * dy) - self.half[0]
+        gap_y = np.abs(-s * dx + c * dy) - self.half[1]
+        outside = np.hypot(np.maximum(gap_x, 0.0), np.maximum(gap_y, 0.0))
+        return float(np.min(outside + np.minimum(np.maximum(gap_x, gap_y), 0.0)))
 
     def is_safe(self, v: float, w: float, points: np.ndarray, margin: float | None = None) -> bool:
         """``points`` (n, 2) in base_link; True if the rectangle driven at (v, w) keeps ``margin`` off them."""

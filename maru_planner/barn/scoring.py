@@ -15,9 +15,7 @@ import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
-from scipy.ndimage import binary_dilation
 
-from maru_planner.base.astar import astar_2d
 from maru_planner.errors import NoPath
 from maru_planner.physics.barn_world import CELL, full_grid
 
@@ -40,12 +38,18 @@ def barn_metric(success: bool, time_s: float | None, optimal_time_s: float) -> f
 
 def cspace(grid: np.ndarray) -> np.ndarray:
     """The generator's C-space of the full grid: blocked if any cylinder lies in the cell's 5 x 5 window."""
+    # lazy: scipy.ndimage only for a --grid's OT (maru-barn --through-ros --world N starts faster without it)
+    from scipy.ndimage import binary_dilation
+
     window = np.ones((2 * ROBOT_CELLS + 1, 2 * ROBOT_CELLS + 1), bool)
     return binary_dilation(full_grid(grid).astype(bool), structure=window)
 
 
 def grid_optimal_time(grid: np.ndarray) -> float:
     """OT of any grid: the C-space shortest path from start to goal cell, in metres, / 2 m/s; NoPath if none."""
+    # lazy: numba's A* kernels only for a --grid's OT (a 2-7 s import under load; public worlds have their OT)
+    from maru_planner.base.astar import astar_2d
+
     blocked = cspace(grid)
     blocked[FULL_START_CELL] = blocked[FULL_GOAL_CELL] = False
     result = astar_2d(blocked, FULL_START_CELL, FULL_GOAL_CELL, method="astar")
@@ -54,6 +58,15 @@ def grid_optimal_time(grid: np.ndarray) -> float:
     steps = np.abs(np.diff(np.asarray(result.path), axis=0)).sum(axis=1)
     length = float(np.sum(np.where(steps == 2, math.sqrt(2), 1.0))) * CELL
     return length / OPTIMAL_SPEED
+
+
+@dataclass
+class RunTrace:
+    """What a picture needs: the driven (true) trajectory, the last global path (world frame), contacts."""
+
+    trajectory: np.ndarray
+    global_path: np.ndarray
+    contacts: list[tuple[float, float, float]]
 
 
 @dataclass

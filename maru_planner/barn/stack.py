@@ -22,7 +22,7 @@ import numpy as np
 
 from maru_planner.barn.online_map import OnlineMap
 from maru_planner.barn.safety import SafetyFilter, StuckMonitor
-from maru_planner.barn.scoring import TIME_LIMIT, RunJudge, RunScore, barn_metric
+from maru_planner.barn.scoring import TIME_LIMIT, RunJudge, RunScore, RunTrace, barn_metric
 from maru_planner.base.astar import GridAStarPlanner
 from maru_planner.physics.barn_world import GOAL
 from maru_planner.physics.base_sim import BaseSim
@@ -52,15 +52,6 @@ class StackConfig:
     backup_speed: float = 0.3  # m/s
     time_limit: float = TIME_LIMIT  # s from the first 0.1 m of motion (the challenge: 100)
     silent_after: float | None = None  # fault injection: the stack stops commanding after this sim time (s)
-
-
-@dataclass
-class RunTrace:
-    """What a picture needs: the driven (true) trajectory, the last global path (world frame), contacts."""
-
-    trajectory: np.ndarray
-    global_path: np.ndarray
-    contacts: list[tuple[float, float, float]]
 
 
 def strip_params(config: StackConfig, laser_x: float) -> StripParams:

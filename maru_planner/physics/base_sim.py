@@ -61,9 +61,10 @@ class BaseSim:
         self._laser = Laser(self.laser_spec, OBSTACLE_GROUP, self.rng)
         self.odometry = Odometry(self.jackal, self.rng)
         self._wheel_dofs = np.array([self.model.jnt_dofadr[self.model.joint(n).id] for n in WHEELS])
-        self._obstacle_geom = self.model.geom_group == OBSTACLE_GROUP
         base = self.model.body("base_link").id
-        self._robot_geom = np.isin(self.model.geom_bodyid, [base, *(self.model.body(f"{n}_wheel").id for n in WHEELS)])
+        robot_geom = np.isin(self.model.geom_bodyid, [base, *(self.model.body(f"{n}_wheel").id for n in WHEELS)])
+        # per geom: 1 robot, 2 obstacle, 0 other; a contact pair's product is 2 only for robot against obstacle
+        self._geom_kind = robot_geom.astype(np.int8) + 2 * (self.model.geom_group == OBSTACLE_GROUP).astype(np.int8)
         self.events = SimEvents()
         self.time = 0.0
         self._cmd = (0.0, 0.0)
@@ -136,8 +137,8 @@ class BaseSim:
             self._applied = self._cmd
         mujoco.mj_step(self.model, self.data)
         self.time += self.timestep
-        rates = self.data.qvel[self._wheel_dofs]
-        self.odometry.update(rates, float(self.data.qvel[5]), self.timestep)
+        qvel = self.data.qvel
+        self.odometry.update(qvel[self._wheel_dofs], float(qvel[5]), self.timestep)
         self._check_contacts()
         if self.time + 1e-9 >= self._next_scan:
             period = 1.0 / self.laser_spec.rate
@@ -154,12 +155,10 @@ class BaseSim:
             self.step()
 
     def _check_contacts(self) -> None:
-        n = self.data.ncon
         touching = False
-        if n:
-            geoms = self.data.contact.geom[:n]
-            robot, obstacle = self._robot_geom[geoms], self._obstacle_geom[geoms]
-            touching = bool(np.any((robot[:, 0] & obstacle[:, 1]) | (robot[:, 1] & obstacle[:, 0])))
+        if self.data.ncon:
+            kinds = self._geom_kind[self.data.contact.geom]
+            touching = bool((kinds[:, 0] * kinds[:, 1] == 2).any())
         if touching and not self._in_contact:
             x, y, _ = self.true_pose()
             self.events.contacts.append((round(self.time, 4), x, y))

@@ -113,15 +113,19 @@ class Odometry:
         self.bias = float(rng.normal(0.0, spec.gyro_bias_sigma))
         self.pose = np.zeros(3)  # x, y, yaw
         self.twist = np.zeros(2)  # v, w
-        self._noise = np.zeros((0, 5))
+        self._encoder_scale = np.zeros((0, 4))  # per step: 1 + encoder noise, one row per wheel set
+        self._gyro_noise: list[float] = []
         self._cursor = 0
 
     def update(self, wheel_rates: np.ndarray, true_yaw_rate: float, dt: float) -> None:
         spec = self.spec
-        noise = self._next_noise()
-        v = spec.wheel_radius * float(wheel_rates @ (1.0 + spec.wheel_noise * noise[:4])) / 4.0
-        w = true_yaw_rate + self.bias + spec.gyro_noise * float(noise[4])
-        x, y, yaw = self.pose
+        if self._cursor >= len(self._gyro_noise):
+            self._draw_noise()
+        scale, gyro = self._encoder_scale[self._cursor], self._gyro_noise[self._cursor]
+        self._cursor += 1
+        v = spec.wheel_radius * float(wheel_rates @ scale) / 4.0
+        w = true_yaw_rate + self.bias + gyro
+        x, y, yaw = self.pose.tolist()
         mid = yaw + 0.5 * w * dt
         yaw += w * dt
         self.pose[:] = (
@@ -131,10 +135,9 @@ class Odometry:
         )
         self.twist[:] = (v, w)
 
-    def _next_noise(self) -> np.ndarray:
-        """Five standard normals (4 encoders, the gyro), drawn in blocks (one draw per step is slow)."""
-        if self._cursor >= len(self._noise):
-            self._noise = self.rng.normal(size=(1000, 5))
-            self._cursor = 0
-        self._cursor += 1
-        return self._noise[self._cursor - 1]
+    def _draw_noise(self) -> None:
+        """Five standard normals per step (4 encoders, the gyro), drawn and scaled in blocks (per step is slow)."""
+        noise = self.rng.normal(size=(1000, 5))
+        self._encoder_scale = 1.0 + self.spec.wheel_noise * noise[:, :4]
+        self._gyro_noise = (self.spec.gyro_noise * noise[:, 4]).tolist()
+        self._cursor = 0

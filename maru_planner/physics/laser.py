@@ -61,6 +61,7 @@ class Laser:
         self._groups[group] = 1
         self._geomid = np.zeros(spec.beams, dtype=np.int32)
         self._dist = np.zeros(spec.beams, dtype=np.float64)
+        self._vec = np.zeros((spec.beams, 3))  # beam directions, reused (the z column stays 0)
 
     def origin(self, pose: tuple[float, float, float]) -> np.ndarray:
         x, y, yaw = pose
@@ -73,12 +74,14 @@ class Laser:
         """Noise-free range per beam (inf beyond range_max or with no hit)."""
         spec = self.spec
         a = pose[2] + self._angles
-        vec = np.column_stack([np.cos(a), np.sin(a), np.zeros_like(a)]).reshape(-1)
+        vec = self._vec
+        np.cos(a, out=vec[:, 0])
+        np.sin(a, out=vec[:, 1])
         mujoco.mj_multiRay(
             model,
             data,
             self.origin(pose),
-            vec,
+            vec.reshape(-1),
             self._groups,
             1,
             -1,

@@ -46,6 +46,8 @@ from maru_planner.ros.env import configure_loopback_dds
 from maru_planner_interfaces.srv import PlanBasePath
 
 RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+# the sim's first state waits for these: scan and odom (reactive_node and this process), ~/status (this process)
+FIRST_STATE_SUBSCRIBERS = 5
 LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
 
 
@@ -123,8 +125,11 @@ class StackNode:
         self.plan_client = node.create_client(PlanBasePath, "plan_base_path")
         node.create_subscription(LaserScan, "scan", self._on_scan, RELIABLE)
         node.create_subscription(Odometry, "odom", self._on_odom, RELIABLE)
-        node.create_subscription(String, "mujoco_sim_node/status", self._on_status, QoSProfile(depth=50))
         node.create_subscription(TwistStamped, "reactive_node/cmd_vel_stamped", self._on_strip, RELIABLE)
+
+    def listen_to_status(self) -> None:
+        """Subscribe to the sim's ``~/status``: the last of the subscriptions the sim's first state waits for."""
+        self.node.create_subscription(String, "mujoco_sim_node/status", self._on_status, QoSProfile(depth=50))
 
     def publish_goal(self) -> None:
         goal = self.stack.goal
@@ -254,6 +259,27 @@ def _spin_until(node: Node, predicate: Any, timeout: float, what: str) -> None:
         rclpy.spin_once(node, timeout_sec=0.05)
 
 
+def _prove_planner(node: Node, client: Any, timeout: float) -> None:
+    """A harmless plan_base_path until one is answered: right after discovery the server may not have matched
+    our reply reader yet, and rmw_fastrtps drops the reply (a replan would wait for nothing)."""
+    deadline, attempt = time.monotonic() + timeout, 1.0
+    _spin_until(node, client.service_is_ready, timeout, "base_planner_node never appeared")
+    request = PlanBasePath.Request()
+    request.start = reactive_conversions.pose_stamped_msg((0.0, 0.0, 0.0), "odom", 0.0)
+    request.goal = reactive_conversions.pose_stamped_msg((0.0, 0.0, 0.0), "odom", 0.0)
+    request.planner_id = "astar"
+    while time.monotonic() < deadline:
+        future = client.call_async(request)
+        wait_until = min(time.monotonic() + attempt, deadline)
+        while not future.done() and time.monotonic() < wait_until:
+            rclpy.spin_once(node, timeout_sec=0.05)
+        if future.done():
+            return
+        client.remove_pending_request(future)
+        attempt = min(2.0 * attempt, 8.0)
+    raise TimeoutError(f"base_planner_node never answered plan_base_path within {timeout} s")
+
+
 def run_through_ros(
     world: int | None, grid_file: str | None, optimal_time_s: float, seed: int, name: str, log_dir: Path,
     config: StackConfig | None = None, wall_limit: float = 600.0,
@@ -263,19 +289,28 @@ def run_through_ros(
     jackal, laser = JackalSpec(), LaserSpec()
     configure_loopback_dds(random.SystemRandom().randint(101, 200))  # a domain of the run's own
     procs = _Processes(log_dir)
-    rclpy.init()
-    node = rclpy.create_node("barn_stack")
+    # all three start at once, before this process sets up (start-up is most of a short run's wall time); the
+    # sim holds its first state until reactive_node and this process subscribe, and this process subscribes to
+    # its status only once reactive_node has the goal: the first scan never finds reactive_node without one
+    source = ["-p", f"grid_file:={grid_file}"] if grid_file else ["-p", f"world:={world}"]
+    sim_args = ["--ros-args", "--params-file", str(config_path("mujoco_sim.yaml")), *source]
+    held = ["-p", f"first_state_subscribers:={FIRST_STATE_SUBSCRIBERS}", "-p", "lockstep_wait:=10.0"]
     try:
-        stack = StackNode(node, config, jackal, laser)
+        procs.start("mujoco_sim_node", [*sim_args, "-p", f"seed:={seed}", *held])
         procs.start("base_planner_node", base_planner_arguments(config))
         procs.start("reactive_node", reactive_arguments(config, laser))
+        rclpy.init()
+        node = rclpy.create_node("barn_stack")
+    except BaseException:  # the nodes never outlive this process
+        procs.stop()
+        raise
+    try:
+        stack = StackNode(node, config, jackal, laser)
         _spin_until(node, lambda: stack.goal_pub.get_subscription_count() > 0, 60.0, "reactive_node never appeared")
-        _spin_until(node, lambda: stack.plan_client.service_is_ready(), 60.0, "base_planner_node never appeared")
         stack.publish_goal()  # latched: reactive_node has it before the first scan
         _spin_until(node, lambda: "goal (" in procs.log("reactive_node"), 30.0, "reactive_node took no goal")
-        source = ["-p", f"grid_file:={grid_file}"] if grid_file else ["-p", f"world:={world}"]
-        sim_args = ["--ros-args", "--params-file", str(config_path("mujoco_sim.yaml")), *source]
-        procs.start("mujoco_sim_node", [*sim_args, "-p", f"seed:={seed}", "-p", "lockstep_wait:=10.0"])
+        _prove_planner(node, stack.plan_client, 60.0)
+        stack.listen_to_status()
         wall0, cpu0 = time.perf_counter(), time.process_time()
 
         def over() -> bool:

@@ -10,9 +10,12 @@ Two ways to step (``lockstep``):
 - lock-step (default): the node publishes the state, waits for the next ``cmd_vel`` and then advances
   ``control_period`` of sim time: deterministic for a fixed ``seed`` and as fast as the controller answers.
   Until the first command the state is re-published every ``lockstep_wait`` s (wall) without advancing, for
-  subscribers that join late. After it, a controller silent for ``lockstep_wait`` s no longer holds the clock:
-  the node advances on its own, and the base stops ``cmd_timeout`` s (sim) after the last command (counted in
-  ``~/status`` and logged), as a real base's command watchdog would.
+  subscribers that join late; with ``first_state_subscribers`` the first state is held until that many
+  subscriptions of ``scan``, ``odom`` and ``~/status`` have matched (a state published before discovery is
+  lost, and waiting for the re-publish cost a whole ``lockstep_wait``). After the first command, a controller
+  silent for ``lockstep_wait`` s no longer holds the clock: the node advances on its own, and the base stops
+  ``cmd_timeout`` s (sim) after the last command (counted in ``~/status`` and logged), as a real base's
+  command watchdog would.
 - real time: the physics advances ``1 / laser rate`` per tick of a wall timer at ``real_time_factor``, and
   ``cmd_vel`` sets the command whenever it arrives.
 
@@ -63,6 +66,9 @@ class MujocoSimConfig:
                                   read_only=True)  # fmt: skip
     lockstep_wait: float = param(1.0, "wall s without a cmd_vel after which lock-step advances on its own",
                                  lower=0.01, upper=60.0)  # fmt: skip
+    first_state_subscribers: int = param(0, "lock-step: hold the first state until scan, odom and ~/status "
+                                         "together have this many matched subscriptions (at most lockstep_wait)",
+                                         lower=0, upper=1000, read_only=True)  # fmt: skip
     real_time_factor: float = param(1.0, "sim s per wall s when not in lock-step", lower=0.01, upper=100.0)
     cmd_timeout: float = param(0.5, "sim s after the last cmd_vel at which the base stops", lower=0.01,
                                upper=10.0, read_only=True)  # fmt: skip
@@ -88,6 +94,7 @@ class MujocoSimNode(ManagedNode):
         self.silent_steps = 0  # lock-step periods advanced without a command (a silent controller)
         self._commanded = False  # a cmd_vel has arrived since activation
         self._last_publish = 0.0  # wall time of the last state published
+        self._published = False  # a state has been published since activation
         self.start()
 
     def _apply(self, changes: dict[str, Any]) -> None:
@@ -115,12 +122,14 @@ class MujocoSimNode(ManagedNode):
 
     def activate(self) -> None:
         assert self.sim is not None
-        self._commanded = False
+        self._commanded = self._published = False
         if self.sim.latest_scan is None:
             self.sim.advance(self.config.control_period if self.config.lockstep else self._tick())
         if self.config.lockstep:
             self._timer = self.create_timer(min(0.05, self.config.lockstep_wait / 2), self._lockstep_watch)
-            self._publish()
+            self._last_publish = time.monotonic()
+            if self._subscribers_matched():
+                self._publish()
         else:
             self._timer = self.create_timer(self._tick() / self.config.real_time_factor, self._real_time_step)
 
@@ -131,6 +140,10 @@ class MujocoSimNode(ManagedNode):
 
     def cleanup(self) -> None:
         self.sim = None
+
+    def _subscribers_matched(self) -> bool:
+        matched = sum(pub.get_subscription_count() for pub in (self.scan_pub, self.odom_pub, self.status_pub))
+        return matched >= self.config.first_state_subscribers
 
     def _tick(self) -> float:
         assert self.sim is not None
@@ -152,7 +165,11 @@ class MujocoSimNode(ManagedNode):
             self._advance()
 
     def _lockstep_watch(self) -> None:
-        """Lock-step without an answer for ``lockstep_wait``: re-publish (before the first command) or advance."""
+        """Lock-step: the first state once its subscribers matched; without an answer for ``lockstep_wait``:
+        re-publish (before the first command) or advance."""
+        if not self._published and self._subscribers_matched():
+            self._publish()
+            return
         if time.monotonic() - self._last_publish < self.config.lockstep_wait:
             return
         if not self._commanded:
@@ -197,6 +214,7 @@ class MujocoSimNode(ManagedNode):
         self.scan_pub.publish(conv.laser_msg(sim.latest_scan, c.laser_frame, period))
         self.status_pub.publish(conv.status_msg(sim, self.steps, self.silent_steps))
         self._last_publish = time.monotonic()
+        self._published = True
 
 
 def main(args: list[str] | None = None) -> int:
