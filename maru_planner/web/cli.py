@@ -12,19 +12,23 @@ import argparse
 import sys
 import time
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 from maru_planner import errors
-from maru_planner.base.grid import OccupancyGrid
 from maru_planner.cli_parser import OneLineParser
-from maru_planner.physics import barn_world
 from maru_planner.planning.config import COLLISION_MODELS, PlannerConfig
 from maru_planner.robot.robot_profile import PROFILES
-from maru_planner.web.base_live import LiveBaseView
-from maru_planner.web.base_view import BaseView, read_base_run
 from maru_planner.web.server import ViewApp, ViewSettings
 from maru_planner.web.serving import DEFAULT_HOST, serve
 
+if TYPE_CHECKING:
+    from maru_planner.web.base_live import LiveBaseView
+    from maru_planner.web.base_view import BaseView
+
 EXIT_OK, EXIT_BAD_INPUT = 0, 2
+#: robots planned with the exact checker unless --collision-model says otherwise: the first fit of TIAGo's sphere
+#: model (its base and torso meshes) ran over 7 minutes, and the view is to plan within seconds of the page
+EXACT_BY_DEFAULT = {"tiago": "its first sphere-model fit takes minutes"}
 
 
 def parser() -> argparse.ArgumentParser:
@@ -42,8 +46,8 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--collision-model",
         choices=COLLISION_MODELS,
-        default=PlannerConfig.collision_model,
-        help="the planner's checker (spheres: a robot's first use fits its sphere model, minutes for TIAGo or Talos)",
+        help=f"the planner's checker (default {PlannerConfig.collision_model}; exact for "
+        f"{', '.join(sorted(EXACT_BY_DEFAULT))}, whose sphere fit takes minutes)",
     )
     p.add_argument("--bag", help="replay the base run of this rosbag2 directory (/odom, /scan, /plan, /goal_pose)")
     p.add_argument("--map", help="with --bag: the occupancy grid's map YAML to draw under the run")
@@ -56,11 +60,28 @@ def settings_of(args: argparse.Namespace) -> ViewSettings:
     if not 0 <= args.port <= 65535:
         raise errors.InvalidRequest(f"--port must be in [0, 65535], got {args.port}")
     scene = args.scene or ("" if args.robot == "maru1" else "none")
-    return ViewSettings(args.robot, scene, args.host, args.port, args.collision_model)
+    return ViewSettings(args.robot, scene, args.host, args.port, collision_model(args))
+
+
+def collision_model(args: argparse.Namespace) -> str:
+    """``--collision-model``, or when it is not given the default for the robot (one line on stderr saying why)."""
+    if args.collision_model:
+        return str(args.collision_model)
+    if args.robot in EXACT_BY_DEFAULT:
+        print(f"maru-view: {args.robot} plans with --collision-model exact ({EXACT_BY_DEFAULT[args.robot]})",
+              file=sys.stderr)  # fmt: skip
+        return "exact"
+    return PlannerConfig.collision_model
 
 
 def base_view(args: argparse.Namespace) -> BaseView | LiveBaseView:
     """The replay of ``--bag`` (over ``--map`` or ``--barn``), or BARN world ``--barn`` alone, on its own server."""
+    # lazy: the base side (scipy, rosbags, BARN worlds) costs the robot view ~1 s of start-up it does not need
+    from maru_planner.base.grid import OccupancyGrid
+    from maru_planner.physics import barn_world
+    from maru_planner.web.base_live import LiveBaseView
+    from maru_planner.web.base_view import BaseView, read_base_run
+
     settings = settings_of(args)
     run = read_base_run(args.bag) if args.bag else None
     try:

@@ -1,9 +1,12 @@
 """``maru-view``'s application: a viser server showing one robot and its scene, planning through a
 :class:`~maru_planner.runtime.PlanningRuntime` what the side panel and the goal gizmos ask for.
 
-The page is served at once (robot and scene drawn from the robot model); the runtime (workers, warm-up) starts in
-a thread and the "Plan" button is enabled when it is ready. A plan: the goals of the end effectors the chosen
-group moves -> IK and the pipeline (one :class:`~maru_planner.planning.types.MotionRequest`) -> the trajectory
+The page is served at once (robot and scene drawn from the robot model). The runtime (workers, warm-up) is built in
+a thread once the first page is up (its camera reported, then its first frame drawn): on a 2-core machine a warm-up
+that runs while the browser compiles viser's client and draws the first frame makes the page ~1-2 s later. It starts
+at once when "Plan" is pressed or :func:`wait_ready` is called, and after :data:`START_ANYWAY_S` when no page opens.
+"Plan" pressed while the planner loads says so and plans when it is ready. A plan: the goals of the end effectors the
+chosen group moves -> IK and the pipeline (one :class:`~maru_planner.planning.types.MotionRequest`) -> the trajectory
 played by :class:`~maru_planner.web.plan_view.PlanView`, whose final state becomes the next start.
 """
 
@@ -16,10 +19,13 @@ import time
 from collections.abc import Sequence
 
 import numpy as np
+import viser
 
 from maru_planner import errors
+from maru_planner.collision.checker import CollisionChecker
 from maru_planner.planning.config import PlannerConfig
 from maru_planner.planning.types import MotionRequest, MotionResult, PlanStatus, set_failure
+from maru_planner.robot import RobotModel
 from maru_planner.robot.attached import check_attachments
 from maru_planner.runtime import PlanningRuntime, RobotSource, RuntimeSettings, SceneEdit
 from maru_planner.runtime.scene_store import load_scene_dict
@@ -30,6 +36,10 @@ from maru_planner.web.scene_edit import SceneEditor
 from maru_planner.web.serving import DEFAULT_HOST, serve
 
 _LOG = logging.getLogger(__name__)
+PAGE_SETTLE_S = 1.0  # s after the first page's camera report: its first frame is drawn meanwhile
+START_ANYWAY_S = 10.0  # s: the planner loads this long after start even when no page opened
+PLAN_WAIT_S = 900.0  # s a press waits for a loading planner (a robot's first sphere fit can take minutes)
+PLAN_LABEL, LOADING_LABEL = "Plan", "Plan (the planner is loading)"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -59,14 +69,20 @@ class ViewApp:
         self.view = PlanView(self.server, self.robot, self.source)
         self.panel = PlanningPanel(self.server, self.robot, self.plan_async)
         self.editor = SceneEditor(self.server, self.robot, self.apply_edits, self.scene_dict, self.joint_values)
-        self.start = self._rest_state()
+        self.start = rest_state(self.robot, self._scene)
         self.view.show_start(self.start)
         self.view.show_scene(self._scene)
         self.editor.refresh(self._scene.to_dict())
         self.panel.place_goals(self.start)
         self.ready = threading.Event()
+        self._wanted = threading.Event()  # build the runtime now (the page is up, or a plan waits for it)
+        self._closed = False
         self.last_result: MotionResult | None = None
         self._plan_lock = threading.Lock()
+        self.panel.plan_button.disabled = False
+        self.panel.plan_button.label = LOADING_LABEL
+        self.panel.message.content = "the planner loads once the page is shown; Plan waits for it"
+        self.server.on_client_connect(self._on_client)
         threading.Thread(target=self._start_runtime, daemon=True, name="maru-view-runtime").start()
 
     @property
@@ -74,6 +90,8 @@ class ViewApp:
         return f"http://{self.settings.host}:{self.server.get_port()}"
 
     def close(self) -> None:
+        self._closed = True  # a runtime not built yet is not built now
+        self._wanted.set()
         self.server.stop()
         self.ready.wait(timeout=60.0)
         if self.runtime is not None:
@@ -126,8 +144,14 @@ class ViewApp:
             runtime.reconfigure(dataclasses.replace(runtime.config, planner_params=wanted), runtime.settings)
 
     def _runtime(self) -> PlanningRuntime:
-        if not self.ready.is_set() or self.runtime is None:
-            raise errors.Busy("the planner is still loading; press Plan again in a moment")
+        """The runtime, waiting while it loads; Busy if it is not ready within PLAN_WAIT_S or did not start."""
+        if not self.ready.is_set():
+            self._wanted.set()
+            self.panel.message.content = "waiting for the planner to load, then planning ..."
+        if not self.ready.wait(PLAN_WAIT_S):
+            raise errors.Busy(f"the planner did not get ready within {PLAN_WAIT_S:g} s")
+        if self.runtime is None:
+            raise errors.Busy("the planner did not start (see the message above); restart maru-view")
         return self.runtime
 
     # ------------------------------------------------------------ scene
@@ -158,33 +182,61 @@ class ViewApp:
         return dict(zip(self.robot.joint_names, np.asarray(self.start, dtype=float).tolist(), strict=True))
 
     # ------------------------------------------------------------ start-up
-    def _rest_state(self) -> np.ndarray:
-        """The SRDF's "home" (or "ready") state if it has one, else the neutral configuration."""
-        for name in ("home", "ready"):
-            if name in self.robot.named_states:
-                return self.robot.named_state(name)
-        return self.robot.neutral()
-
     def _note(self, line: str) -> None:
         """A start-up note of the runtime (a first sphere fit can take minutes): logged and shown in the panel."""
         _LOG.info(line)
         self.panel.message.content = f"loading the planner: {line}"
 
+    def want_planner(self) -> None:
+        """Load the planner now rather than after the first page is up."""
+        self._wanted.set()
+
+    def _on_client(self, client: viser.ClientHandle) -> None:
+        """A page connected: load the planner once its camera reports (its canvas is up) and its first frame is
+        drawn: PAGE_SETTLE_S later, or as long again as the canvas took (a loaded machine draws slowly too)."""
+        reported, connected = threading.Event(), time.monotonic()
+
+        def on_camera(_: viser.CameraHandle) -> None:
+            if not reported.is_set():
+                reported.set()
+                settle = max(PAGE_SETTLE_S, time.monotonic() - connected)
+                timer = threading.Timer(settle, self._wanted.set)
+                timer.daemon = True
+                timer.start()
+
+        client.camera.on_update(on_camera)
+
     def _start_runtime(self) -> None:
+        self._wanted.wait(START_ANYWAY_S)
+        if self._closed:
+            self.ready.set()
+            return
         t0 = time.monotonic()
         try:
             settings = RuntimeSettings(default_group=default_group(self.robot), workers=1, worker_processes=False)
             self.runtime = PlanningRuntime(self.source, self._scene, self.config, settings, log=self._note)
         except errors.MaruError as exc:
             self.panel.message.content = f"**the planner did not start**: {exc.message}"
+            self.panel.plan_button.disabled = True
             return
         finally:
+            self.panel.plan_button.label = PLAN_LABEL
             self.ready.set()
-        self.panel.plan_button.disabled = False
         self.panel.message.content = f"planner ready ({time.monotonic() - t0:.1f} s)"
 
 
+def rest_state(robot: RobotModel, scene: Scene) -> np.ndarray:
+    """The first collision-free (self and ``scene``) of: the SRDF's "home", "ready", its other named states in order,
+    the neutral configuration; the first of them when none is (Talos' neutral pose has its arms in its legs)."""
+    names: list[str] = [n for n in ("home", "ready") if n in robot.named_states]
+    names += [n for n in robot.named_states if n not in names]
+    candidates = [robot.named_state(n) for n in names] + [robot.neutral()]
+    checker = CollisionChecker(robot, scene)
+    return next((q for q in candidates if checker.is_valid(q)), candidates[0])
+
+
 def wait_ready(app: ViewApp, timeout: float) -> None:
-    """Block until ``app``'s planner is ready; Busy (one line) after ``timeout`` s."""
+    """Block until ``app``'s planner is ready (loading it now if it waits for a page); Busy after ``timeout`` s."""
+    app.want_planner()
     if not app.ready.wait(timeout) or app.runtime is None:
         raise errors.Busy(f"the planner did not get ready within {timeout:g} s")
