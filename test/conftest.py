@@ -9,8 +9,6 @@ participant on this machine is using (test runs may share a machine).
 from __future__ import annotations
 
 import os
-import random
-import socket
 import subprocess
 import sys
 import threading
@@ -25,7 +23,7 @@ from maru_planner.paths import benchmarks_dir, config_path
 from maru_planner.planning.problems import PROBLEMS
 from maru_planner.robot import RobotModel, load_example_robot
 from maru_planner.robot.robots.panda import PANDA_FINGERS_OPEN
-from maru_planner.ros.env import configure_loopback_dds
+from maru_planner.ros.env import configure_loopback_dds, unused_domain_id
 from maru_planner.scene import Obstacle, Scene
 from maru_planner.scene.motion_bench_maker import iter_mbm_problems
 
@@ -62,33 +60,12 @@ def panda_clutter(seed: int, count: int = 9) -> Scene:
     return Scene(obstacles)
 
 
-def _domain_in_use(domain: int, participants: int = 4) -> bool:
-    """Whether a Fast DDS participant on this machine holds a discovery port of ``domain``.
-
-    RTPS port mapping: participant ``i`` of domain ``d`` takes UDP 7410 + 250 d + 2 i (metatraffic unicast).
-    """
-    for index in range(participants):
-        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
-            try:
-                probe.bind(("127.0.0.1", 7410 + 250 * domain + 2 * index))
-            except OSError:
-                return True
-    return False
-
-
-def _unused_domain_id() -> int:
-    """A random ROS domain id in 1..100 that no other run on this machine uses (any one if all are taken)."""
-    domains = list(range(1, 101))
-    random.SystemRandom().shuffle(domains)
-    return next((d for d in domains if not _domain_in_use(d)), domains[0])
-
-
 def pytest_configure(config):
     # The user's exported ROS_DOMAIN_ID is kept (make test then runs one worker per lane), else each pytest process
     # takes a free one: xdist workers inherit the controller's environment, so what the user exported is passed on
     # apart from the domain the controller chose for itself.
     user_domain = os.environ.setdefault("MARU_USER_ROS_DOMAIN_ID", os.environ.get("ROS_DOMAIN_ID", ""))
-    configure_loopback_dds(domain_id=int(user_domain) if user_domain.isdigit() else _unused_domain_id())
+    configure_loopback_dds(domain_id=int(user_domain) if user_domain.isdigit() else unused_domain_id())
     os.environ.setdefault("MPLBACKEND", "Agg")
 
 

@@ -17,8 +17,6 @@ import argparse
 import json
 import math
 import os
-import random
-import subprocess
 import sys
 import time
 from dataclasses import fields
@@ -42,13 +40,16 @@ from maru_planner.physics.barn_world import GOAL, START
 from maru_planner.physics.jackal import JackalSpec
 from maru_planner.physics.laser import LaserSpec, Scan
 from maru_planner.ros import base_conversions, reactive_conversions
-from maru_planner.ros.env import configure_loopback_dds
+from maru_planner.ros.env import configure_loopback_dds, unused_domain_id
+from maru_planner.ros.node_processes import NodeProcesses
 from maru_planner_interfaces.srv import PlanBasePath
 
 RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 # the sim's first state waits for these: scan and odom (reactive_node and this process), ~/status (this process)
 FIRST_STATE_SUBSCRIBERS = 5
 LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+
+USER_DOMAIN = os.environ.get("ROS_DOMAIN_ID", "")  # read at import, before a run sets its own
 
 
 def _param(value: Any) -> str:
@@ -219,38 +220,6 @@ class StackNode:
         self.cmd_pub.publish(msg)
 
 
-class _Processes:
-    """The three nodes as processes, their logs under ``log_dir``."""
-
-    def __init__(self, log_dir: Path):
-        self.log_dir = log_dir
-        self.procs: dict[str, subprocess.Popen] = {}
-
-    def start(self, name: str, args: list[str]) -> None:
-        log = open(self.log_dir / f"{name}.log", "w")  # noqa: SIM115 -- the child writes it until stop()
-        self.procs[name] = subprocess.Popen(
-            [sys.executable, "-m", f"maru_planner.ros.{name}", *args], stdout=log, stderr=subprocess.STDOUT,
-            stdin=subprocess.DEVNULL, env=dict(os.environ),
-        )  # fmt: skip
-
-    def log(self, name: str) -> str:
-        return (self.log_dir / f"{name}.log").read_text(errors="replace")
-
-    def dead(self) -> str | None:
-        return next((name for name, proc in self.procs.items() if proc.poll() is not None), None)
-
-    def stop(self) -> None:
-        for proc in self.procs.values():
-            if proc.poll() is None:
-                proc.terminate()
-        for proc in self.procs.values():
-            try:
-                proc.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait(timeout=5)
-
-
 def _spin_until(node: Node, predicate: Any, timeout: float, what: str) -> None:
     deadline = time.monotonic() + timeout
     while not predicate():
@@ -287,8 +256,9 @@ def run_through_ros(
     """One run: start the nodes, hand reactive_node its goal, start the sim, follow it to the outcome."""
     config = config or StackConfig()
     jackal, laser = JackalSpec(), LaserSpec()
-    configure_loopback_dds(random.SystemRandom().randint(101, 200))  # a domain of the run's own
-    procs = _Processes(log_dir)
+    # the user's exported domain, else a free one per run (a run's nodes never meet a previous run's)
+    configure_loopback_dds(int(USER_DOMAIN) if USER_DOMAIN.isdigit() else unused_domain_id())
+    procs = NodeProcesses(log_dir)
     # all three start at once, before this process sets up (start-up is most of a short run's wall time); the
     # sim holds its first state until reactive_node and this process subscribe, and this process subscribes to
     # its status only once reactive_node has the goal: the first scan never finds reactive_node without one
@@ -316,7 +286,7 @@ def run_through_ros(
         def over() -> bool:
             dead = procs.dead()
             if dead is not None:
-                raise RuntimeError(f"{dead} died: {procs.log(dead).strip().splitlines()[-1:]}")
+                raise RuntimeError(f"{dead} died: {procs.last_line(dead)}")
             return stack.judge.outcome is not None
 
         _spin_until(node, over, wall_limit, "the run did not end")

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import os
 import random
+import socket
 
 from maru_planner.paths import config_path
 
@@ -48,16 +49,36 @@ def configure_loopback_dds(domain_id: int | None = None, *, random_domain: bool 
 
     The discovery range and profile are always forced (traffic to any other
     address is never wanted). The domain id is taken from ``domain_id``, else the
-    user's exported ``ROS_DOMAIN_ID``, else a random one in 1..100 when
-    ``random_domain``, else left unset.
+    user's exported ``ROS_DOMAIN_ID``, else one in 1..100 that no process on this machine uses
+    (:func:`unused_domain_id`) when ``random_domain``, else left unset.
     """
     if domain_id is None and random_domain and not os.environ.get("ROS_DOMAIN_ID"):
-        domain_id = random.SystemRandom().randint(1, 100)
+        domain_id = unused_domain_id()
     env = loopback_dds_environment(domain_id)
     os.environ.update(env)
     os.environ.pop("ROS_LOCALHOST_ONLY", None)
     os.environ.pop("ROS_STATIC_PEERS", None)
     return env
+
+
+def unused_domain_id(participants: int = 4) -> int:
+    """A random ROS domain id in 1..100 in which no DDS participant on this machine holds a discovery port (RTPS
+    port mapping: participant ``i`` of domain ``d`` takes UDP 7410 + 250 d + 2 i); any one if all are taken."""
+    domains = list(range(1, 101))
+    random.SystemRandom().shuffle(domains)
+    for domain in domains:
+        if not any(_udp_port_taken(7410 + 250 * domain + 2 * i) for i in range(participants)):
+            return domain
+    return domains[0]
+
+
+def _udp_port_taken(port: int) -> bool:
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+        try:
+            probe.bind(("127.0.0.1", port))
+        except OSError:
+            return True
+    return False
 
 
 def user_network_settings() -> dict[str, str]:
