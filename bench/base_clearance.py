@@ -379,6 +379,25 @@ def per_family(row: dict) -> str:
     )
 
 
+def summary_markdown(summary: dict) -> str:
+    """Ours on each data set as a whole (the rows above): the table docs/base.md quotes."""
+    lines = [
+        "",
+        "## Summary: ours against the shortest path",
+        "",
+        "| data set | planner | mean clearance ratio | min "
+        "clearance ratio | length ratio (max) | lethal paths | plan time ratio | targets missed |",
+        "|---" * 8 + "|",
+    ]
+    for family, name in [(f, n) for f in ("movingai", "barn") for n in OURS[1:] if n in summary.get(f, {})]:
+        s = summary[family][name]
+        missed = ", ".join(k for k, ok in verdicts(s).items() if not ok) or "none"
+        lines.append(f"| {family} | {name} | {s['mean_clearance_ratio']:.2f} | {s['min_clearance_ratio']:.2f} | "
+                     f"{s['length_ratio']:.3f} ({s['max_length_ratio']:.3f}) | {s['lethal_paths']} | "
+                     f"{s['plan_time_ratio']:.2f} | {missed} |")  # fmt: skip
+    return "\n".join(lines) + "\n"
+
+
 def markdown(summary: dict, searches: dict, args, context: str) -> str:
     lines = [
         "# Base paths that keep their distance (issue 37): cost-aware 2-D A* vs the shortest path",
@@ -422,7 +441,7 @@ def markdown(summary: dict, searches: dict, args, context: str) -> str:
         )
         + " (JPS gives way to plain A* once cells cost differently).",
     ]
-    return "\n".join(lines) + "\n"
+    return "\n".join(lines) + "\n" + summary_markdown(summary)
 
 
 def plot(rows: list[dict], cases: dict[str, Case], path: Path, multiplier: float) -> None:

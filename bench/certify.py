@@ -236,6 +236,7 @@ def markdown(summary: dict, args) -> str:
                 f"{_pct(s.get('certify_share'))} | {_pct(s.get('added_to_baseline'))} | "
                 f"{_mm(s['min_clearance_m'])} | {s['repairs']} ({s['runs_repaired']}) |"
             )
+    lines += summary_table(summary, args)
     lines += ["", "## Targets", ""]
     for key, modes in summary.items():
         if not key.endswith("| all"):
@@ -252,6 +253,33 @@ def markdown(summary: dict, args) -> str:
                 f"time (adds {_pct(added)}; certification is {_pct(cert.get('certify_share'))} of it)"
             )
     return "\n".join(lines) + "\n"
+
+
+def summary_table(summary: dict, args) -> list[str]:
+    """Each suite and model over all its planners: the table the README quotes (same run, same numbers)."""
+    suites = {"paper": f"paper 6- and 13-DOF, every planner × {args.seeds} seeds", "mbm": "MotionBenchMaker Panda"}
+    lines = [
+        "",
+        "## Summary",
+        "",
+        "| problems | model | colliding paths: certified / baseline | success: certified / baseline "
+        "| median certify ms | certify share of the plan | baseline's median re-check ms "
+        "| certification adds to the median plan |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for key, modes in summary.items():
+        suite, model, label = key.split(" | ")
+        if label != "all":
+            continue
+        cert, base = modes["certified"], modes["baseline"]
+        recheck = _ms(base["median_certify_s"]) if model == "spheres" else "none"  # exact: nothing to re-check
+        lines.append(
+            f"| {suites.get(suite, suite)} | {model} | **{cert['colliding_paths']}** / {base['colliding_paths']} | "
+            f"{cert['success']} / {base['success']} of {cert['runs']} | {_ms(cert['median_certify_s'])} | "
+            f"{_pct(cert.get('certify_share'))} | {recheck} | "
+            f"{_pct(cert.get('added_to_baseline'))} |"
+        )
+    return lines
 
 
 def plot(summary: dict, path: Path) -> None:

@@ -363,6 +363,46 @@ def table(results: list) -> str:
     return "\n".join(lines)
 
 
+def _memory(peak_bytes) -> str:
+    if not peak_bytes:
+        return "—"
+    kb = peak_bytes / 1024
+    return f"{kb:.0f} kB" if kb < 1024 else f"{kb / 1024:.1f} MB"
+
+
+def summary_table(results: list, summary: dict) -> str:
+    """One row per map (the tunnel beside both A*s) and one for MovingAI: the table docs/tunnel_biped.md quotes."""
+    head = "| map | tunnel: time, expanded cells, peak memory, length / optimum | plain A* (Python) | compiled A* |"
+    lines = [head, "|---|---|---|---|"]
+    maps = [m for m in dict.fromkeys(r["map"] for r in results if r["group"] in ("house", "generated"))]
+    for name in maps:
+        runs = {r["planner"]: r for r in results if r["map"] == name}
+        tunnel, python, compiled = (runs.get(p) for p in ("tunnel", "astar_python", "astar_numba"))
+        cells = next(r["cells"] for r in runs.values())
+        side = int(round(cells**0.5))
+        label = f"{name.split('_')[0]} {side}²"
+        t = (
+            f"{tunnel['time']:.3g} s, {tunnel['expanded']} cells, {_memory(tunnel.get('peak_bytes'))}, "
+            f"{fmt(tunnel['ratio'], '.2f')} ×"
+            if tunnel and tunnel["success"]
+            else "failed"
+        )
+        p = (
+            f"{python['time']:.3g} s, {python['expanded']} cells, {_memory(python.get('peak_bytes'))}"
+            if python
+            else "(not run)"
+        )
+        c = f"{compiled['time']:.2g} s" if compiled else "—"
+        lines.append(f"| {label} | {t} | {p} | {c} |")
+    mt, ma = summary.get("movingai_tunnel"), summary.get("movingai_astar_numba")
+    if mt and ma:
+        lines.append(
+            f"| MovingAI, {mt['queries']} queries | {mt['solved']} solved, {mt['mean_time']:.2g} s mean, "
+            f"{mt['mean_ratio']:.2f} × optimum (max {mt['max_ratio']:.2f}) | — | {ma['mean_time']:.2g} s mean |"
+        )
+    return "\n".join(lines)
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--quick", action="store_true", help="small sizes and few MovingAI queries")
@@ -406,6 +446,10 @@ def write_reports(results: list, quick: bool) -> None:
         "## the paper's claims",
         "",
         *claims(results, summary),
+        "",
+        "## per map",
+        "",
+        summary_table(results, summary),
         "",
         "## summary (log-log slopes vs N)",
         "",

@@ -28,18 +28,9 @@ import coal
 import numpy as np
 from scipy.spatial import ConvexHull, Delaunay
 
+from maru_planner.robot.sphere_options import SphereFitOptions  # re-exported: its home is robot/ (profiles carry it)
+
 FIT_VERSION = 5  # bump when the fit changes, so cached models are refitted
-
-
-@dataclass(frozen=True)
-class SphereFitOptions:
-    """Knobs of the fit. Lengths in metres."""
-
-    max_protrusion: float = 0.015  # how far a sphere may stick out of the link's hull (grown where needed)
-    max_edge: float = 0.025  # surface triangles are split until no edge is longer than this
-    grid_step: float = 0.012  # spacing of the candidate centres inside the hull
-    cylinder_sides: int = 16  # circumscribed prism used to cover a cylinder
-    cluster_size: int = 6  # spheres per cluster (the middle level of the bounding hierarchy)
 
 
 @dataclass(frozen=True)

@@ -151,6 +151,7 @@ class SphereCollisionChecker:
         ``grid_min_obstacles``: reachable obstacles from which a grid broad phase is built (numba path)."""
         self.robot = robot
         self.tree = KinematicTree.from_pinocchio(robot.model)
+        fit_options = fit_options or getattr(robot, "sphere_options", None)  # None: the defaults
         self.spheres = spheres or load_or_fit(robot.model, robot.collision_model, fit_options)
         self.self_pairs = self_collision_groups(robot)
         self.padding = float(padding)

@@ -311,7 +311,7 @@ def run(args: argparse.Namespace, params: dict[str, Any], progress: _Progress) -
         safety_margin=args.safety_margin,
     )
     if args.collision_model == "spheres":
-        notice = sphere_model.first_fit_notice(robot.name, robot.collision_model)
+        notice = sphere_model.first_fit_notice(robot.name, robot.collision_model, robot.sphere_options)
         if notice:
             progress(notice)
     progress(f"building the {args.collision_model} collision model")

@@ -77,6 +77,7 @@ def robot_with_attached(robot: RobotModel, scene: Scene | None) -> RobotModel:
     carrying.skip_adjacent_pairs = base.skip_adjacent_pairs  # the added disabled pairs must not change the rule
     carrying.groups = copy.deepcopy(base.groups)
     carrying.named_states = dict(base.named_states)
+    carrying.sphere_options = base.sphere_options
     carrying.base_robot = base
     carrying.attachment_key = attachment_key(scene)
     return carrying

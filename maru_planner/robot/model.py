@@ -23,6 +23,7 @@ from maru_planner.errors import InvalidGroup, InvalidRequest
 from maru_planner.robot import profile_yaml, robot_profile
 from maru_planner.robot.ik_strategy import IKStrategy
 from maru_planner.robot.robot_profile import DEFAULT_ACCELERATION_LIMIT, InvalidRobotProfile, RobotProfile
+from maru_planner.robot.sphere_options import SphereFitOptions
 from maru_planner.robot.srdf import SrdfInfo, parse_srdf
 
 WORLD = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
@@ -64,6 +65,7 @@ class RobotModel:
         ee = dict(end_effectors) if end_effectors is not None else dict(self.srdf.end_effectors)
         self.end_effectors = {k: v for k, v in ee.items() if model.existFrame(v)} or self._default_end_effector()
         self.ik_strategies: tuple[IKStrategy, ...] = tuple(ik_strategies)
+        self.sphere_options = SphereFitOptions()  # how its sphere model is fitted (a profile's ``sphere_model``)
         self._frame_ids: dict[str, int] = {}
 
     # ------------------------------------------------------------ loading --
@@ -82,7 +84,8 @@ class RobotModel:
     ) -> RobotModel:
         """Load any robot; ``locked_joints`` maps joint names to the value they are frozen at.
 
-        ``ik_strategies`` None: those of the profile whose ``urdf_name`` is the URDF's robot name, if any.
+        ``ik_strategies`` None: those of the profile whose ``urdf_name`` is the URDF's robot name, if any (whose
+        ``sphere_model`` options the robot takes too).
         """
         urdf_path = Path(urdf_path)
         if not urdf_path.is_file():
@@ -97,10 +100,10 @@ class RobotModel:
             known = set(model.names)
             srdf.groups = {g: [j for j in js if j in known] for g, js in srdf.groups.items()}
             srdf.groups = {g: js for g, js in srdf.groups.items() if js}
+        matching = robot_profile.profile_for_urdf(model.name)
         if ik_strategies is None:
-            matching = robot_profile.profile_for_urdf(model.name)
             ik_strategies = matching.ik_strategies if matching is not None else ()
-        return cls(
+        loaded = cls(
             name or model.name,
             model,
             geom,
@@ -109,6 +112,9 @@ class RobotModel:
             end_effectors=end_effectors,
             ik_strategies=ik_strategies,
         )
+        if matching is not None:  # a built-in robot's URDF loaded by path fits its spheres as its profile says
+            loaded.sphere_options = matching.sphere_model
+        return loaded
 
     @classmethod
     def from_profile(cls, robot: str | Path | RobotProfile) -> RobotModel:
@@ -154,6 +160,7 @@ class RobotModel:
             raise InvalidRobotProfile(f"robot {profile.name}: end_effectors: no such frame(s) {missing}")
         if profile.ignore_links_touching_at_rest:
             self.disable_default_collisions()
+        self.sphere_options = profile.sphere_model
 
     @classmethod
     def maru1(cls) -> RobotModel:

@@ -17,6 +17,9 @@ given by path wherever a robot name is taken (``maru-plan --robot my_arm.yaml``,
     locked_joints: {gripper_joint: 0.0} # joints frozen at a value (not planned)
     ignore_links_touching_at_rest: false  # true: links touching at the neutral posture are never checked
     ik_strategies: [my_package.my_ik:strategy]  # "module:function" IK tried before the numeric one
+    sphere_model: {max_protrusion: 0.01}  # the sphere model's fit (SphereFitOptions); omitted keys keep defaults:
+                                        #   max_protrusion 0.015, max_edge 0.025, grid_step 0.012 (m),
+                                        #   cylinder_sides 16, cluster_size 6
 
 Any other key, a missing required key or a value of the wrong kind raises :class:`InvalidRobotProfile`
 with one line naming the file and the key.
@@ -36,6 +39,7 @@ import yaml
 from maru_planner.robot import robot_profile
 from maru_planner.robot.ik_strategy import IKStrategy
 from maru_planner.robot.robot_profile import DEFAULT_ACCELERATION_LIMIT, SOURCES, InvalidRobotProfile, RobotProfile
+from maru_planner.robot.sphere_options import SPHERE_OPTION_RANGES, SphereFitOptions
 
 PROFILE_SUFFIXES = (".yaml", ".yml")
 NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_.-]*$")
@@ -96,6 +100,7 @@ def profile_from_mapping(data: Any, directory: Path, where: str = "robot profile
         ik_strategies=fields.take("ik_strategies", _strategies) or (),
         package_dirs=tuple(str(directory / d) for d in fields.take("package_dirs", _directories) or ()),
         locked_joints=fields.take("locked_joints", _locked) or {},
+        sphere_model=fields.take("sphere_model", _sphere_options) or SphereFitOptions(),
     )
     fields.no_others()
     return profile
@@ -145,7 +150,7 @@ class _Fields:
 
 KEYS = (
     "name", "source", "urdf", "srdf", "package_dirs", "urdf_name", "acceleration_limits", "end_effectors", "groups",
-    "locked_joints", "ignore_links_touching_at_rest", "ik_strategies",
+    "locked_joints", "ignore_links_touching_at_rest", "ik_strategies", "sphere_model",
 )  # fmt: skip
 
 
@@ -254,3 +259,28 @@ def _strategy(reference: str) -> IKStrategy:
     if not callable(found):
         raise _Bad(f"{reference}: {module_name} has no function {function}")
     return found
+
+
+def _sphere_options(value: Any, key: str) -> SphereFitOptions:
+    """The fit's options: a mapping of some of SphereFitOptions' fields, each within SPHERE_OPTION_RANGES."""
+    if not isinstance(value, Mapping):
+        raise _Bad(f"expected a mapping of {', '.join(SPHERE_OPTION_RANGES)}, got {_kind(value)}")
+    unknown = sorted(str(k) for k in value if k not in SPHERE_OPTION_RANGES)
+    if unknown:
+        raise _Bad(f"unknown key(s) {', '.join(unknown)}; known: {', '.join(SPHERE_OPTION_RANGES)}")
+    options: dict[str, Any] = {str(k): _sphere_option(str(k), v) for k, v in value.items()}  # int or float per key
+    return SphereFitOptions(**options)
+
+
+def _sphere_option(name: str, value: Any) -> float | int:
+    low, high = SPHERE_OPTION_RANGES[name]
+    is_count = isinstance(SphereFitOptions.__dataclass_fields__[name].default, int)
+    if is_count and (isinstance(value, bool) or not isinstance(value, int)):
+        raise _Bad(f"{name}: expected a whole number, got {_kind(value)}")
+    try:
+        number = _number(value)
+    except _Bad as exc:
+        raise _Bad(f"{name}: {exc}") from None
+    if not low <= number <= high:
+        raise _Bad(f"{name}: expected a value in [{low:g}, {high:g}], got {number:g}")
+    return int(value) if is_count else number

@@ -2,9 +2,10 @@
 
 A :class:`RobotProfile` says where a robot's URDF/SRDF are, its acceleration limits (URDF has no
 field for them), end effectors, planning groups to add to the SRDF's, joints to lock, whether links
-touching at rest are to be ignored (MoveIt's "Default" rule for robots shipped without an SRDF), and
-its IK strategies (tried before the numeric IK, see :mod:`maru_planner.robot.ik`). Profiles are written
-as YAML files (:mod:`maru_planner.robot.profile_yaml`, docs/your_robot.md).
+touching at rest are to be ignored (MoveIt's "Default" rule for robots shipped without an SRDF), the
+options of its sphere model's fit, and its IK strategies (tried before the numeric IK, see
+:mod:`maru_planner.robot.ik`). Profiles are written as YAML files (:mod:`maru_planner.robot.profile_yaml`,
+docs/your_robot.md).
 
 This module only holds the (generic) table; the built-in robots live in ``maru_planner/robot/robots/``
 (``<name>.yaml``, and a module where a robot has code of its own) and :mod:`maru_planner.robot.profiles`
@@ -21,6 +22,7 @@ from pathlib import Path
 from maru_planner.errors import InvalidRequest
 from maru_planner.paths import urdf_path
 from maru_planner.robot.ik_strategy import IKStrategy
+from maru_planner.robot.sphere_options import SphereFitOptions
 
 DEFAULT_ACCELERATION_LIMIT = 4.0  # rad/s^2 (or m/s^2): URDF has no field for it
 
@@ -40,7 +42,7 @@ class RobotFiles:
 
 @dataclass(frozen=True)
 class RobotProfile:
-    """One robot: files, limits, end effectors, extra groups, collision rule and IK strategies."""
+    """One robot: files, limits, end effectors, extra groups, collision rule, sphere-model options and IK."""
 
     name: str
     source: str  # a key of SOURCES, or a directory: where ``urdf`` and ``srdf`` are relative to
@@ -54,6 +56,7 @@ class RobotProfile:
     ik_strategies: tuple[IKStrategy, ...] = ()
     package_dirs: tuple[str, ...] = ()  # more directories where package:// mesh URIs resolve
     locked_joints: dict[str, float] = field(default_factory=dict)  # joint -> the value it is frozen at
+    sphere_model: SphereFitOptions = field(default_factory=SphereFitOptions)  # how its sphere model is fitted
 
     def files(self) -> RobotFiles:
         source = SOURCES.get(self.source)

@@ -282,10 +282,10 @@ class PlanningRuntime:
         """Fit the robot's sphere model here, once per geometry (disk-cached), so the planners and worker processes
         built next load it instead of each fitting it at the same time."""
         robot: RobotModel = self.robot
-        notice = sphere_model.first_fit_notice(robot.name, robot.collision_model)
+        notice = sphere_model.first_fit_notice(robot.name, robot.collision_model, robot.sphere_options)
         if notice:
             self._log(notice)
-        sphere_model.load_or_fit(robot.model, robot.collision_model)
+        sphere_model.load_or_fit(robot.model, robot.collision_model, robot.sphere_options)
 
     def _reconfigured_processes(self, config: PlannerConfig, settings: RuntimeSettings) -> ProcessPool | None:
         """The worker processes (``worker_processes``), started once, then given ``config`` and ``workers``."""
