@@ -39,7 +39,7 @@ build_package() {
     -DPython3_EXECUTABLE="$py" -DBUILD_TESTING=OFF -DCMAKE_BUILD_TYPE=Release >"$build/build.log" 2>&1 \
     || { tail -40 "$build/build.log"; exit 1; }
   cmake --build "$build" -j "$(nproc)" >>"$build/build.log" 2>&1 || { tail -40 "$build/build.log"; exit 1; }
-  cmake --install "$build" >>"$build/build.log" 2>&1 || { tail -40 "$build/build.log"; exit 1; }
+  cmake --install "$build" --prefix "$venv" >>"$build/build.log" 2>&1 || { tail -40 "$build/build.log"; exit 1; }
   "$py" -c "$check" || { echo "built, but Python cannot run: $check"; exit 1; }
   echo "$hash" > "$stamp"
   echo "$name: installed into $venv"

@@ -13,15 +13,14 @@ simulation has no closed chains) by :class:`ArmController` like
 joint_trajectory_controller would. Prints the tracking error, contacts, overrun and how well the *executed* motion
 kept the hands' grip (the relative-pose error of the simulated arm), and draws the executed motion.
 
-``--through-ros``: the carry through the nodes (:mod:`maru_planner.ros.carry_demo_run` in a process of its own:
-this layer imports no ROS). arm_sim_node and planning_node run as processes with the box attached
-(:func:`through_ros_scene`); two ``plan_motion`` goals with ``execute: true`` move the arm from home to the carry's
-start, then carry. planning_node's ``PathConstraints`` message has no relative-pose constraint, so the carry
-through the nodes is the one that needs none: the arms hold their joints (so the grip) while the waist turns the
-box across the desk (:func:`carry_goals`). arm_sim_node takes no payload mass: the box weighs nothing there. The
-numbers come from what the nodes report and what this process recorded: the tracking error is the arm's
-(its result and feedback), contacts are MuJoCo's at every recorded /joint_states sample (the same model, the box
-as geometry), the overrun is when /joint_states first stayed within 0.01 rad of the goal.
+``--through-ros``: the same carry through the nodes (:mod:`maru_planner.ros.carry_demo_run` in a process of its
+own: this layer imports no ROS). arm_sim_node (started at the carry's start, the box attached and weighing
+:data:`BOX_MASS`) and planning_node run as processes with :func:`through_ros_scene`; one ``plan_motion`` goal with
+``execute: true`` plans the carry from its start with the hands' relative pose held (``PathConstraints``' relative
+fields: CBiRRT, as in-process) and executes it. The numbers come from what the nodes report and what this process
+recorded: the tracking error is the arm's (its result and feedback), contacts are MuJoCo's at every recorded
+/joint_states sample (the same model, the box as geometry), the overrun is when /joint_states first stayed within
+0.01 rad of the goal, the grip error is the hands' relative pose along the recorded /joint_states.
 """
 
 from __future__ import annotations
@@ -55,8 +54,6 @@ BOX = "carried_box"
 BOX_SIZE = (0.26, 0.12, 0.12)  # m: along the hands' axis, across, up
 BOX_MASS = 1.0  # kg: carried by the right hand's servos in the simulation (a closed chain is not simulated)
 GRIP_LINKS = ("r_hand", "l_hand", "r_arm_link5", "l_arm_link5")  # touch the box without colliding
-# through the nodes the box is attached from the start (home), where it lies in the torso: base_link may touch it
-THROUGH_ROS_TOUCH = (*GRIP_LINKS, "base_link")
 ARRIVAL_TOLERANCE = 0.01  # rad: the arm has arrived when every joint stays this close to the goal
 START_WAIST, GOAL_WAIST = -1.3, 0.3  # rad: the box over the desk's right part, then its left part
 DEFAULT_OUT = Path("docs/images/execution_carry.png")
@@ -75,7 +72,6 @@ class CarryRun:
     joint_states: tuple[np.ndarray, np.ndarray] | None = None
     reported_tracking: float | None = None  # through the nodes: the arm's own max tracking error (every step)
     goal_status: str | None = None  # through the nodes: how the carry's plan_motion goal ended
-    approach_grip: float | None = None  # through the nodes: the carry's start's hands, m from the nominal grip
 
     @property
     def executed(self) -> tuple[np.ndarray, np.ndarray]:
@@ -91,10 +87,18 @@ class CarryRun:
         q[self.robot.group_joint_indices(self.problem.group)] = row
         return q
 
-    def grip_error(self, positions: np.ndarray) -> tuple[float, float]:
-        """Largest hands' relative-pose error (m, rad) from the start's along ``positions`` (group rows)."""
-        translation, rotation = relative_pose_error(self.robot, self.problem, positions)
+    def grip_error(self, positions: np.ndarray, start: np.ndarray | None = None) -> tuple[float, float]:
+        """Largest hands' relative-pose error (m, rad) along ``positions`` (group rows) from their relative pose at
+        ``start`` (default: the problem's start, the nominal grip)."""
+        problem = self.problem if start is None else dataclasses.replace(self.problem, start=tuple(start))
+        translation, rotation = relative_pose_error(self.robot, problem, positions)
         return float(translation.max()), float(rotation.max())
+
+    def executed_grip_from_its_start(self) -> tuple[float, float]:
+        """The executed grip error from the arm's own first sample (which the box's weight has already bent a
+        little: the servos' gravity compensation does not know the payload)."""
+        rows = self.executed[1]
+        return self.grip_error(rows, rows[0])
 
 
 def carry_problem() -> DualArmProblem:
@@ -130,17 +134,8 @@ def carry_scene(robot: RobotModel, problem: DualArmProblem, touch_links: tuple[s
 
 
 def through_ros_scene() -> Scene:
-    """Both nodes' scene: :func:`carry_scene` where ``base_link`` may touch the box (:data:`THROUGH_ROS_TOUCH`)."""
-    return carry_scene(RobotModel.maru1(), carry_problem(), THROUGH_ROS_TOUCH)
-
-
-def carry_goals() -> tuple[dict[str, float], dict[str, float]]:
-    """The goals through the nodes: the carry's start (from home), then the waist at :data:`GOAL_WAIST`, the arms
-    as they were (the arms' joints held: the grip kept without a relative-pose constraint)."""
-    problem = carry_problem()
-    names = RobotModel.maru1().groups[problem.group]
-    start = dict(zip(names, problem.start, strict=True))
-    return start, {**start, names[0]: GOAL_WAIST}
+    """Both nodes' scene: :func:`carry_scene` (the same as in-process)."""
+    return carry_scene(RobotModel.maru1(), carry_problem())
 
 
 def run_carry(seed: int = 1, gains: ServoGains | None = None) -> CarryRun:
@@ -196,15 +191,10 @@ def carry_from_record(record: dict) -> CarryRun:
     states = sorted(record["joint_states"], key=lambda s: s["stamp"])
     state_times = np.array([s["stamp"] for s in states]) * rate - start
     state_rows = np.array([_ordered(s["names"], s["positions"], names) for s in states]).reshape(-1, len(names))
-    carrying = state_times >= -0.01  # from the execution's start (before it: the arm settling after the approach)
+    carrying = state_times >= -0.01  # from the execution's start (before it: the arm holding the start)
     state_times, state_rows = state_times[carrying], state_rows[carrying]
     execution = record["execution"]
-    # the grip is measured from the carry's own start: the approach ends within the arm's goal tolerance (0.01 rad
-    # a joint) of the nominal start, which can leave the hands a centimetre or two from its relative pose
-    approach_grip, _ = relative_pose_error(robot, problem, trajectory.positions[:1])
-    problem = dataclasses.replace(problem, start=tuple(float(v) for v in trajectory.positions[0]))
     run = CarryRun(robot, problem, scene, motion, None, (state_times, state_rows))
-    run.approach_grip = float(approach_grip[0])
     run.execution = ExecutionResult(
         ResultCode(execution["code"]), execution["message"], names, duration=trajectory.duration,
         finished_at=_arrival(state_times, state_rows, trajectory.positions[-1]),
@@ -261,23 +251,22 @@ def summary(run: CarryRun) -> str:
     result, tr = run.execution, run.plan.trajectory
     assert tr is not None
     planned, executed = run.grip_error(tr.positions), run.grip_error(run.executed[1])
+    from_start = run.executed_grip_from_its_start()
     overrun = "never reached" if result.overrun is None else f"{100 * result.overrun:.2f} %"
     if run.joint_states is None:
         waypoints = 0 if run.plan.path is None else len(run.plan.path)
         how, tracking = f"({waypoints} waypoints)", float(result.max_error.max())
         saturated = f", {result.saturated_steps} saturated steps"
     else:
-        how = (
-            f"by planning_node ({run.plan.message}) from where the approach left the arm (hands "
-            f"{1e3 * (run.approach_grip or 0.0):.2f} mm from the nominal grip), executed by arm_sim_node"
-        )
+        how = f"by planning_node ({run.plan.message}), executed by arm_sim_node"
         tracking, saturated = float(run.reported_tracking or 0.0), ""
     return (
         f"{run.problem.name}: planned {tr.duration:.2f} s {how}; executed: "
         f"{result.code.name}, max tracking error {tracking:.4f} rad, {len(result.contacts)} contacts, "
         f"overrun {overrun}{saturated}; hands' relative pose held to "
         f"{1e3 * planned[0]:.2f} mm / {planned[1]:.4f} rad planned, {1e3 * executed[0]:.2f} mm / "
-        f"{executed[1]:.4f} rad executed"
+        f"{executed[1]:.4f} rad executed ({1e3 * from_start[0]:.2f} mm / {from_start[1]:.4f} rad from the arm's "
+        f"own start)"
     )
 
 

@@ -16,8 +16,11 @@
   (:mod:`maru_planner.ros.follow_joint_trajectory`). Without control_msgs installed only ``execute_trajectory``
   is served (one log line).
 
-Parameters: :class:`ArmSimConfig` (``config/arm_sim.yaml``). The robot, scene, start state and servo gains are
-read at configure; tolerances and rates at every goal. Physics runs on its own thread at ``real_time_factor``
+Parameters: :class:`ArmSimConfig` (``config/arm_sim.yaml``) and two pairs of arrays (:data:`ARRAY_PARAMETERS`):
+``initial_joint_names`` + ``initial_positions`` (rad or m; these joints start there instead of at
+``initial_state``'s values) and ``payload_names`` + ``payload_masses`` (kg of attached objects of the scene,
+uniform density; others weigh nothing). The robot, scene, start state, payloads and servo gains are read at
+configure; tolerances and rates at every goal. Physics runs on its own thread at ``real_time_factor``
 while the node is active (deactivating cancels a running goal and pauses the arm; a signal stops it before the
 publisher goes).
 """
@@ -33,8 +36,11 @@ from typing import Any
 
 import numpy as np
 from builtin_interfaces.msg import Duration
+from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.action import ActionServer, CancelResponse
 from rclpy.callback_groups import ReentrantCallbackGroup
+from rclpy.exceptions import ParameterUninitializedException
+from rclpy.parameter import Parameter
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
@@ -93,6 +99,13 @@ class ArmSimConfig:
 
 
 SPECS = dataclass_params(ArmSimConfig)
+STRING_ARRAY, DOUBLE_ARRAY = Parameter.Type.STRING_ARRAY, Parameter.Type.DOUBLE_ARRAY
+ARRAY_PARAMETERS: tuple[tuple[str, Parameter.Type, str], ...] = (
+    ("initial_joint_names", STRING_ARRAY, "joints that start at initial_positions instead of initial_state's"),
+    ("initial_positions", DOUBLE_ARRAY, "start values (rad or m, within the joint limits) of initial_joint_names"),
+    ("payload_names", STRING_ARRAY, "attached objects of the scene that have a mass"),
+    ("payload_masses", DOUBLE_ARRAY, "their masses (kg, > 0), in the order of payload_names"),
+)
 ERROR_CODES: tuple[tuple[type[MaruError], int], ...] = (
     (InvalidJointNames, R.INVALID_JOINTS),
     (MaruError, R.INVALID_GOAL),
@@ -117,6 +130,8 @@ class ArmSimNode(ManagedNode):
     def __init__(self, **kwargs: Any):
         super().__init__("arm_sim_node", **kwargs)
         self.config = ArmSimConfig(**parameters.declare_parameters(self, SPECS))
+        for name, kind, description in ARRAY_PARAMETERS:
+            self.declare_parameter(name, kind, ParameterDescriptor(description=description, read_only=True))
         parameters.add_on_set_parameters_callback(self, SPECS, self._apply)
         self._lock = threading.Lock()
         self._stop = threading.Event()
@@ -141,7 +156,13 @@ class ArmSimNode(ManagedNode):
             gravity_compensation=config.gravity_compensation,
             acceleration_feedforward=config.acceleration_feedforward,
         )
-        sim = ArmSim(build_arm_model(robot, scene, gains, q0=q0))
+        payloads = paired(self._array("payload_names"), self._array("payload_masses"), "payload")
+        for name, mass in payloads.items():
+            if not (math.isfinite(mass) and mass > 0.0):
+                raise InvalidRequest(
+                    f"parameter 'payload_masses': {name!r} must weigh a finite mass > 0 kg, got {mass}"
+                )
+        sim = ArmSim(build_arm_model(robot, scene, gains, q0=q0, payloads=payloads))
         sim.reset(q0)
         self.controller = ArmController(sim)
         self.joint_states = self.create_lifecycle_publisher(JointState, "joint_states", 10)
@@ -169,10 +190,31 @@ class ArmSimNode(ManagedNode):
     def _initial_state(self, robot: RobotModel) -> np.ndarray:
         name = self.config.initial_state
         if name in robot.named_states:
-            return robot.named_state(name)
-        if name != "neutral":
-            self.get_logger().warn(f"initial_state {name!r}: not a named state of {robot.name}; starting neutral")
-        return robot.neutral()
+            q = np.array(robot.named_state(name), dtype=float)
+        else:
+            if name != "neutral":
+                self.get_logger().warn(f"initial_state {name!r}: not a named state of {robot.name}; starting neutral")
+            q = np.array(robot.neutral(), dtype=float)
+        given = paired(self._array("initial_joint_names"), self._array("initial_positions"), "initial")
+        for joint, value in given.items():
+            if joint not in robot.joint_names:
+                raise InvalidRequest(f"parameter 'initial_joint_names': {robot.name} has no joint {joint!r}")
+            i = robot.joint_names.index(joint)
+            lo, hi = robot.lower_limits[i], robot.upper_limits[i]
+            if not (math.isfinite(value) and lo <= value <= hi):
+                raise InvalidRequest(
+                    f"parameter 'initial_positions': {joint} = {value} is outside [{lo:.4g}, {hi:.4g}]"
+                )
+            q[i] = value
+        return q
+
+    def _array(self, name: str) -> list[Any]:
+        """An array parameter's values; not given (declared by type, with no value): none."""
+        try:
+            value = self.get_parameter(name).value
+        except ParameterUninitializedException:
+            return []
+        return list(value) if value is not None else []
 
     def activate(self) -> None:
         self._stop.clear()
@@ -305,6 +347,16 @@ class ArmSimNode(ManagedNode):
 
 class _OldHeader(Exception):
     pass
+
+
+def paired(names: list[str], values: list[float], prefix: str) -> dict[str, float]:
+    """``names`` -> ``values`` of the parameter pair ``<prefix>_names``/``..._positions|masses``
+    (InvalidRequest if their lengths differ or a name repeats)."""
+    if len(names) != len(values):
+        raise InvalidRequest(f"parameters '{prefix}_*': {len(names)} names but {len(values)} values")
+    if len(set(names)) != len(names):
+        raise InvalidRequest(f"parameters '{prefix}_*': a name is given twice in {names}")
+    return dict(zip(names, (float(v) for v in values), strict=True))
 
 
 def points_from_msg(msg: JointTrajectory) -> TrajectoryPoints:

@@ -2,23 +2,23 @@
 
     python -m maru_planner.ros.carry_demo_run --json OUT.json [--seed 1] [--real-time-factor 1] [--logs DIR]
 
-Processes: ``arm_sim_node`` (MuJoCo, the box attached to ``r_hand``) and ``planning_node`` (the same scene), both
-given :func:`~maru_planner.execution.carry_demo.through_ros_scene` as their scene file. This process sends two
-``plan_motion`` goals with ``execute: true``, the start of each the arm's /joint_states: the approach (home to the
-carry's start) and the carry (the waist turns the box from the right of the desk to the left, both hands holding
-it). While the carry executes it records /joint_states and arm_sim_node's ``execute_trajectory`` feedback (the
-controller's desired and actual samples); everything goes to ``--json`` for the demo to measure and draw. The DDS
-traffic stays on loopback, in the user's exported ROS_DOMAIN_ID or a random one. Progress on stderr; a failure is one
-line on stderr and exit code 1.
+Processes: ``arm_sim_node`` (MuJoCo, the box attached to ``r_hand`` and weighing ``BOX_MASS``, the arm started at
+the carry's start pose: parameters ``initial_joint_names``/``initial_positions``, ``payload_names``/
+``payload_masses``) and ``planning_node`` (the same scene), both given
+:func:`~maru_planner.execution.carry_demo.through_ros_scene` as their scene file. This process sends one
+``plan_motion`` goal with ``execute: true``: the in-process carry (:func:`~maru_planner.execution.carry_demo.
+carry_problem`, the dual-arm lift-and-tilt while the waist turns the box from the right of the desk to the left)
+from the carry's start, with the hands' relative pose (``l_hand`` in ``r_hand``'s frame, as at the start) held
+to 1 mm / 0.01 rad by ``path_constraints``' relative fields. While it executes this process records /joint_states
+and arm_sim_node's ``execute_trajectory`` feedback (the controller's desired and actual samples); everything goes
+to ``--json`` for the demo to measure and draw. The DDS traffic stays on loopback, in the user's exported
+ROS_DOMAIN_ID or a random one. Progress on stderr; a failure is one line on stderr and exit code 1.
 """
 
 from __future__ import annotations
 
 import json
 import os
-import random
-import socket
-import subprocess
 import sys
 import tempfile
 import threading
@@ -27,17 +27,21 @@ from pathlib import Path
 from typing import Any
 
 import rclpy
+from geometry_msgs.msg import Pose, Quaternion
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
 from sensor_msgs.msg import JointState
 
 from maru_planner.cli_parser import OneLineParser
 from maru_planner.errors import one_line
-from maru_planner.execution.carry_demo import carry_goals, through_ros_scene
+from maru_planner.execution.carry_demo import BOX, BOX_MASS, carry_problem, through_ros_scene
 from maru_planner.paths import config_path
-from maru_planner.ros.env import configure_loopback_dds
-from maru_planner.ros.planning_client import PlanningClient, status_name
+from maru_planner.robot import RobotModel
+from maru_planner.ros.env import configure_loopback_dds, unused_domain_id
+from maru_planner.ros.node_processes import NodeProcesses
+from maru_planner.ros.planning_client import PlanningClient, plan_goal, send_plan_goal, status_name
 from maru_planner_interfaces.action import ExecuteTrajectory
+from maru_planner_interfaces.msg import PathConstraints
 
 SUCCEEDED = 4  # action_msgs/GoalStatus
 PLAN_BUDGET = 20.0  # s per plan
@@ -80,72 +84,52 @@ def _stamp(stamp: Any) -> float:
     return stamp.sec + 1e-9 * stamp.nanosec
 
 
-class Nodes:
-    """arm_sim_node and planning_node as processes, their logs under ``log_dir``."""
-
-    def __init__(self, log_dir: Path):
-        self.log_dir = log_dir
-        self.procs: dict[str, subprocess.Popen] = {}
-
-    def start(self, name: str, args: list[str]) -> None:
-        log = open(self.log_dir / f"{name}.log", "w")  # noqa: SIM115 -- the child writes it until stop()
-        self.procs[name] = subprocess.Popen(
-            [sys.executable, "-m", f"maru_planner.ros.{name}", "--ros-args", *args], stdout=log,
-            stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, env=dict(os.environ),
-        )  # fmt: skip
-
-    def check_alive(self) -> None:
-        for name, proc in self.procs.items():
-            if proc.poll() is not None:
-                lines = (self.log_dir / f"{name}.log").read_text(errors="replace").strip().splitlines()
-                raise RunFailed(f"{name} exited ({proc.returncode}): {lines[-1] if lines else 'no output'}")
-
-    def stop(self) -> None:
-        for proc in self.procs.values():
-            if proc.poll() is None:
-                proc.terminate()
-        for proc in self.procs.values():
-            try:
-                proc.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait(timeout=5)
-
-
-def unused_domain_id() -> int:
-    """A random ROS domain id in 1..100 whose Fast DDS discovery ports no participant on this machine holds (RTPS
-    port mapping: participant ``i`` of domain ``d`` takes UDP 7410 + 250 d + 2 i); any one if all are taken."""
-    domains = list(range(1, 101))
-    random.SystemRandom().shuffle(domains)
-    return next((d for d in domains if not any(_port_taken(7410 + 250 * d + 2 * i) for i in range(4))), domains[0])
-
-
-def _port_taken(port: int) -> bool:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
-        try:
-            probe.bind(("127.0.0.1", port))
-        except OSError:
-            return True
-    return False
-
-
 def progress(message: str) -> None:
     print(f"[carry_demo_run] {message}", file=sys.stderr, flush=True)
 
 
-def start_nodes(nodes: Nodes, scene_file: Path, real_time_factor: float) -> None:
+def check_alive(nodes: NodeProcesses) -> None:
+    """RunFailed naming a node that exited, with its log's last line."""
+    dead = nodes.dead()
+    if dead is not None:
+        raise RunFailed(f"{dead} exited ({nodes.procs[dead].returncode}): {nodes.last_line(dead)}")
+
+
+def start_nodes(nodes: NodeProcesses, scene_file: Path, real_time_factor: float, start: dict[str, float]) -> None:
     scene = ["-p", f"scene_file:={scene_file}"]
     arm_yaml, planner_yaml = str(config_path("arm_sim.yaml")), str(config_path("planner.yaml"))
-    nodes.start("arm_sim_node", ["--params-file", arm_yaml, *scene, "-p", f"real_time_factor:={real_time_factor}"])
-    nodes.start("planning_node", ["--params-file", planner_yaml, *scene, "-p", "workers:=1"])
+    arm = [
+        "-p", f"real_time_factor:={real_time_factor}",
+        "-p", f"initial_joint_names:=[{', '.join(start)}]",
+        "-p", f"initial_positions:=[{', '.join(repr(float(v)) for v in start.values())}]",
+        "-p", f"payload_names:=[{BOX}]", "-p", f"payload_masses:=[{float(BOX_MASS)!r}]",
+    ]  # fmt: skip
+    nodes.start("arm_sim_node", ["--ros-args", "--params-file", arm_yaml, *scene, *arm])
+    nodes.start("planning_node", ["--ros-args", "--params-file", planner_yaml, *scene, "-p", "workers:=1"])
 
 
-def execute(client: PlanningClient, nodes: Nodes, goal: dict[str, float], seed: int, what: str) -> tuple[int, Any]:
-    """Plan to ``goal`` from the arm's /joint_states and execute it: (goal status, result), or RunFailed."""
-    handle = client.plan_action(goal, execute=True, seed=seed, time_budget=PLAN_BUDGET, group="upper_body")
+def carry_constraints() -> PathConstraints:
+    """The carry's path constraint as a message: ``l_hand`` in ``r_hand``'s frame held as at the request's start
+    (an all-zero quaternion in ``relative_pose``: the node takes the pose from the start state)."""
+    held = carry_problem().constraints(RobotModel.maru1()).relative
+    assert held is not None
+    as_at_start = Pose(orientation=Quaternion(x=0.0, y=0.0, z=0.0, w=0.0))
+    return PathConstraints(
+        relative_link_a=held.link_a, relative_link_b=held.link_b, relative_pose=as_at_start,
+        relative_position_tolerance=held.position_tolerance, relative_orientation_tolerance=held.orientation_tolerance,
+    )  # fmt: skip
+
+
+def execute(client: PlanningClient, nodes: NodeProcesses, start: dict[str, float], goal: dict[str, float], seed: int,
+            what: str) -> tuple[int, Any]:  # fmt: skip
+    """Plan from ``start`` to ``goal`` keeping :func:`carry_constraints` and execute it: (goal status, result), or
+    RunFailed."""
+    request = plan_goal(goal, start=start, execute=True, seed=seed, time_budget=PLAN_BUDGET, group="upper_body")
+    request.path_constraints = carry_constraints()
+    handle = send_plan_goal(client.plan_action_client, request)
     deadline = time.monotonic() + PLAN_BUDGET + 120.0
     while not handle.done:
-        nodes.check_alive()
+        check_alive(nodes)
         if time.monotonic() > deadline:
             raise RunFailed(f"{what}: no plan_motion result within {PLAN_BUDGET + 120.0:.0f} s")
         time.sleep(0.05)
@@ -159,11 +143,14 @@ def execute(client: PlanningClient, nodes: Nodes, goal: dict[str, float], seed: 
 
 
 def run(seed: int, real_time_factor: float, log_dir: Path) -> dict[str, Any]:
-    """Start the nodes, approach, carry; the recorded run as a JSON-ready dict."""
+    """Start the nodes (the arm at the carry's start), carry; the recorded run as a JSON-ready dict."""
     scene_file = log_dir / "carry_scene.yaml"
     scene_file.write_text(through_ros_scene().to_yaml())
-    approach, carry = carry_goals()
-    nodes = Nodes(log_dir)
+    problem = carry_problem()
+    names = RobotModel.maru1().groups[problem.group]
+    start = dict(zip(names, problem.start, strict=True))
+    carry = dict(zip(names, problem.goal, strict=True))
+    nodes = NodeProcesses(log_dir)
     rclpy.init()
     node = rclpy.create_node("carry_demo_run")
     executor = MultiThreadedExecutor(num_threads=2)
@@ -173,24 +160,22 @@ def run(seed: int, real_time_factor: float, log_dir: Path) -> dict[str, Any]:
         recorder = Recorder(node)
         client = PlanningClient(node=node)
         spinner.start()
-        start_nodes(nodes, scene_file, real_time_factor)
+        start_nodes(nodes, scene_file, real_time_factor, start)
         progress(f"nodes started (ROS_DOMAIN_ID {os.environ.get('ROS_DOMAIN_ID')}, logs {log_dir})")
         if not client.plan_client.wait_for_service(timeout_sec=NODE_TIMEOUT):
-            nodes.check_alive()
+            check_alive(nodes)
             raise RunFailed(f"planning_node served no plan_motion within {NODE_TIMEOUT:.0f} s")
         client.wait_until_ready(timeout=NODE_TIMEOUT)  # both directions proven before the first goal
         if not recorder.seen_state.wait(NODE_TIMEOUT):
             raise RunFailed(f"arm_sim_node published no joint_states within {NODE_TIMEOUT:.0f} s")
-        progress("approach: home -> the carry's start (plan_motion, execute)")
-        _, first = execute(client, nodes, approach, seed, "approach")
-        progress(f"approach executed ({first.execution_time:.2f} s); carry (plan_motion, execute)")
+        progress("carry: plan_motion (relative pose held), execute")
         recorder.on = True
-        status, result = execute(client, nodes, carry, seed, "carry")
+        status, result = execute(client, nodes, start, carry, seed, "carry")
         time.sleep(0.2)  # the last samples in flight
         recorder.on = False
         progress(f"carry executed ({result.execution_time:.2f} s)")
         header = {"goal_status": status_name(status), "real_time_factor": real_time_factor}
-        return {**header, **record(result, recorder, first.execution_time)}
+        return {**header, **record(result, recorder)}
     finally:
         nodes.stop()
         executor.shutdown()
@@ -198,7 +183,7 @@ def run(seed: int, real_time_factor: float, log_dir: Path) -> dict[str, Any]:
         rclpy.try_shutdown()
 
 
-def record(result: Any, recorder: Recorder, approach_time: float) -> dict[str, Any]:
+def record(result: Any, recorder: Recorder) -> dict[str, Any]:
     points = result.trajectory.points
     with recorder.lock:
         states, feedback = list(recorder.states), list(recorder.feedback)
@@ -218,7 +203,6 @@ def record(result: Any, recorder: Recorder, approach_time: float) -> dict[str, A
             "message": result.execution_error_string,
             "tracking_error": float(result.execution_tracking_error),
             "time": float(result.execution_time),
-            "approach_time": float(approach_time),
         },
         "joint_states": [{"stamp": s, "names": n, "positions": p} for s, n, p in states],
         "feedback": [{"stamp": s, "names": n, "desired": d, "actual": a} for s, n, d, a in feedback],

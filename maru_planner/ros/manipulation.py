@@ -11,14 +11,22 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 from geometry_msgs.msg import PoseStamped
 
 from maru_planner import errors
 from maru_planner.planning.cartesian import CartesianRequest, CartesianResult
-from maru_planner.planning.constraints import OrientationConstraint, PathConstraints, PositionConstraint
+from maru_planner.planning.constraints import (
+    OrientationConstraint,
+    PathConstraints,
+    PositionConstraint,
+    RelativePoseConstraint,
+)
+from maru_planner.planning.links import check_link
 from maru_planner.planning.queries import PlannerDescription, StateValidity
+from maru_planner.planning.requests import start_configuration
 from maru_planner.ros import planning_conversions as conv
 from maru_planner.runtime.requests import cartesian_in_context, fk_in_context, validity_in_context
 from maru_planner.runtime.scene_store import Attachments, AttachObject, DetachObject, LinkPose, apply_edit
@@ -42,8 +50,14 @@ __all__ = [  # what runs on a worker and the attachments moved to maru_planner.r
 # ---------------------------------------------------------------- path constraints
 
 
-def path_constraints(msg: PathConstraintsMsg, frame: str) -> PathConstraints:
-    """Core constraints of a ``PathConstraints`` message (empty link names: no such constraint)."""
+def path_constraints(
+    msg: PathConstraintsMsg, frame: str, robot: Any = None, start: Mapping[str, float] | None = None
+) -> PathConstraints:
+    """Core constraints of a ``PathConstraints`` message (empty link names: no such constraint).
+
+    A relative pose with an all-zero quaternion is the links' relative pose at ``start`` (joint values by name;
+    joints it lacks at neutral) on ``robot``: both are needed for that form.
+    """
     orientation = position = None
     if msg.orientation_link:
         q = msg.orientation
@@ -57,7 +71,35 @@ def path_constraints(msg: PathConstraintsMsg, frame: str) -> PathConstraints:
         box = conv.pose_to_matrix(msg.box_pose, "path_constraints.box_pose")
         s = msg.box_size
         position = PositionConstraint(msg.position_link, box, np.array([s.x, s.y, s.z]))
-    return PathConstraints(orientation, position)
+    relative = relative_constraint(msg, robot, start) if msg.relative_link_a or msg.relative_link_b else None
+    return PathConstraints(orientation, position, relative)
+
+
+def relative_constraint(
+    msg: PathConstraintsMsg, robot: Any, start: Mapping[str, float] | None
+) -> RelativePoseConstraint:
+    """The relative-pose part of ``msg`` (see :func:`path_constraints`)."""
+    what = "path_constraints.relative"
+    if not (msg.relative_link_a and msg.relative_link_b):
+        raise errors.InvalidRequest(f"{what}: give both relative_link_a and relative_link_b")
+    tolerances = {}
+    for name, value in (("position_tolerance", msg.relative_position_tolerance),
+                        ("orientation_tolerance", msg.relative_orientation_tolerance)):  # fmt: skip
+        if not (math.isfinite(value) and value >= 0.0):
+            raise errors.InvalidRequest(f"{what}_{name} must be finite and >= 0 (0 = default), got {value}")
+        if value > 0.0:
+            tolerances[name] = float(value)
+    link_a, link_b = msg.relative_link_a, msg.relative_link_b
+    q = msg.relative_pose.orientation
+    if (q.x, q.y, q.z, q.w) != (0.0, 0.0, 0.0, 0.0):
+        relative = conv.pose_to_matrix(msg.relative_pose, f"{what}_pose")
+        return RelativePoseConstraint(link_a, link_b, relative, **tolerances)
+    if robot is None or not start:
+        raise errors.InvalidRequest(f"{what}_pose: a zero quaternion (held at the start) needs a start state here")
+    for link in (link_a, link_b):
+        check_link(robot, link, "path constraint link")
+    q_start = start_configuration(robot, dict(start), [])
+    return RelativePoseConstraint.held(robot, q_start, link_a, link_b, **tolerances)
 
 
 # ---------------------------------------------------------------- compute_fk

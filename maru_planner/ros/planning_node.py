@@ -19,6 +19,7 @@ ABORTED with the service's error code in its result, a cancelled one CANCELED wi
 from __future__ import annotations
 
 import concurrent.futures
+import copy
 import dataclasses
 import itertools
 import sys
@@ -39,6 +40,7 @@ from visualization_msgs.msg import MarkerArray
 from maru_planner import errors
 from maru_planner.monitor import PlanMonitor
 from maru_planner.planning.queries import query_planners
+from maru_planner.robot import RobotModel
 from maru_planner.ros import manipulation, parameters
 from maru_planner.ros import planning_conversions as conv
 from maru_planner.ros import planning_requests as requests
@@ -257,12 +259,22 @@ class PlanningNode(ManagedNode):
     async def _on_plan_motion(self, request: srv.PlanMotion.Request, response: srv.PlanMotion.Response):
         return await self._answer_plan(request, response, "plan_motion")
 
+    def _kinematics(self, request) -> RobotModel | None:
+        """The robot for a relative-pose constraint held at the start, with forward-kinematics data of its own
+        (requests are converted on several executor threads at once), else None."""
+        constraints = request.path_constraints
+        if not (constraints.relative_link_a or constraints.relative_link_b):
+            return None
+        robot = copy.copy(self._robot)
+        robot.data = robot.model.createData()
+        return robot
+
     async def _answer_plan(self, request, answer, name: str, monitor: PlanMonitor | None = None):
         """Plan ``request`` (a service request or action goal) and fill ``answer`` (its response or result)."""
         started = time.perf_counter()
         try:
             motion_request = requests.motion_request(
-                request, self.settings, self.config.default_planner, self.latest_joint_state
+                request, self.settings, self.config.default_planner, self.latest_joint_state, self._kinematics(request)
             )
             result = await self._awaitable(self.runtime.plan(motion_request, monitor))
         except Exception as exc:  # noqa: BLE001 - every failure becomes an error code

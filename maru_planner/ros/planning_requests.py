@@ -29,8 +29,13 @@ from maru_planner_interfaces.srv import ComputeIK
 Latest = Callable[[], dict[str, float]]  # the latest /joint_states values
 
 
-def motion_request(request: Any, settings: NodeSettings, default_planner: str, latest: Latest) -> MotionRequest:
-    """Core ``MotionRequest`` of a ``PlanMotion`` request or goal (raises typed errors for bad fields)."""
+def motion_request(
+    request: Any, settings: NodeSettings, default_planner: str, latest: Latest, robot: Any = None
+) -> MotionRequest:
+    """Core ``MotionRequest`` of a ``PlanMotion`` request or goal (raises typed errors for bad fields).
+
+    ``robot`` (the runtime's, read-only): places the links of a relative-pose constraint held at the start.
+    """
     budget = float(request.allowed_planning_time)
     if not math.isfinite(budget) or budget <= 0.0:
         raise errors.InvalidRequest(f"allowed_planning_time must be > 0 s, got {budget}")
@@ -50,7 +55,7 @@ def motion_request(request: Any, settings: NodeSettings, default_planner: str, l
     if goal_joints is not None and goal_poses is not None:
         raise errors.InvalidRequest("give either a joint goal or pose goals, not both")
     # kept along the motion; planned by CBiRRT, which an empty planner id then means
-    constraints = manipulation.path_constraints(request.path_constraints, settings.planning_frame)
+    constraints = manipulation.path_constraints(request.path_constraints, settings.planning_frame, robot, start)
     return MotionRequest(
         group=request.group or settings.default_group,
         start=start,

@@ -178,3 +178,64 @@ def test_no_broken_invariant_and_enough_inputs(node):
     record = tally(TARGET)
     assert record.broken == 0, record.failures
     assert record.inputs >= sum(EXAMPLES.values()) * 0.9
+
+
+def _relative(**fields) -> object:
+    """A PathConstraints message with a relative pose r_hand -> l_hand (identity unless ``fields`` say)."""
+    from maru_planner_interfaces.msg import PathConstraints
+
+    msg = PathConstraints(relative_link_a="r_hand", relative_link_b="l_hand")
+    msg.relative_pose.orientation.w = 1.0
+    for name, value in fields.items():
+        setattr(msg, name, value)
+    return msg
+
+
+def _nan_position() -> object:
+    msg = _relative()
+    msg.relative_pose.position.x = math.nan
+    return msg
+
+
+@pytest.mark.parametrize(
+    ("constraints", "code", "words"),
+    [
+        (lambda: _relative(relative_link_a="no_such_link"), PlanningError.INVALID_LINK_NAME, "no_such_link"),
+        (lambda: _relative(relative_link_b=""), PlanningError.INVALID_REQUEST, "relative_link_b"),
+        (_nan_position, PlanningError.INVALID_REQUEST, "NaN"),
+        (lambda: _relative(relative_position_tolerance=-0.001), PlanningError.INVALID_REQUEST, "position_tolerance"),
+        (lambda: _relative(relative_orientation_tolerance=math.inf), PlanningError.INVALID_REQUEST, "orientation"),
+        # the hands are 0.3 m or so apart at the start, not at one pose: the start breaks the constraint
+        (_relative, PlanningError.START_STATE_VIOLATES_PATH_CONSTRAINTS, "start"),
+    ],
+    ids=["unknown-link", "one-link", "nan-pose", "negative-tolerance", "infinite-tolerance", "start-violates"],
+)
+def test_bad_relative_pose_constraints_get_a_code_and_one_line(node, constraints, code, words):
+    from maru_planner.ros.planning_client import plan_request
+
+    request = plan_request(EASY_GOAL, start=PAPER_START, time_budget=1.0)
+    request.path_constraints = constraints()
+    response = node.client.call(node.client.plan_client, request, 30.0)
+    assert response.error.code == code, response.error.message
+    assert words in response.error.message and "\n" not in response.error.message
+    _still_serving(node)
+
+
+def test_a_relative_pose_held_at_the_start_is_the_core_one(node):
+    """The all-zero quaternion form, converted with the robot and the start (as motion_request does): the links'
+    relative pose at the start, the tolerances 0 -> the core's defaults; without a robot it is one clear error."""
+    from maru_planner import errors
+    from maru_planner.planning.constraints import RelativePoseConstraint
+    from maru_planner.planning.requests import start_configuration
+    from maru_planner.ros.manipulation import path_constraints
+    from maru_planner_interfaces.msg import PathConstraints
+
+    msg = PathConstraints(relative_link_a="r_hand", relative_link_b="l_hand")
+    msg.relative_pose.orientation.w = 0.0  # geometry_msgs' default quaternion is the identity (0, 0, 0, 1)
+    robot = node.robot
+    relative = path_constraints(msg, "base_link", robot, PAPER_START).relative
+    expected = RelativePoseConstraint.held(robot, start_configuration(robot, PAPER_START, []), "r_hand", "l_hand")
+    assert relative is not None and np.allclose(relative.relative, expected.relative)
+    assert (relative.position_tolerance, relative.orientation_tolerance) == (1e-3, 1e-2)
+    with pytest.raises(errors.InvalidRequest, match="start state"):
+        path_constraints(msg, "base_link")

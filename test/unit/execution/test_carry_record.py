@@ -15,8 +15,16 @@ OFFSET, RATE = 1000.0, 2.0  # wall-clock stamp of the start; simulated seconds p
 DURATION = 1.6
 
 
+def _goals() -> tuple[dict[str, float], dict[str, float]]:
+    """The carry's start, and it with the waist (its first joint) at GOAL_WAIST (the arms held: the grip kept)."""
+    problem = carry_demo.carry_problem()
+    start = dict(zip(RobotModel.maru1().groups[problem.group], problem.start, strict=True))
+    names = list(start)
+    return start, {**start, names[0]: carry_demo.GOAL_WAIST}
+
+
 def _record(end_waist: float, lag: float = 0.0) -> dict:
-    start, goal = carry_demo.carry_goals()
+    start, goal = _goals()
     names = list(start)
     first, last = np.array(list(start.values())), np.array(list(goal.values()))
     last[0] = end_waist
@@ -35,7 +43,7 @@ def _record(end_waist: float, lag: float = 0.0) -> dict:
         "joint_names": names,
         "plan": {"times": times.tolist(), "positions": positions.tolist(), "velocities": zeros,
                  "accelerations": zeros, "planner": "CompiledRRTConnect", "waypoints": 2, "certified": True},
-        "execution": {"code": 0, "message": "goal reached", "tracking_error": 0.001, "time": 1.0, "approach_time": 3.0},
+        "execution": {"code": 0, "message": "goal reached", "tracking_error": 0.001, "time": 1.0},
         "feedback": [{"stamp": wall(t), "names": names[::-1], "desired": at(t + lag)[::-1], "actual": at(t)[::-1]}
                      for t in sim_feedback],
         "joint_states": [{"stamp": wall(t), "names": names, "positions": at(t)} for t in sim_states],
