@@ -39,6 +39,8 @@ from maru_planner.paths import config_path
 from maru_planner.ros.env import configure_loopback_dds
 
 NAME = "soak"
+FULL_DURATION_S = 1800.0
+REPORT_PERIOD_S = 60.0  # a progress line this often
 WARM_UP_S, WINDOW_S = 300.0, 300.0  # the issue's: growth after the first 5 minutes, p99 of the first/last 5
 HOSTILE_SHARE = 0.05
 ANSWER_GRACE_S = 30.0  # s past a request's budget before it counts as lost
@@ -101,6 +103,13 @@ class Ledger:
         with self.lock:
             late = [kind for key, (kind, _, _) in self.sent.items() if key not in self.answered]
         return {kind: late.count(kind) for kind in sorted(set(late))}
+
+
+def report_progress(now: float, duration: float, sent: dict[str, int], ledger: Ledger) -> None:
+    """One line on stderr: time, requests sent, those still unanswered, each node's latest RSS."""
+    waiting = sum(ledger.unanswered().values())
+    memory = ", ".join(f"{name} {samples[-1][1]:.0f} MB" for name, samples in ledger.rss.items() if samples)
+    log(f"{now:.0f}/{duration:.0f} s: {sum(sent.values())} requests sent, {waiting} awaiting an answer; RSS {memory}")
 
 
 def rss_mb(pid: int, with_children: bool = False) -> float:
@@ -293,7 +302,7 @@ def run(duration: float, logs_dir: str | None = None) -> dict:
         log(f"soaking for {duration:.0f} s")
         schedule = {kind: 0.0 for kind in PERIODS}
         sent = dict.fromkeys(PERIODS, 0)
-        next_sample = 0.0
+        next_sample, next_report = 0.0, REPORT_PERIOD_S
         while (now := time.monotonic() - ledger.t0) < duration:
             for kind, due in schedule.items():
                 if now >= due:
@@ -307,6 +316,9 @@ def run(duration: float, logs_dir: str | None = None) -> dict:
                     elif name in NODES:
                         ledger.rss.setdefault(name, []).append((now, rss_mb(proc.pid, name == "planning_node")))
                 next_sample = now + 1.0
+            if now >= next_report:
+                report_progress(now, duration, sent, ledger)
+                next_report += REPORT_PERIOD_S
             time.sleep(max(0.0, min(schedule.values()) - (time.monotonic() - ledger.t0)))
         log("draining the answers ...")
         drain_until = time.monotonic() + max(PLAN_BUDGET, BASE_BUDGET) + ANSWER_GRACE_S
@@ -444,15 +456,20 @@ def plot(results: dict, path: Path) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--duration", type=float, default=1800.0, help="seconds of traffic (the issue's: 1800)")
+    parser.add_argument(
+        "--duration", type=float, default=FULL_DURATION_S,
+        help=f"seconds of traffic (the issue's: {FULL_DURATION_S:.0f}; shorter runs write under bench/results/quick/)",
+    )  # fmt: skip
     parser.add_argument("--quick", action="store_true", help="60 s, written under bench/results/quick/")
     parser.add_argument("--logs", help="keep the nodes' logs in this folder (default: deleted)")
     args = parser.parse_args(argv)
     if not args.duration > 0:
         parser.error("--duration must be > 0")
     configure_loopback_dds(random_domain=True)
-    results = run(60.0 if args.quick else args.duration, args.logs)
-    write_results(RESULTS / NAME, results, table(results), lambda path: plot(results, path), quick=args.quick)
+    duration = 60.0 if args.quick else args.duration
+    results = run(duration, args.logs)
+    scratch = duration < FULL_DURATION_S  # only a full run replaces the committed results
+    write_results(RESULTS / NAME, results, table(results), lambda path: plot(results, path), quick=scratch)
     return 0
 
 
