@@ -193,6 +193,7 @@ def run(calls: int, paper_calls: int, storm_rounds: int) -> dict:
 
     from maru_planner.ros.executor import MultiThreadedExecutor
     from maru_planner.ros.plan_actions import DrainingActionClient as ActionClient
+    from maru_planner.ros.planning_client import goal_until_answered, plan_action_client
     from maru_planner_interfaces.action import PlanMotion as PlanMotionAction
     from maru_planner_interfaces.msg import PlanningError
     from maru_planner_interfaces.srv import GetScene, PlanMotion
@@ -236,13 +237,13 @@ def run(calls: int, paper_calls: int, storm_rounds: int) -> dict:
         scene_rtt, _ = timed_calls(scene_client, lambda i: GetScene.Request(), calls, "get_scene")
         trigger_rtt, _ = timed_calls(trigger_client, lambda i: Trigger.Request(), calls, "trigger")
         log(f"cancels: {storm_rounds} storms of {STORM} goals, then {calls // 5} lone goals")
-        storm_clients = [action_client] + [
-            ActionClient(client_node, PlanMotionAction, "plan_motion") for _ in range(STORM_CLIENTS - 1)
-        ]
-        for extra in storm_clients[1:]:
-            extra.wait_for_server(timeout_sec=60.0)
+        # the storm's clients keep every answer (deep reply queues: with Fast DDS each client reads every client's
+        # replies) and each proves both directions first (a fresh client's first replies can be lost)
+        storm_clients = [plan_action_client(client_node) for _ in range(STORM_CLIENTS)]
+        for storm_client in storm_clients:
+            goal_until_answered(storm_client, plan_goal_factory()(0), 120.0)
         storm_cancel = cancel_latencies(storm_clients, storm_rounds, STORM)
-        lone_cancel = cancel_latencies([action_client], max(calls // 5, 4), 1)
+        lone_cancel = cancel_latencies(storm_clients[:1], max(calls // 5, 4), 1)
     finally:
         executor.shutdown(timeout_sec=2.0)
         client_node.destroy_node()
