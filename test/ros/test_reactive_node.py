@@ -358,12 +358,15 @@ def test_launch_file_starts_the_node_with_the_shipped_config(monkeypatch):
         "launch": types.SimpleNamespace(LaunchDescription=Recorder),
         "launch.actions": types.SimpleNamespace(DeclareLaunchArgument=Recorder),
         "launch.conditions": types.SimpleNamespace(IfCondition=Recorder),
-        "launch.substitutions": types.SimpleNamespace(LaunchConfiguration=lambda name: f"<{name}>"),
+        "launch.substitutions": types.SimpleNamespace(
+            LaunchConfiguration=lambda name: f"<{name}>", PythonExpression=lambda parts: "".join(parts)
+        ),
         "launch_ros.actions": types.SimpleNamespace(Node=Recorder),
         "ament_index_python.packages": types.SimpleNamespace(get_package_share_directory=lambda _: str(REPO_ROOT)),
     }
     for name, module in fakes.items():
         monkeypatch.setitem(sys.modules, name, module)
+    monkeypatch.delitem(sys.modules, "maru_planner.ros.launch_args", raising=False)  # rebuilt on the stand-ins
     spec = importlib.util.spec_from_file_location("reactive_launch", REPO_ROOT / "launch" / "reactive.launch.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
