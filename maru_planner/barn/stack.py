@@ -80,13 +80,13 @@ def strip_params(config: StackConfig, laser_x: float) -> StripParams:
     return StripParams(**values)
 
 
-def _to_odom(start: tuple[float, float, float], point: tuple[float, float]) -> np.ndarray:
+def to_odom(start: tuple[float, float, float], point: tuple[float, float]) -> np.ndarray:
     dx, dy = point[0] - start[0], point[1] - start[1]
     c, s = math.cos(start[2]), math.sin(start[2])
     return np.array([c * dx + s * dy, -s * dx + c * dy])
 
 
-def _to_world(start: tuple[float, float, float], points: np.ndarray) -> np.ndarray:
+def to_world(start: tuple[float, float, float], points: np.ndarray) -> np.ndarray:
     c, s = math.cos(start[2]), math.sin(start[2])
     pts = np.asarray(points, dtype=float).reshape(-1, 2)
     return np.column_stack([start[0] + c * pts[:, 0] - s * pts[:, 1], start[1] + s * pts[:, 0] + c * pts[:, 1]])
@@ -239,7 +239,7 @@ def run_barn(
     sim = BaseSim(grid, seed=seed, scan_on_demand=True)
     start = sim.start
     half_size = (sim.jackal.chassis_length / 2, sim.jackal.chassis_width / 2)
-    stack = BarnStack(config, _to_odom(start, GOAL), sim.laser_spec.x, half_size)
+    stack = BarnStack(config, to_odom(start, GOAL), sim.laser_spec.x, half_size)
     period = 1.0 / config.control_rate
     trajectory = [sim.true_pose()]
     judge = RunJudge(start[:2], GOAL, config.time_limit, config.max_wait)
@@ -277,5 +277,5 @@ def run_barn(
         nan_commands=sim.events.nan_commands,
         replans=stack.replans,
     )
-    trace = RunTrace(np.array(trajectory), _to_world(start, stack.path), list(sim.events.contacts))
+    trace = RunTrace(np.array(trajectory), to_world(start, stack.path), list(sim.events.contacts))
     return score, trace

@@ -34,7 +34,7 @@ from sensor_msgs.msg import LaserScan
 from std_msgs.msg import String
 
 from maru_planner.barn.scoring import RunJudge, RunScore, barn_metric
-from maru_planner.barn.stack import BarnStack, RunTrace, StackConfig, _to_odom, _to_world, strip_params
+from maru_planner.barn.stack import BarnStack, RunTrace, StackConfig, strip_params, to_odom, to_world
 from maru_planner.paths import config_path
 from maru_planner.physics.barn_world import GOAL, START
 from maru_planner.physics.jackal import JackalSpec
@@ -110,7 +110,7 @@ class StackNode:
 
     def __init__(self, node: Node, config: StackConfig, jackal: JackalSpec, laser: LaserSpec):
         self.node, self.config = node, config
-        self.stack = BarnStack(config, _to_odom(START, GOAL), laser.x, (jackal.chassis_length / 2,
+        self.stack = BarnStack(config, to_odom(START, GOAL), laser.x, (jackal.chassis_length / 2,
                                                                         jackal.chassis_width / 2))  # fmt: skip
         self.judge = RunJudge(START[:2], GOAL, config.time_limit, config.max_wait)
         self.steps: dict[int, _Step] = {}
@@ -306,7 +306,7 @@ def run_through_ros(
         sim_time_s=now, wall_time_s=wall, cpu_time_s=cpu, cmd_timeouts=int(status.get("cmd_timeouts", 0)),
         nan_commands=int(status.get("nan_commands", 0)), replans=stack.stack.replans,
     )  # fmt: skip
-    trace = RunTrace(np.array(stack.trajectory), _to_world(START, stack.stack.path), stack.contacts)
+    trace = RunTrace(np.array(stack.trajectory), to_world(START, stack.stack.path), stack.contacts)
     return score, trace
 
 
