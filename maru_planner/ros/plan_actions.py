@@ -17,6 +17,7 @@ from __future__ import annotations
 import contextlib
 import threading
 import time
+from collections import OrderedDict
 from collections.abc import Awaitable, Callable
 from typing import Any
 
@@ -30,9 +31,13 @@ from maru_planner.monitor import PlanMonitor, Progress
 
 CANCEL_SETTLE_TIMEOUT = 1.0  # s a finished goal waits for rclpy to mark its accepted cancel (microseconds in practice)
 DRAIN_LIMIT = 256  # cancel or result requests taken per executor wake-up (the services' QoS depth)
-# s a finished goal's result is kept for a late get_result (rclpy's default: 900). Every status message lists every
-# goal kept, and clients and server handle each in full: at 1 goal/s a 30-min soak's p90 latencies grew for 15 min
-RESULT_TIMEOUT = 60.0
+# s a finished goal's result is kept for a late get_result (rclpy's default: 900), at most RESULTS_KEPT of them
+RESULT_TIMEOUT, RESULTS_KEPT = 60.0, 1024
+# s a finished goal stays in rcl (rcl's result timeout), so in every status message. Each status message lists every
+# goal rcl keeps, and each client converts all of it to Python (~15 us a goal): at 1 goal/s a 30-min soak's p90
+# latencies grew for 15 min, and a storm's 4 clients spent their executor converting status arrays of 260 goals
+# (cancel -> result p95 157 ms). Later get_result requests are answered from the server's own copy.
+STATUS_RETENTION = 1
 
 
 class PlanActionServer:
@@ -79,7 +84,7 @@ class PlanActionServer:
             goal_service_qos_profile=requests_qos,
             result_service_qos_profile=requests_qos,
             cancel_service_qos_profile=requests_qos,  # a storm of cancels: rclpy's depth 10 dropped some
-            result_timeout=int(RESULT_TIMEOUT),
+            result_timeout=STATUS_RETENTION,
         )
 
     @property
@@ -133,19 +138,25 @@ class _DrainingActionServer(ActionServer):
     rclpy takes one request of each kind per wake-up, and every wake-up resumes each goal awaiting its plan:
     16 cancels and 32 result requests of a storm took ~50 wake-ups of 5-25 ms each before the last result left.
     A goal's result goes out from the thread that ends the goal, not from a task of one more executor round.
+    rcl forgets a finished goal after :data:`STATUS_RETENTION` (so status messages stay short); its result is
+    kept here for :data:`RESULT_TIMEOUT` (at most :data:`RESULTS_KEPT` results) and answers a later request.
     """
 
     def __init__(self, *args: Any, **kwargs: Any):
         super().__init__(*args, **kwargs)
         self._result_requests: dict[bytes, list[Any]] = {}  # goal id -> headers of result requests before its end
         self._result_requests_lock = threading.Lock()
+        self._kept_results: OrderedDict[bytes, tuple[float, Any]] = OrderedDict()  # goal id -> (end, response)
 
     async def _execute_get_result_request(self, request_header_and_message: tuple) -> None:
         header, request = request_header_and_message
         goal = bytes(request.goal_id.uuid)
         future = self._result_futures.get(goal)
-        if future is None:  # an unknown goal: rclpy answers STATUS_UNKNOWN
-            await super()._execute_get_result_request(request_header_and_message)
+        if future is None:  # a goal rcl forgot: its kept result, else rclpy answers STATUS_UNKNOWN
+            if (kept := self._kept_result(goal)) is not None:
+                self._handle.send_result_response(header, kept)
+            else:
+                await super()._execute_get_result_request(request_header_and_message)
             return
         with self._result_requests_lock:
             if not future.done():
@@ -156,10 +167,26 @@ class _DrainingActionServer(ActionServer):
     async def _execute_goal(self, execute_callback: Any, goal_handle: ServerGoalHandle) -> None:
         await super()._execute_goal(execute_callback, goal_handle)  # sets the goal's result future
         goal = bytes(goal_handle.goal_id.uuid)
+        future = self._result_futures[goal]
         with self._result_requests_lock:
             headers = self._result_requests.pop(goal, [])
+            self._keep_result(goal, future.result())
         for header in headers:
-            self._send_result_response(header, self._result_futures[goal])
+            self._send_result_response(header, future)
+
+    def _keep_result(self, goal: bytes, response: Any) -> None:
+        """Keep ``response`` for a late request; drop what is older than RESULT_TIMEOUT or beyond RESULTS_KEPT."""
+        now = time.monotonic()
+        self._kept_results[goal] = (now, response)
+        while self._kept_results and (
+            len(self._kept_results) > RESULTS_KEPT or next(iter(self._kept_results.values()))[0] < now - RESULT_TIMEOUT
+        ):
+            self._kept_results.popitem(last=False)
+
+    def _kept_result(self, goal: bytes) -> Any:
+        with self._result_requests_lock:
+            ended, response = self._kept_results.get(goal, (0.0, None))
+        return response if time.monotonic() - ended <= RESULT_TIMEOUT else None
 
     def take_data(self) -> dict:
         data = super().take_data()

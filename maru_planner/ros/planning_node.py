@@ -96,6 +96,7 @@ class PlanningNode(ManagedNode):
         self._description_files = DescriptionFiles(prefix=f"{NODE_NAME}_")  # URDF/SRDF given as XML text
         parameters.add_on_set_parameters_callback(self, self._specs, self.when_configured(self._apply_parameters))
         self._view: PlanViewBridge | None = None  # the view option's browser view
+        self._scene_cache: tuple | None = None  # (runtime, scene version, frame, obstacles, YAML) of get_scene
         self.start()
 
     @property
@@ -114,6 +115,7 @@ class PlanningNode(ManagedNode):
         self.settings = node_settings(values)
         self.config = checked_config(lambda: planner_config(values))
         self._robot_source, origin = robot_source(self, self.settings, self._description_files)
+        self._plan_publisher = concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="plan_publisher")
         self.runtime = PlanningRuntime(
             self._robot_source, self.settings.scene_file, self.config, runtime_settings(self.settings),
             log=self.get_logger().info, joint_states=self._joint_states,
@@ -137,6 +139,7 @@ class PlanningNode(ManagedNode):
             self._description_pub.publish(String(data=Path(self._robot_source.urdf).read_text()))
 
     def cleanup(self) -> None:
+        self._plan_publisher.shutdown(wait=True)  # before the publishers go
         if self._view is not None:
             self._view.close()
             self._view = None
@@ -251,8 +254,11 @@ class PlanningNode(ManagedNode):
 
     def _publish_plan(self, trajectory_msg: JointTrajectory, trajectory, start: dict[str, float]) -> None:
         """Publish the last plan on ~/planned_trajectory and, when someone listens, its hand paths."""
-        self._trajectory_pub.publish(trajectory_msg)
-        self._markers.publish_plan(trajectory, start, trajectory_msg.header.frame_id, trajectory_msg.header.stamp)
+        try:
+            self._trajectory_pub.publish(trajectory_msg)
+            self._markers.publish_plan(trajectory, start, trajectory_msg.header.frame_id, trajectory_msg.header.stamp)
+        except Exception as exc:  # noqa: BLE001 - a plan's picture must not take the node down
+            self.get_logger().warning(f"the plan was not published: {errors.one_line(exc)}", throttle_duration_sec=10.0)
 
     # ------------------------------------------------------------ services
 
@@ -290,9 +296,8 @@ class PlanningNode(ManagedNode):
             return answer
         stamp = self.get_clock().now().to_msg()
         answer.trajectory = conv.trajectory_msg(result.trajectory, self.settings.planning_frame, stamp)
-        # publishing (and marker FK) happens after the answer has gone out
-        assert self.executor is not None  # a service callback runs in the node's executor
-        self.executor.create_task(self._publish_plan, answer.trajectory, result.trajectory, motion_request.start)
+        # publishing (and marker FK) on a thread of its own: no executor round on the way to the answer
+        self._plan_publisher.submit(self._publish_plan, answer.trajectory, result.trajectory, motion_request.start)
         self.get_logger().info(
             f"{name} {motion_request.group} {answer.stats.planner_id} on {result.stats.collision_model}: "
             f"{len(answer.trajectory.points)} points, "
@@ -329,11 +334,18 @@ class PlanningNode(ManagedNode):
         return response
 
     def _on_get_scene(self, _request: srv.GetScene.Request, response: srv.GetScene.Response):
-        scene_dict, _ = self.runtime.get_scene()
-        frame = self.settings.planning_frame
-        response.obstacles = [conv.obstacle_to_msg(o, frame) for o in scene_dict.get("obstacles", [])]
-        response.scene_yaml = Scene.from_dict(scene_dict).to_yaml()
+        response.obstacles, response.scene_yaml = self._scene_answer()
         return response
+
+    def _scene_answer(self) -> tuple[list[SceneObstacle], str]:
+        """get_scene's obstacles and YAML, made again only when the scene (its version) or the frame changed."""
+        runtime, frame = self.runtime, self.settings.planning_frame
+        cached = self._scene_cache
+        if cached is None or cached[0] is not runtime or cached[1:3] != (runtime.scene_version, frame):
+            scene_dict, version = runtime.get_scene()
+            obstacles = [conv.obstacle_to_msg(o, frame) for o in scene_dict.get("obstacles", [])]
+            cached = self._scene_cache = (runtime, version, frame, obstacles, Scene.from_dict(scene_dict).to_yaml())
+        return cached[3], cached[4]
 
     # ------------------------------------------------------------ manipulation services (docs/manipulation.md)
 

@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 from conftest import PAPER_GOAL, PAPER_START, BaseNodeClient, connected_planning_client
 
+from maru_planner.ros.planning_client import wait_for_future
 from maru_planner.ros.reactive_conversions import pose_stamped_msg
 
 # serial: its bursts, storms and admission timings load the machine on purpose (make test runs it alone)
@@ -205,6 +206,42 @@ def test_a_successful_goal_ends_with_the_service_response(client):
     for field in ("planner_id", "seed", "nodes", "waypoints", "path_length", "collision_checks"):
         assert getattr(result.stats, field) == getattr(response.stats, field), field
     assert stages.messages and stages.messages[0][1].stage == "queued"
+
+
+def test_a_result_asked_for_after_rcl_forgot_the_goal_is_the_kept_one_and_status_lists_recent_goals(client, tester):
+    """rcl forgets a finished goal after STATUS_RETENTION (status messages stay short); a later get_result is
+    answered from the server's copy, with the goal's status and result."""
+    from action_msgs.msg import GoalStatusArray
+
+    from maru_planner.ros.plan_actions import RESULT_TIMEOUT, STATUS_RETENTION
+
+    listed: list[set[bytes]] = []  # goal ids of each status message
+    subscription = tester.node.create_subscription(
+        GoalStatusArray, "plan_motion/_action/status",
+        lambda message: listed.append({bytes(s.goal_info.goal_id.uuid) for s in message.status_list}), 50,
+    )  # fmt: skip
+    try:
+        request = dict(start=PAPER_START, planner_id="RRTConnect", time_budget=20.0, seed=3)
+        first = client.plan_action(PAPER_GOAL, **request)
+        status, result = first.result()
+        assert status == _status().STATUS_SUCCEEDED, _describe(status, result)
+        time.sleep(STATUS_RETENTION + 2.0)
+        assert STATUS_RETENTION + 2.0 < RESULT_TIMEOUT
+        again = wait_for_future(first.handle.get_result_async(), 30.0, "the late result")
+        assert again.status == _status().STATUS_SUCCEEDED
+        assert len(again.result.trajectory.points) == len(result.trajectory.points)
+
+        seen_before = len(listed)
+        second = client.plan_action(PAPER_GOAL, **request)
+        assert second.result()[0] == _status().STATUS_SUCCEEDED
+        second_id, first_id = bytes(second.handle.goal_id.uuid), bytes(first.handle.goal_id.uuid)
+        deadline = time.monotonic() + 30.0
+        while not any(second_id in ids for ids in listed[seen_before:]) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert any(second_id in ids for ids in listed[seen_before:]), "no status message listed the new goal"
+        assert not any(first_id in ids for ids in listed[seen_before:]), "a goal rcl forgot is still listed"
+    finally:
+        tester.node.destroy_subscription(subscription)
 
 
 @pytest.mark.parametrize(
