@@ -17,7 +17,9 @@ Every second it samples each node's RSS (the planning node with its worker proce
 
 Targets (issue 36, for the 30-minute run): rss_growth <= 5 %, 0 crashes, 0 lost, |p99_drift| <= 20 %.
 
-    .venv/bin/python bench/soak.py [--duration 1800] [--quick]   (--quick: 60 s, under bench/results/quick/)
+    .venv/bin/python bench/soak.py [--duration 1800] [--quick] [--out DIR]   (--quick: 60 s, under bench/results/quick/)
+
+The suite runs the 60-second version (test/ros/test_soak_minute.py).
 """
 
 from __future__ import annotations
@@ -462,6 +464,7 @@ def main(argv: list[str] | None = None) -> int:
     )  # fmt: skip
     parser.add_argument("--quick", action="store_true", help="60 s, written under bench/results/quick/")
     parser.add_argument("--logs", help="keep the nodes' logs in this folder (default: deleted)")
+    parser.add_argument("--out", type=Path, help="write soak.{json,md,png} into this folder instead")
     args = parser.parse_args(argv)
     if not args.duration > 0:
         parser.error("--duration must be > 0")
@@ -469,7 +472,8 @@ def main(argv: list[str] | None = None) -> int:
     duration = 60.0 if args.quick else args.duration
     results = run(duration, args.logs)
     scratch = duration < FULL_DURATION_S  # only a full run replaces the committed results
-    write_results(RESULTS / NAME, results, table(results), lambda path: plot(results, path), quick=scratch)
+    out = args.out / NAME if args.out else RESULTS / NAME
+    write_results(out, results, table(results), lambda path: plot(results, path), quick=scratch and not args.out)
     return 0
 
 
