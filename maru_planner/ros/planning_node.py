@@ -297,7 +297,9 @@ class PlanningNode(ManagedNode):
         stamp = self.get_clock().now().to_msg()
         answer.trajectory = conv.trajectory_msg(result.trajectory, self.settings.planning_frame, stamp)
         # publishing (and marker FK) on a thread of its own: no executor round on the way to the answer
-        self._plan_publisher.submit(self._publish_plan, answer.trajectory, result.trajectory, motion_request.start or {})
+        self._plan_publisher.submit(
+            self._publish_plan, answer.trajectory, result.trajectory, motion_request.start or {}
+        )
         self.get_logger().info(
             f"{name} {motion_request.group} {answer.stats.planner_id} on {result.stats.collision_model}: "
             f"{len(answer.trajectory.points)} points, "
