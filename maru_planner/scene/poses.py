@@ -55,7 +55,12 @@ def _pose_matrix(pose: Any, where: str) -> np.ndarray:
         T[:3, 3] = numbers(where, "pose.xyz", pose.get("xyz", [0, 0, 0]), 3)
         T[:3, :3] = rpy_matrix(*numbers(where, "pose.rpy", pose.get("rpy", [0, 0, 0]), 3))
         return T
-    arr = np.asarray(pose, dtype=float)
+    try:
+        arr = np.asarray(pose, dtype=float)
+    except (TypeError, ValueError):  # e.g. a list holding text or nested lists of uneven length
+        raise InvalidScene(
+            f"{where}: pose must be a 4x4, {{xyz, rpy}}, xyz or xyz+rpy of numbers, got {pose!r:.80}"
+        ) from None
     if arr.shape == (4, 4):
         if not np.all(np.isfinite(arr)):
             raise InvalidScene(f"{where}: pose contains NaN or inf")

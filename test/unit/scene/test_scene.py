@@ -101,3 +101,11 @@ def test_obstacles_pickle_as_plain_data():
     scene = Scene.from_yaml(YAML)
     again = pickle.loads(pickle.dumps(scene))
     assert again.to_dict() == scene.to_dict() and again.obstacles["post"].length == 1.0
+
+
+@pytest.mark.parametrize("pose", [["\u00a8F\u00dd\x910qx"], [[1, 2], [3]], [None, "a"]])
+def test_a_pose_list_of_text_or_uneven_rows_is_an_invalid_scene(pose):
+    """bench/robustness.py found a scene file whose pose was a list holding text: a ValueError escaped maru-plan."""
+    box = {"name": "a", "type": "box", "size": [0.1, 0.1, 0.1], "pose": pose}
+    with pytest.raises(InvalidScene, match="pose must be"):
+        Scene.from_dict({"obstacles": [box]})
