@@ -23,8 +23,9 @@ for ``scan_timeout`` seconds, in both clock modes.
 
 Bounded work and memory per message: a /plan arrives serialized and its pose count is read first, so one
 longer than ``max_plan_poses`` is refused (counted as ``oversized``) before rclpy builds a Python object per
-pose (100,000 poses took 1.7 s); the input queues hold one message each (the newest; best-effort scans,
-goals, plans), so the node is never more than one scan behind and holds at most queue depth x message size.
+pose (100,000 poses took 1.7 s), as is one larger than 512 bytes a pose (long frame ids); the input queues hold
+one message each (the newest; best-effort scans, goals, plans), so the node is never more than one scan behind
+and holds at most queue depth x message size.
 An exception in a callback is logged on one line and stops the base; the node keeps serving.
 
 A managed node (:mod:`maru_planner.ros.lifecycle`): configure reads the parameters and creates the
@@ -110,6 +111,8 @@ class NodeSettings:
     )
 
 
+# a serialized /plan larger than this is refused unread: a pose with a frame id of ~400 characters, the Path's header
+PLAN_BYTES_PER_POSE, PLAN_BYTES_FIXED = 512, 1024
 NODE_SPECS = dataclass_params(NodeSettings)
 STRIP_SPECS = dataclass_params(StripParams)
 SPECS = {**STRIP_SPECS, **NODE_SPECS}  # every parameter the node declares
@@ -372,11 +375,18 @@ class ReactiveNode(ManagedNode):
         self.get_logger().info(f"goal ({goal[0]:.2f}, {goal[1]:.2f}, {goal[2]:.2f})")
 
     def on_plan_bytes(self, raw: bytes) -> None:
-        """A serialized /plan: refused unread when longer than ``max_plan_poses``, else decoded and taken."""
+        """A serialized /plan: refused unread when longer than ``max_plan_poses`` or larger than
+        :data:`PLAN_BYTES_PER_POSE` a pose (e.g. long frame ids: 2,000 poses took 0.6 GB decoded), else decoded."""
         count, most = conv.path_pose_count(raw), self.settings.max_plan_poses
         if count > most:
             self.counts["oversized"] += 1
             self.warnings.warn("oversized", f"ignored /plan: {count} poses (max_plan_poses {most}), not decoded")
+            return
+        if len(raw) > PLAN_BYTES_FIXED + PLAN_BYTES_PER_POSE * max(count, 0):
+            self.counts["oversized"] += 1
+            self.warnings.warn(
+                "oversized", f"ignored /plan: {len(raw)} bytes for {count} poses (long names?), not decoded"
+            )
             return
         self.on_plan(deserialize_message(raw, Path))
 

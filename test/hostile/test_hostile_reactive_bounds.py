@@ -85,6 +85,24 @@ def test_oversized_plans_are_refused_unread_and_counted_and_the_next_scan_is_ans
     assert node.alive()
 
 
+def test_a_plan_of_few_poses_with_huge_frame_ids_is_refused_unread(client, node):
+    """bench/robustness.py's full run: 2,000 poses with long frame ids passed the pose count and took the node to
+    1.1 GB once decoded."""
+    from rclpy.serialization import serialize_message
+
+    from maru_planner.ros import reactive_conversions as conv
+
+    points = np.column_stack([np.linspace(0.0, GOAL[0], 50), np.zeros(50), np.zeros(50)])
+    plan = conv.path_msg(points, "odom", 0.0)
+    for pose in plan.poses:
+        pose.header.frame_id = "x" * 20_000
+    client.plan_pub.publish(serialize_message(plan))
+    assert client.spinning.wait_for(lambda: "bytes for 50 poses (long names?), not decoded" in node.log(), timeout=60)
+    _good_step(client)
+    assert "initial path with 50 poses" not in node.log()
+    assert node.alive()
+
+
 def test_a_plan_at_the_limit_is_taken(client, node):
     client.plan_pub.publish(_serialized_plan(MAX_PLAN_POSES))
     assert client.spinning.wait_for(lambda: f"initial path with {MAX_PLAN_POSES} poses" in node.log(), timeout=60), (
