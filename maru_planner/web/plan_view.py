@@ -77,7 +77,7 @@ class PlanView:
         self._columns = np.zeros(0, dtype=int)
         self.frames_shown = 0  # trajectory frames sent since the last plan (the player's progress)
         self.first_frame_time: float | None = None  # time.monotonic() of the last plan's first frame
-        with server.gui.add_folder("Plan"):
+        with server.gui.add_folder("Plan") as self.folder:
             self.status = server.gui.add_markdown("no plan yet")
             self.scrubber = server.gui.add_slider("time (s)", 0.0, 1.0, 0.01, 0.0, disabled=True)
             self.replay = server.gui.add_button("Replay", disabled=True)

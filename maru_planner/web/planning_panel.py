@@ -72,7 +72,8 @@ class PlanningPanel:
     def __init__(self, server: viser.ViserServer, robot: RobotModel, on_plan: Callable[[], None]):
         self.robot = robot
         gui = server.gui
-        with gui.add_folder("Planning"):
+        self._shown = True
+        with gui.add_folder("Planning") as self.folder:
             self.group = gui.add_dropdown("group", tuple(robot.groups), initial_value=default_group(robot))
             self.planner = gui.add_dropdown("planner", tuple(PLANNERS), initial_value="CompiledRRTConnect")
             self.budget = gui.add_number("time budget (s)", 2.0, min=0.1, max=60.0, step=0.1)
@@ -98,7 +99,15 @@ class PlanningPanel:
                 self._folders[chosen] = folder
                 self.params[chosen] = {name: param_control(self._gui, p) for name, p in get_spec(chosen).params.items()}
         for planner_id, folder in self._folders.items():
-            folder.visible = planner_id == chosen
+            folder.visible = self._shown and planner_id == chosen
+
+    def set_shown(self, shown: bool) -> None:
+        """Show or hide the panel and the goal gizmos."""
+        self._shown = shown
+        self.folder.visible = shown
+        self._show_params()
+        for handle in self.goals.values():
+            handle.visible = shown
 
     def planner_params(self) -> dict[str, Any]:
         """The chosen planner's parameters that differ from the registry defaults."""

@@ -233,6 +233,12 @@ class RobotView:
             self.show(self.q)
         return f"{ROOT}/{link}"
 
+    def set_visible(self, visible: bool) -> None:
+        """Show or hide the whole robot (its link frames carry its meshes)."""
+        with self._server.atomic():
+            for handle in self._frames.values():
+                handle.visible = visible
+
     def show(self, q: np.ndarray) -> None:
         """Pose every link at configuration ``q`` (one message batch)."""
         model, data = self.robot.model, self.robot.model.createData()

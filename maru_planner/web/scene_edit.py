@@ -59,7 +59,7 @@ class SceneEditor:
     ):
         self._server, self._apply, self._current, self._state = server, apply, current, state
         gui = server.gui
-        with gui.add_folder("Scene", expand_by_default=False):
+        with gui.add_folder("Scene", expand_by_default=False) as self.folder:
             self.shape = gui.add_dropdown("shape", EDITABLE_SHAPES, initial_value="box")
             self.name = gui.add_text("name", "box1")
             self.size = gui.add_vector3("size (m)", (0.1, 0.1, 0.1), min=(1e-3,) * 3, max=(5.0,) * 3, step=0.01)

@@ -1,7 +1,9 @@
 """A scene's obstacles in a viser scene under ``/scene``; attached objects ride on their link's frame.
 
-Boxes, spheres and cylinders are viser primitives; any other shape of the shape table is drawn from its
-``faces`` (fan-triangulated polygons), so a new obstacle type shows up without a change here.
+Spheres and cylinders are viser primitives; boxes and any other shape of the shape table are drawn from their
+``faces`` (fan-triangulated polygons), so a new obstacle type shows up without a change here. A box is a mesh
+rather than viser's box: its own vertices per face look the same (flat), and it draws with the robot meshes'
+shader, one compile less (~0.1 s of a software-WebGL page's first frame).
 """
 
 from __future__ import annotations
@@ -36,6 +38,16 @@ def faces_mesh(obstacle: Obstacle) -> tuple[np.ndarray, np.ndarray]:
     return np.concatenate(vertices), np.asarray(triangles, dtype=np.int32)
 
 
+def outward(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """``faces`` with each triangle turned to face away from the origin (a convex shape about its own frame)."""
+    corners = vertices[faces]
+    normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    inward = np.einsum("ij,ij->i", normals, corners.mean(axis=1)) < 0
+    turned = faces.copy()
+    turned[inward] = turned[inward][:, ::-1]
+    return turned
+
+
 def add_obstacle(
     server: viser.ViserServer, name: str, obstacle: Obstacle, color: tuple[int, int, int], opacity: float | None = None
 ) -> viser.SceneNodeHandle:
@@ -43,14 +55,15 @@ def add_obstacle(
     wxyz, position = wxyz_position(obstacle.pose)
     scene = server.scene
     d = obstacle.dimensions
-    if obstacle.type == "box":
-        return scene.add_box(name, color, tuple(d["size"]), opacity=opacity, wxyz=wxyz, position=position)
     if obstacle.type == "sphere":
         return scene.add_icosphere(name, d["radius"], color, opacity=opacity, wxyz=wxyz, position=position)
     if obstacle.type == "cylinder":
         # viser's cylinder lies along its local z like ours
         return scene.add_cylinder(name, d["radius"], d["length"], color, opacity=opacity, wxyz=wxyz, position=position)
     vertices, faces = faces_mesh(obstacle)
+    if obstacle.type == "box":  # (module doc) no shadows, as the robot's meshes
+        return scene.add_mesh_simple(name, vertices, outward(vertices, faces), color=color, opacity=opacity,
+                                     wxyz=wxyz, position=position, cast_shadow=False, receive_shadow=False)  # fmt: skip
     return scene.add_mesh_simple(
         name, vertices, faces, color=color, opacity=opacity, side="double", wxyz=wxyz, position=position
     )

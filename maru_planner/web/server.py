@@ -1,10 +1,12 @@
 """``maru-view``'s application: a viser server showing one robot and its scene, planning through a
 :class:`~maru_planner.runtime.PlanningRuntime` what the side panel and the goal gizmos ask for.
 
-The page is served at once (robot and scene drawn from the robot model). The runtime (workers, warm-up) is built in
-a thread once the first page is up (its camera reported, then its first frame drawn): on a 2-core machine a warm-up
-that runs while the browser compiles viser's client and draws the first frame makes the page ~1-2 s later. It starts
-at once when "Plan" is pressed or :func:`wait_ready` is called, and after :data:`START_ANYWAY_S` when no page opens.
+The page is served at once (robot and scene drawn from the robot model). The controls (the side panel's folders and
+the goal gizmos) and then the runtime (workers, warm-up) come once the first page is up (its camera reported, then
+its first frame drawn): with software WebGL, the panel's ~40 inputs (React) and the gizmos' three shaders cost the
+page ~0.1-0.15 s of CPU before the robot's first frame (measured), and a warm-up that runs while the browser compiles
+viser's client and draws the first frame makes the page ~1-2 s later. Both come at once when "Plan" is pressed or
+:func:`wait_ready` is called, and after :data:`START_ANYWAY_S` when no page opens.
 "Plan" pressed while the planner loads says so and plans when it is ready. A plan: the goals of the end effectors the
 chosen group moves -> IK and the pipeline (one :class:`~maru_planner.planning.types.MotionRequest`) -> the trajectory
 played by :class:`~maru_planner.web.plan_view.PlanView`, whose final state becomes the next start.
@@ -74,6 +76,7 @@ class ViewApp:
         self.view.show_scene(self._scene)
         self.editor.refresh(self._scene.to_dict())
         self.panel.place_goals(self.start)
+        self._show_controls(False)  # until the first page has drawn the robot (module doc)
         self.ready = threading.Event()
         self._wanted = threading.Event()  # build the runtime now (the page is up, or a plan waits for it)
         self._closed = False
@@ -192,8 +195,9 @@ class ViewApp:
         self._wanted.set()
 
     def _on_client(self, client: viser.ClientHandle) -> None:
-        """A page connected: load the planner once its camera reports (its canvas is up) and its first frame is
-        drawn: PAGE_SETTLE_S later, or as long again as the canvas took (a loaded machine draws slowly too)."""
+        """A page connected: show the controls and load the planner once its camera reports (its canvas is up) and
+        its first frame is drawn: PAGE_SETTLE_S later, or as long again as the canvas took (a loaded machine draws
+        slowly too)."""
         reported, connected = threading.Event(), time.monotonic()
 
         def on_camera(_: viser.CameraHandle) -> None:
@@ -206,11 +210,18 @@ class ViewApp:
 
         client.camera.on_update(on_camera)
 
+    def _show_controls(self, shown: bool) -> None:
+        with self.server.atomic():
+            self.view.folder.visible = shown
+            self.panel.set_shown(shown)
+            self.editor.folder.visible = shown
+
     def _start_runtime(self) -> None:
         self._wanted.wait(START_ANYWAY_S)
         if self._closed:
             self.ready.set()
             return
+        self._show_controls(True)
         t0 = time.monotonic()
         try:
             settings = RuntimeSettings(default_group=default_group(self.robot), workers=1, worker_processes=False)

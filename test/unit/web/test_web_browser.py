@@ -54,10 +54,15 @@ def _wait_result(app: ViewApp, before: object, timeout: float = 20.0) -> None:
 
 
 def test_the_page_loads_and_draws_the_robot(app: ViewApp, page):
-    assert browser.wait_drawn(page, timeout=40.0) > 0.01
+    page.wait_for_selector("canvas", timeout=40_000)
     wait_ready(app, 60.0)
     page.wait_for_function("document.body.innerText.includes('planner ready')", timeout=10_000)
     assert page.get_by_role("button", name="Plan").is_enabled()
+    screen = browser.Screen(page)
+    robot = browser.robot_pixels(screen, app.view.robot_view.set_visible)
+    assert robot.share > 0.002, "hiding the robot changed (almost) nothing on the page"
+    assert browser.robot_shown(screen.grab(robot.box), robot) >= browser.SHOWN_SHARE  # shown again
+    assert browser.robot_shown(robot.hidden, robot) == 0.0
 
 
 def test_a_moved_goal_and_plan_play_the_trajectory_to_its_final_state(app: ViewApp, page):

@@ -1,5 +1,6 @@
 """The view's parts without a browser: maru-view's bad input, the panel's controls from the registry's ParamSpecs,
-the robot's visual meshes, obstacles as triangles, the trajectory sampled for playback, the plan summary."""
+the robot's visual meshes, obstacles as triangles (a box's facing outward), the trajectory sampled for playback,
+the plan summary, and how a screenshot is judged to show the robot."""
 
 from __future__ import annotations
 
@@ -16,12 +17,12 @@ from maru_planner.robot import RobotModel
 from maru_planner.runtime import RobotSource
 from maru_planner.scene import Obstacle
 from maru_planner.trajectory.trajectory import Trajectory
-from maru_planner.web import cli
+from maru_planner.web import browser, cli
 from maru_planner.web.plan_view import PlanView, result_summary, trajectory_state
 from maru_planner.web.planning_panel import control_value, moved_by, param_control
 from maru_planner.web.robot_view import pose_of, visual_parts, wxyz_position
 from maru_planner.web.scene_edit import new_obstacle
-from maru_planner.web.scene_view import faces_mesh
+from maru_planner.web.scene_view import faces_mesh, outward
 
 
 @pytest.fixture(scope="module")
@@ -89,6 +90,34 @@ def test_obstacles_become_triangles_and_bad_ones_are_refused():
         new_obstacle("m", "mesh", (1, 1, 1), 0.05, 0.2)
     with pytest.raises(errors.InvalidScene, match="'s'"):
         new_obstacle("s", "sphere", (1, 1, 1), -1.0, 0.2)
+
+
+def test_a_box_mesh_faces_outward_whatever_the_polygons_winding():
+    vertices, faces = faces_mesh(new_obstacle("b", "box", (0.1, 0.2, 0.3), 0.05, 0.2))
+    scrambled = faces.copy()
+    scrambled[::2] = scrambled[::2, ::-1]
+    turned = outward(vertices, scrambled)
+    corners = vertices[turned]
+    normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    assert np.all(np.einsum("ij,ij->i", normals, corners.mean(axis=1)) > 0)
+    assert sorted(map(sorted, turned.tolist())) == sorted(map(sorted, faces.tolist()))  # the same triangles
+
+
+def test_the_robot_is_shown_when_most_of_its_pixels_look_as_with_it():
+    hidden = np.full((40, 60, 3), 255, dtype=np.uint8)
+    hidden[30:, :] = 200  # the floor
+    shown = hidden.copy()
+    shown[10:20, 20:30] = (90, 90, 90)  # the robot
+    notice = hidden.copy()
+    notice[0:8, 0:60] = (30, 30, 30)  # a panel over the canvas, in both images
+    robot = browser.robot_region(shown, hidden, browser.changed(shown, hidden))
+    assert robot.box == (20, 10, 10, 10) and robot.share == pytest.approx(100 / 2400)
+    assert browser.robot_shown(robot.shown, robot) == 1.0 and browser.robot_shown(robot.hidden, robot) == 0.0
+    half = robot.hidden.copy()
+    half[:5] = robot.shown[:5]
+    assert browser.robot_shown(half, robot) == pytest.approx(0.5)
+    cut = (slice(10, 20), slice(20, 30))
+    assert browser.robot_shown(notice[cut], robot) == 0.0  # something drawn elsewhere is not the robot
 
 
 def test_playback_interpolates_the_trajectory_joints_only():

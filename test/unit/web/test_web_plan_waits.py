@@ -1,5 +1,6 @@
-"""maru-view's planner loads after the page is up (so the page is not slowed by the warm-up), and "Plan" pressed
-before then says so, loads the planner at once and plans when it is ready (no browser: no page ever connects). The
+"""maru-view's controls and planner come after the page is up (so the robot's first frame is not slowed by the panel
+or the warm-up), and "Plan" pressed before then says so, shows them, loads the planner at once and plans when it is
+ready (no browser: no page ever connects). The
 view starts a robot in a collision-free named state; TIAGo plans with the exact checker unless told otherwise."""
 
 from __future__ import annotations
@@ -20,6 +21,8 @@ def test_plan_before_the_planner_loaded_waits_for_it_and_plans():
     try:
         assert app.runtime is None and not app.ready.is_set()  # no page yet: nothing warms up
         assert not app.panel.plan_button.disabled and app.panel.plan_button.label == server.LOADING_LABEL
+        controls = [app.view.folder, app.panel.folder, app.editor.folder, *app.panel.goals.values()]
+        assert not any(c.visible for c in controls)  # no page yet: the robot draws first
         problem = PROBLEMS["maru13"]
         goal_q = app.start.copy()
         goal_q[app.robot.joint_indices(app.robot.groups[problem.group])] = problem.goal
@@ -29,6 +32,8 @@ def test_plan_before_the_planner_loaded_waits_for_it_and_plans():
         assert result is not None and result.success, result.message if result else "busy"
         assert app.ready.is_set() and app.runtime is not None
         assert app.panel.plan_button.label == server.PLAN_LABEL
+        assert all(c.visible for c in controls)
+        assert app.panel._folders["CompiledRRTConnect"].visible  # the chosen planner's parameters
         assert app.view.wait_played(timeout=30.0)
     finally:
         app.close()
