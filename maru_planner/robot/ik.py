@@ -66,7 +66,11 @@ class DampedLeastSquares:
     def step(self, damping: float, free: np.ndarray) -> np.ndarray:
         """Damped least-squares step using only the ``free`` joints (the others get 0)."""
         J, e = self.J * free, self.err
-        return J.T @ np.linalg.solve(J @ J.T + damping * np.eye(len(e)), e)
+        damped = J @ J.T + damping * np.eye(len(e))
+        try:
+            return J.T @ np.linalg.solve(damped, e)
+        except np.linalg.LinAlgError:  # singular to machine precision (a target far beyond reach): no step
+            return np.zeros(J.shape[1])
 
 
 def solve_ik(

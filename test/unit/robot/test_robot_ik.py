@@ -99,3 +99,17 @@ def test_validity_callback_rejects_solutions(robot):
     target = robot.frame_pose(q, "r_hand")
     with pytest.raises(NoIKSolution):
         solve_ik(robot, {"r_hand": target}, q, "torso_right_arm", max_restarts=2, is_valid=lambda _q: False)
+
+
+def test_a_damped_system_singular_to_machine_precision_is_no_solution_not_a_crash(robot, monkeypatch):
+    """bench/robustness.py: compute_ik answered INTERNAL_ERROR ('LinAlgError: Singular matrix') for hostile goals."""
+    from maru_planner.robot import ik
+
+    def singular(*_args):
+        raise np.linalg.LinAlgError("Singular matrix")
+
+    monkeypatch.setattr(ik.np.linalg, "solve", singular)
+    far = np.eye(4)
+    far[:3, 3] = [0.4, -0.2, 0.3]
+    with pytest.raises(NoIKSolution, match="r_hand"):
+        ik.solve_ik_numeric(robot, {"r_hand": far}, robot.neutral(), "torso_right_arm", max_restarts=1)
