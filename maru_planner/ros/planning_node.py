@@ -26,7 +26,7 @@ import sys
 import threading
 import time
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup, ReentrantCallbackGroup
 from rclpy.parameter import Parameter
@@ -50,7 +50,6 @@ from maru_planner.ros.markers import MarkerPublisher
 from maru_planner.ros.plan_actions import PlanActionServer
 from maru_planner.ros.plan_execution import TrajectoryExecution, mark_not_run
 from maru_planner.ros.plan_execution import feedback_msg as plan_feedback_msg
-from maru_planner.ros.plan_view_bridge import PlanViewBridge, open_view
 from maru_planner.ros.planning_parameters import (
     NODE_PARAMS,
     PLANNER_PREFIX,
@@ -70,6 +69,9 @@ from maru_planner.scene import Scene
 from maru_planner_interfaces import srv
 from maru_planner_interfaces.action import PlanMotion as PlanMotionAction
 from maru_planner_interfaces.msg import PlanningError, SceneObstacle
+
+if TYPE_CHECKING:  # the view's module is imported only for a node with a view
+    from maru_planner.ros.plan_view_bridge import PlanViewBridge
 
 __all__ = [  # with what moved to the runtime, planning_parameters and robot_description, re-exported
     "DEFAULT_SCENE", "DEFAULT_SRDF", "DEFAULT_URDF", "LATCHED", "NODE_PARAMS", "PLANNER_PREFIX", "NodeSettings",
@@ -123,7 +125,7 @@ class PlanningNode(ManagedNode):
         self._robot = self.runtime.robot  # read-only use in the executor threads (names, markers)
         try:
             self._make_interfaces()
-            self._view = open_view(self, self.runtime, self.settings)
+            self._view = self._open_view()
         except BaseException:
             self.runtime.shutdown()
             raise
@@ -132,6 +134,15 @@ class PlanningNode(ManagedNode):
             f"scene {len(self.runtime.obstacle_names())} obstacles, "
             f"{self.settings.workers} workers, queue_size {self.settings.queue_size}; {origin}"
         )
+
+    def _open_view(self) -> PlanViewBridge | None:
+        """The browser view when the ``view`` parameter is true."""
+        if not self.settings.view:
+            return None
+        # lazy: viser and the web view cost the node ~25 MB and 0.25 s of imports; most nodes run without a view
+        from maru_planner.ros.plan_view_bridge import open_view
+
+        return open_view(self, self.runtime, self.settings)
 
     def activate(self) -> None:
         self._markers.reset_subscribers()  # the marker timer sends the scene to whoever listens now
