@@ -24,6 +24,7 @@ from typing import Any
 from rclpy.action import ActionClient, ActionServer, CancelResponse
 from rclpy.action.server import ServerGoalHandle
 from rclpy.callback_groups import CallbackGroup
+from rclpy.executors import await_or_execute
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, qos_profile_services_default
 
@@ -98,7 +99,6 @@ class PlanActionServer:
     def _on_accepted(self, goal_handle: ServerGoalHandle) -> None:
         """Every goal is accepted (its result says what was wrong); its monitor exists before a cancel can come."""
         self._monitors[bytes(goal_handle.goal_id.uuid)] = PlanMonitor()
-        goal_handle.__class__ = _CoalescedStatusGoalHandle  # same object and state; its state changes coalesced
         goal_handle.execute()
 
     def _on_cancel(self, goal_handle: ServerGoalHandle) -> CancelResponse:
@@ -149,6 +149,13 @@ class _DrainingActionServer(ActionServer):
     def __init__(self, *args: Any, **kwargs: Any):
         super().__init__(*args, **kwargs)
         self.status_changed = _Coalesced(self._publish_status, STATUS_PERIOD)
+        accepted = self._handle_accepted_callback
+
+        async def coalesced(goal_handle: ServerGoalHandle) -> Any:
+            goal_handle.__class__ = _CoalescedStatusGoalHandle  # same object and state; its state changes coalesced
+            return await await_or_execute(accepted, goal_handle)
+
+        self.register_handle_accepted_callback(coalesced)
         self._result_requests: dict[bytes, list[Any]] = {}  # goal id -> headers of result requests before its end
         self._result_requests_lock = threading.Lock()
         self._kept_results: OrderedDict[bytes, tuple[float, Any]] = OrderedDict()  # goal id -> (end, response)

@@ -98,7 +98,8 @@ class PlanningNode(ManagedNode):
         self._description_files = DescriptionFiles(prefix=f"{NODE_NAME}_")  # URDF/SRDF given as XML text
         parameters.add_on_set_parameters_callback(self, self._specs, self.when_configured(self._apply_parameters))
         self._view: PlanViewBridge | None = None  # the view option's browser view
-        self._scene_cache: tuple | None = None  # (runtime, scene version, frame, obstacles, YAML) of get_scene
+        # get_scene's answer: ((scene version, frame), obstacles, YAML); cleared with the runtime it came from
+        self._scene_answer_cache: tuple[tuple[int, str], list[SceneObstacle], str] | None = None
         self.start()
 
     @property
@@ -151,6 +152,7 @@ class PlanningNode(ManagedNode):
 
     def cleanup(self) -> None:
         self._plan_publisher.shutdown(wait=True)  # before the publishers go
+        self._scene_answer_cache = None  # the next runtime numbers its scenes from the start
         if self._view is not None:
             self._view.close()
             self._view = None
@@ -352,13 +354,13 @@ class PlanningNode(ManagedNode):
 
     def _scene_answer(self) -> tuple[list[SceneObstacle], str]:
         """get_scene's obstacles and YAML, made again only when the scene (its version) or the frame changed."""
-        runtime, frame = self.runtime, self.settings.planning_frame
-        cached = self._scene_cache
-        if cached is None or cached[0] is not runtime or cached[1:3] != (runtime.scene_version, frame):
-            scene_dict, version = runtime.get_scene()
+        frame = self.settings.planning_frame
+        cached = self._scene_answer_cache
+        if cached is None or cached[0] != (self.runtime.scene_version, frame):
+            scene_dict, version = self.runtime.get_scene()
             obstacles = [conv.obstacle_to_msg(o, frame) for o in scene_dict.get("obstacles", [])]
-            cached = self._scene_cache = (runtime, version, frame, obstacles, Scene.from_dict(scene_dict).to_yaml())
-        return cached[3], cached[4]
+            cached = self._scene_answer_cache = ((version, frame), obstacles, Scene.from_dict(scene_dict).to_yaml())
+        return cached[1], cached[2]
 
     # ------------------------------------------------------------ manipulation services (docs/manipulation.md)
 

@@ -379,16 +379,14 @@ class ReactiveNode(ManagedNode):
         :data:`PLAN_BYTES_PER_POSE` a pose (e.g. long frame ids: 2,000 poses took 0.6 GB decoded), else decoded."""
         count, most = conv.path_pose_count(raw), self.settings.max_plan_poses
         if count > most:
-            self.counts["oversized"] += 1
-            self.warnings.warn("oversized", f"ignored /plan: {count} poses (max_plan_poses {most}), not decoded")
+            oversized = f"{count} poses (max_plan_poses {most})"
+        elif len(raw) > PLAN_BYTES_FIXED + PLAN_BYTES_PER_POSE * max(count, 0):
+            oversized = f"{len(raw)} bytes for {count} poses (long names?)"
+        else:
+            self.on_plan(deserialize_message(raw, Path))
             return
-        if len(raw) > PLAN_BYTES_FIXED + PLAN_BYTES_PER_POSE * max(count, 0):
-            self.counts["oversized"] += 1
-            self.warnings.warn(
-                "oversized", f"ignored /plan: {len(raw)} bytes for {count} poses (long names?), not decoded"
-            )
-            return
-        self.on_plan(deserialize_message(raw, Path))
+        self.counts["oversized"] += 1
+        self.warnings.warn("oversized", f"ignored /plan: {oversized}, not decoded")
 
     def on_plan(self, msg: Path) -> None:
         """The initial path; its last pose becomes the goal (eq. 36-44 deform it from here on)."""

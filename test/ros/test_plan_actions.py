@@ -235,10 +235,8 @@ def test_a_result_asked_for_after_rcl_forgot_the_goal_is_the_kept_one_and_status
         second = client.plan_action(PAPER_GOAL, **request)
         assert second.result()[0] == _status().STATUS_SUCCEEDED
         second_id, first_id = bytes(second.handle.goal_id.uuid), bytes(first.handle.goal_id.uuid)
-        deadline = time.monotonic() + 30.0
-        while not any(second_id in ids for ids in listed[seen_before:]) and time.monotonic() < deadline:
-            time.sleep(0.05)
-        assert any(second_id in ids for ids in listed[seen_before:]), "no status message listed the new goal"
+        listed_new = lambda: any(second_id in ids for ids in listed[seen_before:])  # noqa: E731
+        assert tester.wait_for(listed_new, timeout=30.0), "no status message listed the new goal"
         assert not any(first_id in ids for ids in listed[seen_before:]), "a goal rcl forgot is still listed"
     finally:
         tester.node.destroy_subscription(subscription)
