@@ -20,6 +20,10 @@ from maru_planner.paths import config_path
 
 LOOPBACK_PROFILE = "fastdds_loopback.xml"
 
+#: Lets rmw_fastrtps take the history memory policy from the profile (see the profile's comment);
+#: a user's own value is kept.
+QOS_FROM_XML = "RMW_FASTRTPS_USE_QOS_FROM_XML"
+
 #: The variables through which a user chooses ROS 2 networking; nodes never change them.
 NETWORK_VARIABLES = (
     "RMW_IMPLEMENTATION",
@@ -38,6 +42,7 @@ def loopback_dds_environment(domain_id: int | None = None) -> dict[str, str]:
         "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST",
         "FASTRTPS_DEFAULT_PROFILES_FILE": str(config_path(LOOPBACK_PROFILE)),
         "RMW_IMPLEMENTATION": "rmw_fastrtps_cpp",
+        QOS_FROM_XML: "1",
     }
     if domain_id is not None:
         env["ROS_DOMAIN_ID"] = str(domain_id)
@@ -92,7 +97,10 @@ def network_from_environment() -> str:
     if settings:
         chosen = ", ".join(f"{name}={value}" for name, value in settings.items())
         return f"DDS networking from the environment: {chosen}"
+    users_qos_from_xml = os.environ.get(QOS_FROM_XML)
     configure_loopback_dds()
+    if users_qos_from_xml:
+        os.environ[QOS_FROM_XML] = users_qos_from_xml
     return (
         "DDS networking: no ROS networking variable set, so loopback only "
         f"(ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST, {LOOPBACK_PROFILE}); set any of "

@@ -52,6 +52,7 @@ from rclpy.service import Service
 from rclpy.subscription import Subscription
 from rclpy.timer import Timer
 
+from maru_planner import heap
 from maru_planner.errors import MaruError, excerpt, one_line
 from maru_planner.params import ParamSpec
 from maru_planner.ros import parameters
@@ -68,6 +69,7 @@ AUTOSTART = ParamSpec(
 )
 SUCCESS = TransitionCallbackReturn.SUCCESS
 FAILURE = TransitionCallbackReturn.FAILURE
+NODE_MALLOC_ARENAS = 2  # maru_planner.heap
 INACTIVE_WARNING_PERIOD = 5.0  # s between repeats of the "not active" warning
 PRIMARY_STATES = frozenset(
     (State.PRIMARY_STATE_UNCONFIGURED, State.PRIMARY_STATE_INACTIVE, State.PRIMARY_STATE_ACTIVE,
@@ -399,6 +401,7 @@ def run_node(
     node on a multi-threaded executor of that size; ``farewell`` is logged when the node stops.
     """
     network = network_from_environment()
+    heap.limit_arenas(NODE_MALLOC_ARENAS)  # before any thread: executor threads' freed memory is shared, not kept
     try:
         rclpy.init(args=args)
     except RuntimeError as exc:  # rcl's RCLError

@@ -15,7 +15,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from maru_planner import errors
+from maru_planner import errors, heap
 from maru_planner.planning.motion_planner import MotionPlanner
 from maru_planner.runtime.process_pool import ProcessPool
 
@@ -116,10 +116,13 @@ class WorkerPool:
                 took = time.monotonic() - started
                 with self._lock:
                     self._admitted -= 1
+                    idle = self._admitted == 0
                     if budgeted and representative and took > 1e-4:  # one cancelled while waiting took no time
                         self._recent = (
                             took if self._recent == 0.0 else self._recent + RECENT_WEIGHT * (took - self._recent)
                         )
+            if idle:  # after the answer; ~0.1-1 ms, not while a burst is served
+                heap.release_free_memory()
 
 
 def time_left(deadline: float, budget_name: str) -> float:

@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from maru_planner import errors
+from maru_planner import errors, heap
 from maru_planner.collision import sphere_model
 from maru_planner.monitor import PlanMonitor
 from maru_planner.planning.cartesian import CartesianRequest, CartesianResult
@@ -271,6 +271,7 @@ class PlanningRuntime:
                 self._log(f"worker process {n}: {summary}")
         else:  # no request pays numba's compile or cache load (warm_up module doc)
             self._log(warm_up(contexts[0].planner.robot, config).summary())
+        heap.release_free_memory()  # what building the planners freed (heap module doc)
         return WorkerPool(contexts, settings.queue_size)
 
     def _make_context(self, config: PlannerConfig, processes: ProcessPool | None) -> WorkerContext:

@@ -252,7 +252,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("robot.robots",),  # one module per robot
     ("robot",),  # RobotModel, SRDF, IK, attached bodies
     ("scene",),  # Scene, shapes, MoveIt scene formats
-    ("params", "monitor", "paths", "cli_parser"),
+    ("params", "monitor", "paths", "cli_parser", "heap"),
     ("errors", ""),
 )
 #: Folders of numba code: a module in one imports only modules of these folders (and no other package module).

@@ -110,3 +110,22 @@ def test_a_plan_at_the_limit_is_taken(client, node):
     )
     _good_step(client)
     assert rss_mb(node.proc.pid) < RSS_BOUND_MB
+
+
+def test_the_memory_of_a_huge_plan_is_given_back(client, node):
+    """With rmw_fastrtps's default history memory, Fast DDS kept a buffer as large as the largest sample it ever
+    received: one 200 MB /plan held 200 MB for the node's life. The loopback profile's DYNAMIC history memory
+    frees it once the node has taken (and refused) it."""
+    from rclpy.serialization import serialize_message
+
+    from maru_planner.ros import reactive_conversions as conv
+
+    plan = conv.path_msg(np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]]), "odom", 0.0)
+    for pose in plan.poses:
+        pose.header.frame_id = "x" * 40_000_000
+    huge = serialize_message(plan)
+    before = rss_mb(node.proc.pid)
+    client.plan_pub.publish(huge)
+    assert client.spinning.wait_for(lambda: "bytes for 3 poses (long names?), not decoded" in node.log(), timeout=60)
+    _good_step(client)
+    assert rss_mb(node.proc.pid) - before < len(huge) / 1e6 / 4, (before, rss_mb(node.proc.pid))

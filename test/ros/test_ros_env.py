@@ -11,7 +11,7 @@ from maru_planner.ros import env
 
 @pytest.fixture
 def no_network_settings(monkeypatch):
-    for name in env.NETWORK_VARIABLES:
+    for name in (*env.NETWORK_VARIABLES, env.QOS_FROM_XML):
         monkeypatch.delenv(name, raising=False)
     return monkeypatch
 
@@ -21,6 +21,13 @@ def test_nothing_set_falls_back_to_loopback_and_says_so(no_network_settings):
     assert "loopback only" in line and "ROS_AUTOMATIC_DISCOVERY_RANGE" in line
     assert os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "LOCALHOST"
     assert os.environ["FASTRTPS_DEFAULT_PROFILES_FILE"].endswith(env.LOOPBACK_PROFILE)
+    assert os.environ[env.QOS_FROM_XML] == "1"  # the profile's DYNAMIC history memory takes effect
+
+
+def test_loopback_keeps_a_users_qos_from_xml_choice(no_network_settings):
+    no_network_settings.setenv(env.QOS_FROM_XML, "0")
+    env.network_from_environment()
+    assert os.environ[env.QOS_FROM_XML] == "0"
 
 
 @pytest.mark.parametrize(

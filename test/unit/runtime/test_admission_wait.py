@@ -121,3 +121,23 @@ def test_a_waiting_plan_cancelled_ends_at_once_while_the_worker_plans():
         running_monitor.cancel()
         assert isinstance(running.result(LIVENESS_TIMEOUT).error, errors.PlanningCancelled)
         assert runtime.plan(_request()).result(LIVENESS_TIMEOUT).success  # the cancelled one left no trace
+
+
+def test_freed_memory_is_given_back_when_the_pool_runs_dry_not_during_a_burst(monkeypatch):
+    from maru_planner import heap
+
+    releases: list[int] = []
+    pool = _pool(workers=1)
+    monkeypatch.setattr(heap, "release_free_memory", lambda: releases.append(pool.admitted) or True)
+    release = threading.Event()
+    try:
+        for _ in range(3):
+            pool.submit(lambda context: release.wait(), budget=10.0)
+        release.set()
+        deadline = time.monotonic() + LIVENESS_TIMEOUT
+        while not releases and time.monotonic() < deadline:
+            time.sleep(0.001)
+        assert releases == [0]  # once, after the last of the three
+    finally:
+        release.set()
+        pool.close()
