@@ -4,7 +4,8 @@ A request with a budget (a plan, IK) is refused at once with :class:`~maru_plann
 can expect -- the requests ahead of it x the recent time per request / ``workers`` -- exceeds its budget, so a
 burst that fits its budgets is served in full. ``workers + queue_size`` admitted requests (planning or waiting)
 are a hard bound on the memory the queue holds; one more is refused as BUSY too. Time spent waiting counts
-against the request's own budget (:func:`time_left`).
+against the request's own budget (:func:`time_left`). Once no request has been admitted for
+``IDLE_RELEASE_DELAY``, a worker gives the memory the requests freed back to the system (:mod:`maru_planner.heap`).
 """
 
 from __future__ import annotations
@@ -35,6 +36,7 @@ class WorkerContext:
 
 Job = Callable[[WorkerContext], "bool | None"]  # False: its run time says nothing of the next job's (cancelled)
 RECENT_WEIGHT = 0.2  # weight of the newest job in the recent time per budgeted job (an exponential average)
+IDLE_RELEASE_DELAY = 1.0  # s with no job admitted before the memory jobs freed is given back (maru_planner.heap)
 
 
 class WorkerPool:
@@ -51,6 +53,7 @@ class WorkerPool:
         self._lock = threading.Lock()
         self._admitted = 0
         self._recent = 0.0  # s per budgeted job, recently (0 until one has run: a fresh pool admits)
+        self._ran_since_release = False
         self._threads = [
             threading.Thread(target=self._serve, args=(context,), name=f"{name}-{i}", daemon=True)
             for i, context in enumerate(contexts)
@@ -106,7 +109,14 @@ class WorkerPool:
             self._jobs.put(None)
 
     def _serve(self, context: WorkerContext) -> None:
-        while (item := self._jobs.get()) is not None:
+        while True:
+            try:
+                item = self._jobs.get(timeout=IDLE_RELEASE_DELAY if self._ran_since_release else None)
+            except queue.Empty:
+                self._release_freed_memory()
+                continue
+            if item is None:
+                return
             job, budgeted = item
             started = time.monotonic()
             representative = False
@@ -116,13 +126,19 @@ class WorkerPool:
                 took = time.monotonic() - started
                 with self._lock:
                     self._admitted -= 1
-                    idle = self._admitted == 0
+                    self._ran_since_release = True
                     if budgeted and representative and took > 1e-4:  # one cancelled while waiting took no time
                         self._recent = (
                             took if self._recent == 0.0 else self._recent + RECENT_WEIGHT * (took - self._recent)
                         )
-            if idle:  # after the answer; ~0.1-1 ms, not while a burst is served
-                heap.release_free_memory()
+
+    def _release_freed_memory(self) -> None:
+        """Once the pool has been idle IDLE_RELEASE_DELAY s: off every request's path, once per busy spell."""
+        with self._lock:
+            if self._admitted or not self._ran_since_release:
+                return
+            self._ran_since_release = False
+        heap.release_free_memory()
 
 
 def time_left(deadline: float, budget_name: str) -> float:

@@ -123,21 +123,26 @@ def test_a_waiting_plan_cancelled_ends_at_once_while_the_worker_plans():
         assert runtime.plan(_request()).result(LIVENESS_TIMEOUT).success  # the cancelled one left no trace
 
 
-def test_freed_memory_is_given_back_when_the_pool_runs_dry_not_during_a_burst(monkeypatch):
+def test_freed_memory_is_given_back_once_the_pool_has_been_idle_not_during_a_burst(monkeypatch):
     from maru_planner import heap
+    from maru_planner.runtime import admission
 
+    monkeypatch.setattr(admission, "IDLE_RELEASE_DELAY", 0.2)
+    pool = _pool(workers=2)
     releases: list[int] = []
-    pool = _pool(workers=1)
     monkeypatch.setattr(heap, "release_free_memory", lambda: releases.append(pool.admitted) or True)
     release = threading.Event()
     try:
-        for _ in range(3):
+        for _ in range(5):
             pool.submit(lambda context: release.wait(), budget=10.0)
+        time.sleep(0.5)  # longer than the delay, with every job still admitted
+        assert releases == []
         release.set()
         deadline = time.monotonic() + LIVENESS_TIMEOUT
         while not releases and time.monotonic() < deadline:
-            time.sleep(0.001)
-        assert releases == [0]  # once, after the last of the three
+            time.sleep(0.01)
+        time.sleep(0.5)  # both threads have been idle past the delay: still one release for the spell
+        assert releases == [0]
     finally:
         release.set()
         pool.close()
