@@ -3,8 +3,8 @@
 glibc keeps memory that was freed inside its heaps for later allocations instead of giving it back, and it gives
 each thread that allocates while another does an arena of its own (up to 8 per core), each keeping its own freed
 memory. A node that built its planners (robot models, numba's compiled kernels, OMPL set-ups) and then served
-requests on several executor threads held tens of megabytes that no object used: planning_node went from 335 to
-366 MB without :func:`release_free_memory` after building its planners (``bench/robustness.py``).
+requests on several executor threads held tens of megabytes that no object used: planning_node is 338 MB idle
+with :func:`release_free_memory` after building its planners, 366 MB without (``bench/robustness.py``'s node).
 """
 
 from __future__ import annotations

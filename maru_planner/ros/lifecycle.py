@@ -401,7 +401,7 @@ def run_node(
     node on a multi-threaded executor of that size; ``farewell`` is logged when the node stops.
     """
     network = network_from_environment()
-    heap.limit_arenas(NODE_MALLOC_ARENAS)  # before any thread: executor threads' freed memory is shared, not kept
+    heap.limit_arenas(NODE_MALLOC_ARENAS)  # before any thread: each arena keeps its own freed memory
     try:
         rclpy.init(args=args)
     except RuntimeError as exc:  # rcl's RCLError

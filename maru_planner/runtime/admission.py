@@ -4,8 +4,8 @@ A request with a budget (a plan, IK) is refused at once with :class:`~maru_plann
 can expect -- the requests ahead of it x the recent time per request / ``workers`` -- exceeds its budget, so a
 burst that fits its budgets is served in full. ``workers + queue_size`` admitted requests (planning or waiting)
 are a hard bound on the memory the queue holds; one more is refused as BUSY too. Time spent waiting counts
-against the request's own budget (:func:`time_left`). Once no request has been admitted for
-``IDLE_RELEASE_DELAY``, a worker gives the memory the requests freed back to the system (:mod:`maru_planner.heap`).
+against the request's own budget (:func:`time_left`). A worker that has waited ``IDLE_RELEASE_DELAY`` for a job,
+with none admitted, gives the memory the requests freed back to the system (:mod:`maru_planner.heap`).
 """
 
 from __future__ import annotations
@@ -36,7 +36,7 @@ class WorkerContext:
 
 Job = Callable[[WorkerContext], "bool | None"]  # False: its run time says nothing of the next job's (cancelled)
 RECENT_WEIGHT = 0.2  # weight of the newest job in the recent time per budgeted job (an exponential average)
-IDLE_RELEASE_DELAY = 1.0  # s with no job admitted before the memory jobs freed is given back (maru_planner.heap)
+IDLE_RELEASE_DELAY = 1.0  # s a worker waits for a job before it gives freed memory back (none admitted)
 
 
 class WorkerPool:
@@ -133,7 +133,7 @@ class WorkerPool:
                         )
 
     def _release_freed_memory(self) -> None:
-        """Once the pool has been idle IDLE_RELEASE_DELAY s: off every request's path, once per busy spell."""
+        """Off every request's path (no job admitted), once per busy spell."""
         with self._lock:
             if self._admitted or not self._ran_since_release:
                 return
