@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import platform
+import subprocess
+import sys
 
 import pytest
 
@@ -31,5 +33,32 @@ def test_memory_freed_below_a_live_block_is_given_back():
     assert pinned[0] == 1
 
 
-def test_arenas_can_be_limited():
-    assert heap.limit_arenas(8)  # glibc's own default on a one-core machine: harmless to this test process
+ARENA_COUNT = """
+import ctypes, re, sys, tempfile, threading
+from maru_planner import heap
+if sys.argv[1] == "limited":
+    assert heap.limit_arenas(1)
+threads = [threading.Thread(target=lambda: [bytearray(1000) for _ in range(20000)]) for _ in range(8)]
+for thread in threads:
+    thread.start()
+for thread in threads:
+    thread.join()
+libc = ctypes.CDLL("libc.so.6")
+libc.fopen.restype = ctypes.c_void_p
+with tempfile.NamedTemporaryFile(suffix=".xml") as report:
+    stream = ctypes.c_void_p(libc.fopen(report.name.encode(), b"w"))
+    libc.malloc_info(0, stream)
+    libc.fclose(stream)
+    print(len(re.findall("<heap nr=", open(report.name).read())))
+"""
+
+
+def _arenas_after_eight_threads(mode: str) -> int:
+    done = subprocess.run([sys.executable, "-c", ARENA_COUNT, mode], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    return int(done.stdout)
+
+
+def test_limited_arenas_hold_for_every_thread():
+    assert _arenas_after_eight_threads("limited") == 1
+    assert _arenas_after_eight_threads("default") > 1  # the control: threads do get arenas of their own
