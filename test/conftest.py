@@ -239,6 +239,25 @@ def connected_planning_client(tester: SpinningNode, proc: NodeProcess, namespace
     return planning
 
 
+def wait_until_node_has_joint_states(planning, timeout: float = 60.0) -> None:
+    """Until the planning node behind the PlanningClient ``planning`` has matched the /joint_states publisher, it drops
+    what is sent (a node ready and a test that has seen /joint_states say nothing of it): wait for the first one.
+
+    The probe has no goal: INVALID_REQUEST once the node has a joint state, NO_START_STATE before.
+    """
+    from maru_planner.ros.planning_client import plan_request
+    from maru_planner_interfaces.msg import PlanningError
+
+    deadline = time.monotonic() + timeout
+    while True:
+        answer = planning.call(planning.plan_client, plan_request(None, start=None, time_budget=1.0), 30.0)
+        if answer.error.code != PlanningError.NO_START_STATE:
+            assert answer.error.code == PlanningError.INVALID_REQUEST, answer.error.message
+            return
+        assert time.monotonic() < deadline, "the node never received /joint_states"
+        time.sleep(0.05)
+
+
 class BaseNodeClient:
     """base_planner_node's plan_base_path service client and a latched map publisher on a spinning test node."""
 

@@ -14,7 +14,7 @@ import threading
 import numpy as np
 import pytest
 from builtin_interfaces.msg import Time
-from conftest import connected_planning_client
+from conftest import connected_planning_client, wait_until_node_has_joint_states
 from control_msgs.action import FollowJointTrajectory
 from control_msgs.msg import JointComponentTolerance
 from sensor_msgs.msg import JointState
@@ -65,6 +65,7 @@ def ros2_control_path(node_process, tester):
     tester.node.create_subscription(JointState, "joint_states", state, 10)
     client = connected_planning_client(tester, planner)
     assert tester.wait_for(lambda: state.msg is not None, timeout=60.0), arm.log()
+    wait_until_node_has_joint_states(client)  # the plans start from the arm's /joint_states
     yield client, state, arm, panda
     assert panda.alive() and planner.alive(), panda.log() + planner.log()
 

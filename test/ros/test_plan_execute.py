@@ -12,7 +12,7 @@ import threading
 
 import numpy as np
 import pytest
-from conftest import connected_planning_client
+from conftest import connected_planning_client, wait_until_node_has_joint_states
 
 from maru_planner.paths import config_path
 from maru_planner.robot import RobotModel
@@ -43,6 +43,7 @@ def planning(node_process, tester):
         "maru_planner.ros.planning_node", ["--ros-args", "--params-file", str(config_path("planner.yaml"))]
     )
     client = connected_planning_client(tester, node)
+    wait_until_node_has_joint_states(client)  # the plans start from the arm's /joint_states
     yield client
     assert arm.alive(), "arm_sim_node died:\n" + arm.log()
     assert node.alive(), "planning_node died:\n" + node.log()

@@ -84,7 +84,7 @@ class Recorder:
 @pytest.fixture(scope="module")
 def session_bag(node_process, rclpy_session, tmp_path_factory):
     """Run the scripted session once; returns (bag path, the plan responses, last published state)."""
-    from conftest import SpinningNode
+    from conftest import SpinningNode, wait_until_node_has_joint_states
 
     from maru_planner.paths import config_path
     from maru_planner.ros.planning_client import PlanningClient
@@ -123,7 +123,7 @@ def session_bag(node_process, rclpy_session, tmp_path_factory):
     responses = []
     try:
         assert spinning.wait_for(lambda: recorder.count("/joint_states") >= 5)
-        _wait_until_node_has_joint_states(client)
+        wait_until_node_has_joint_states(client)
         for i in range(PLANS):
             if i == 1:
                 pose = np.eye(4)
@@ -145,24 +145,6 @@ def session_bag(node_process, rclpy_session, tmp_path_factory):
     recorder.write(path)
     yield path, responses, published, spinning, client, publisher
     spinning.destroy()
-
-
-def _wait_until_node_has_joint_states(client, timeout: float = 60.0) -> None:
-    """Until the node has matched the /joint_states publisher it drops what is sent: wait for the first one.
-
-    The probe has no goal: INVALID_REQUEST once the node has a joint state, NO_START_STATE before.
-    """
-    from maru_planner.ros.planning_client import plan_request
-    from maru_planner_interfaces.msg import PlanningError
-
-    deadline = time.monotonic() + timeout
-    while True:
-        answer = client.call(client.plan_client, plan_request(None, start=None, time_budget=1.0), 30.0)
-        if answer.error.code != PlanningError.NO_START_STATE:
-            assert answer.error.code == PlanningError.INVALID_REQUEST, answer.error.message
-            return
-        assert time.monotonic() < deadline, "the node never received /joint_states"
-        time.sleep(0.05)
 
 
 def test_session_bag_holds_every_topic(session_bag):
