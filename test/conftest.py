@@ -239,6 +239,15 @@ def connected_planning_client(tester: SpinningNode, proc: NodeProcess, namespace
     return planning
 
 
+def rss_mb(pid: int) -> float:
+    """Resident set size of process ``pid`` (MB), from /proc/<pid>/status."""
+    with open(f"/proc/{pid}/status") as status:
+        for line in status:
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) / 1024.0
+    raise RuntimeError(f"no VmRSS for process {pid}")
+
+
 def wait_until_node_has_joint_states(planning, timeout: float = 60.0) -> None:
     """Until the planning node behind the PlanningClient ``planning`` has matched the /joint_states publisher, it drops
     what is sent (a node ready and a test that has seen /joint_states say nothing of it): wait for the first one.

@@ -27,6 +27,7 @@ from pathlib import Path as FilePath
 
 import yaml
 from builtin_interfaces.msg import Time
+from conftest import rss_mb as rss_mb  # re-exported: the hostile tests and bench/robustness.py read RSS here
 from geometry_msgs.msg import Point32, PoseStamped
 from hypothesis import HealthCheck, Phase, given, seed, settings
 from hypothesis import strategies as st
@@ -915,14 +916,6 @@ class LogWatch:
             text = f.read()
             self.offset = f.tell()
         return text
-
-
-def rss_mb(pid: int) -> float:
-    """Resident set size of process ``pid`` (MB), from /proc/<pid>/status."""
-    for line in FilePath(f"/proc/{pid}/status").read_text().splitlines():
-        if line.startswith("VmRSS:"):
-            return int(line.split()[1]) / 1024.0
-    raise RuntimeError(f"no VmRSS for process {pid}")
 
 
 def timed_call(spinning, client, request, budget: float) -> tuple[object | None, float]:

@@ -20,9 +20,10 @@ from maru_planner.paths import config_path
 
 LOOPBACK_PROFILE = "fastdds_loopback.xml"
 
-#: Lets rmw_fastrtps take the history memory policy from the profile (see the profile's comment);
-#: a user's own value is kept.
+#: Lets rmw_fastrtps take the history memory policy from the profile (see the profile's comment).
 QOS_FROM_XML = "RMW_FASTRTPS_USE_QOS_FROM_XML"
+#: Loopback settings that a user's own value overrides (everything else of the loopback is forced).
+LOOPBACK_DEFAULTS = {QOS_FROM_XML: "1"}
 
 #: The variables through which a user chooses ROS 2 networking; nodes never change them.
 NETWORK_VARIABLES = (
@@ -42,7 +43,7 @@ def loopback_dds_environment(domain_id: int | None = None) -> dict[str, str]:
         "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST",
         "FASTRTPS_DEFAULT_PROFILES_FILE": str(config_path(LOOPBACK_PROFILE)),
         "RMW_IMPLEMENTATION": "rmw_fastrtps_cpp",
-        QOS_FROM_XML: "1",
+        **LOOPBACK_DEFAULTS,
     }
     if domain_id is not None:
         env["ROS_DOMAIN_ID"] = str(domain_id)
@@ -55,12 +56,15 @@ def configure_loopback_dds(domain_id: int | None = None, *, random_domain: bool 
     The discovery range and profile are always forced (traffic to any other
     address is never wanted). The domain id is taken from ``domain_id``, else the
     user's exported ``ROS_DOMAIN_ID``, else one in 1..100 that no process on this machine uses
-    (:func:`unused_domain_id`) when ``random_domain``, else left unset.
+    (:func:`unused_domain_id`) when ``random_domain``, else left unset. :data:`LOOPBACK_DEFAULTS` apply only
+    where the user set nothing.
     """
     if domain_id is None and random_domain and not os.environ.get("ROS_DOMAIN_ID"):
         domain_id = unused_domain_id()
     env = loopback_dds_environment(domain_id)
-    os.environ.update(env)
+    for name, value in env.items():
+        if name not in LOOPBACK_DEFAULTS or not os.environ.get(name):
+            os.environ[name] = value
     os.environ.pop("ROS_LOCALHOST_ONLY", None)
     os.environ.pop("ROS_STATIC_PEERS", None)
     return env
@@ -97,10 +101,7 @@ def network_from_environment() -> str:
     if settings:
         chosen = ", ".join(f"{name}={value}" for name, value in settings.items())
         return f"DDS networking from the environment: {chosen}"
-    users_qos_from_xml = os.environ.get(QOS_FROM_XML)
     configure_loopback_dds()
-    if users_qos_from_xml:
-        os.environ[QOS_FROM_XML] = users_qos_from_xml
     return (
         "DDS networking: no ROS networking variable set, so loopback only "
         f"(ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST, {LOOPBACK_PROFILE}); set any of "

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import GROUP_JOINTS, PAPER_GOAL, PAPER_START, connected_planning_client
+from conftest import GROUP_JOINTS, PAPER_GOAL, PAPER_START, connected_planning_client, rss_mb
 
 # serial: its bursts, storms and admission timings load the machine on purpose (make test runs it alone)
 pytestmark = [pytest.mark.ros, pytest.mark.serial]
@@ -635,13 +635,6 @@ def test_64_clients_5_rounds_lose_nothing_and_no_busy_when_the_work_fits(planner
     _good_request_still_succeeds(client)
 
 
-def _rss_mb(pid: int) -> float:
-    for line in open(f"/proc/{pid}/status"):
-        if line.startswith("VmRSS:"):
-            return int(line.split()[1]) / 1024.0
-    raise AssertionError(f"no VmRSS for pid {pid}")
-
-
 def test_junk_joint_states_are_ignored_and_counted_never_stored(client, tester, joint_states, planner_node):
     """A gripper joint, 50k junk names and NaN values on /joint_states: the robot's joints are still
     taken from it, nothing else is kept (memory stays flat), and an empty start plans from the real joints."""
@@ -651,7 +644,7 @@ def test_junk_joint_states_are_ignored_and_counted_never_stored(client, tester, 
     with_gripper = dict(moved, r_gripper_finger_joint=0.04)
     # taken (the plan starts there) before the burst: a burst on a loaded machine may drop a message queued before it
     _assert_success(_plan_from_joint_states(client, tester, joint_states, with_gripper, _easy_goal(PAPER_START, 0.3)))
-    rss_before = _rss_mb(planner_node.proc.pid)
+    rss_before = rss_mb(planner_node.proc.pid)
     junk = JointState(name=[f"junk_{i}" for i in range(50_000)], position=[0.0] * 50_000)
     for _ in range(20):
         joint_states.publish(junk)
@@ -661,7 +654,7 @@ def test_junk_joint_states_are_ignored_and_counted_never_stored(client, tester, 
     _assert_success(response)
     assert _starts_at(response, moved)
     assert "r_gripper_finger_joint" in planner_node.log() and "so far" in planner_node.log()
-    assert _rss_mb(planner_node.proc.pid) - rss_before < 50.0
+    assert rss_mb(planner_node.proc.pid) - rss_before < 50.0
 
 
 def _children(pid: int) -> list[int]:

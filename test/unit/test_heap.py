@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import os
 import platform
 import subprocess
 import sys
 
 import pytest
+from conftest import rss_mb
 
 from maru_planner import heap
 
@@ -16,20 +18,15 @@ BLOCK = 64 * 1024  # below glibc's mmap threshold: these come from the heap, not
 BLOCKS = 2_000  # 128 MB
 
 
-def _rss_mb() -> float:
-    with open("/proc/self/statm") as statm:
-        return int(statm.read().split()[1]) * 4096 / 1e6
-
-
 def test_memory_freed_below_a_live_block_is_given_back():
     blocks = [bytearray(BLOCK) for _ in range(BLOCKS)]
     for block in blocks:  # touch every page
         block[::4096] = b"\x01" * len(block[::4096])
     pinned = blocks[-1]  # keeps the heap's top in use: glibc cannot shrink the heap by itself
     del blocks
-    held = _rss_mb()
+    held = rss_mb(os.getpid())
     assert heap.release_free_memory()
-    assert held - _rss_mb() > BLOCKS * BLOCK / 1e6 / 2
+    assert held - rss_mb(os.getpid()) > BLOCKS * BLOCK / 1e6 / 2
     assert pinned[0] == 1
 
 
