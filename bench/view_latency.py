@@ -110,6 +110,13 @@ def reference(page: Page, name: str) -> browser.RobotPixels:
     return pixels
 
 
+def shown_since(screen: browser.Screen, pixels: browser.RobotPixels, t0: float) -> tuple[float, float]:
+    """(s from ``t0`` until a screenshot showed the robot, or until it was given up on: the breakdown's end;
+    page ready: the same, NaN when the robot was never shown)."""
+    seen = browser.wait_shown(screen, pixels, timeout=60.0, since=t0)
+    return (time.monotonic() - t0, float("nan")) if seen is None else (seen, seen)
+
+
 def page_ready(page: Page, robot: str, pixels: browser.RobotPixels) -> dict:
     """Start -> the page shows the robot, in parts: the app (robot, meshes from the disk cache, scene, server), the
     page's own start (viser's client: unpacked and compiled per page, to its canvas), our scene's first frame."""
@@ -125,13 +132,12 @@ def page_ready(page: Page, robot: str, pixels: browser.RobotPixels) -> dict:
         page.goto(app.url)
         page.wait_for_selector("canvas", timeout=60_000)
         canvas = time.monotonic() - t0
-        seen = browser.wait_shown(screen, pixels, timeout=60.0, since=t0)
-        ready = time.monotonic() - t0 if seen is None else seen
+        ready, page_ready = shown_since(screen, pixels, t0)
         wait_ready(app, 120.0)
         while not planner:
             time.sleep(0.01)
         return {"robot": robot, "server_s": started, "canvas_s": canvas - started, "first_frame_s": ready - canvas,
-                "page_ready_s": ready if seen is not None else float("nan"), "planner_ready_s": planner[0],
+                "page_ready_s": page_ready, "planner_ready_s": planner[0],
                 **page_content(app)}  # fmt: skip
     finally:
         app.close()
@@ -151,8 +157,7 @@ def process_page_ready(page: Page, robot: str, pixels: browser.RobotPixels) -> d
             fail(f"maru-view --robot {robot} printed no URL: {line.strip()!r}")
         url = time.monotonic() - t0
         page.goto(line.rsplit(" at ", 1)[1].strip())
-        seen = browser.wait_shown(screen, pixels, timeout=60.0, since=t0)
-        return {"robot": robot, "url_printed_s": url, "page_ready_s": float("nan") if seen is None else seen}
+        return {"robot": robot, "url_printed_s": url, "page_ready_s": shown_since(screen, pixels, t0)[1]}
     finally:
         proc.send_signal(signal.SIGINT)
         try:
@@ -184,10 +189,9 @@ def bare_viser_ready(page: Page, name: str, pixels: browser.RobotPixels) -> dict
         page.goto(peer.url)
         page.wait_for_selector("canvas", timeout=60_000)
         canvas = time.monotonic() - t0
-        seen = browser.wait_shown(screen, pixels, timeout=60.0, since=t0)
-        ready = time.monotonic() - t0 if seen is None else seen
+        ready, page_ready = shown_since(screen, pixels, t0)
         return {"robot": name, "server_s": 0.0, "canvas_s": canvas, "first_frame_s": ready - canvas,
-                "page_ready_s": ready if seen is not None else float("nan")}  # fmt: skip
+                "page_ready_s": page_ready}  # fmt: skip
     finally:
         peer.close()
 
@@ -415,7 +419,7 @@ def main() -> None:
             for peer in (PEER_LEAN, PEER_DEFAULT):
                 ready_rows.append(_on_new_page(chromium, bare_viser_ready, peer, pixels[peer]))
                 progress.step("page ready, bare viser")
-        app = ViewApp(ViewSettings(robot="panda", scene="none", port=0))
+        app = view_app("panda", SCENES["panda"])
         page = chromium.new_page(viewport=browser.VIEWPORT)
         page.goto(app.url)
         wait_ready(app, 120.0)
