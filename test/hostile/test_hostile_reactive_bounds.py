@@ -55,13 +55,18 @@ def _counter(node, name: str) -> int:
     return int(found[-1]) if found else -1
 
 
-def _serialized_plan(poses: int) -> bytes:
+def _serialized_plan(poses: int, frame_id_chars: int = 0) -> bytes:
+    """A straight /plan to the goal, serialized; with ``frame_id_chars``, each pose's frame id that long."""
     from rclpy.serialization import serialize_message
 
     from maru_planner.ros import reactive_conversions as conv
 
     points = np.column_stack([np.linspace(0.0, GOAL[0], poses), np.zeros(poses), np.zeros(poses)])
-    return serialize_message(conv.path_msg(points, "odom", 0.0))
+    plan = conv.path_msg(points, "odom", 0.0)
+    if frame_id_chars:
+        for pose in plan.poses:
+            pose.header.frame_id = "x" * frame_id_chars
+    return serialize_message(plan)
 
 
 def _good_step(client) -> float:
@@ -88,15 +93,7 @@ def test_oversized_plans_are_refused_unread_and_counted_and_the_next_scan_is_ans
 def test_a_plan_of_few_poses_with_huge_frame_ids_is_refused_unread(client, node):
     """bench/robustness.py's full run: 2,000 poses with long frame ids passed the pose count and took the node to
     1.1 GB once decoded."""
-    from rclpy.serialization import serialize_message
-
-    from maru_planner.ros import reactive_conversions as conv
-
-    points = np.column_stack([np.linspace(0.0, GOAL[0], 50), np.zeros(50), np.zeros(50)])
-    plan = conv.path_msg(points, "odom", 0.0)
-    for pose in plan.poses:
-        pose.header.frame_id = "x" * 20_000
-    client.plan_pub.publish(serialize_message(plan))
+    client.plan_pub.publish(_serialized_plan(50, frame_id_chars=20_000))
     assert client.spinning.wait_for(lambda: "bytes for 50 poses (long names?), not decoded" in node.log(), timeout=60)
     _good_step(client)
     assert "initial path with 50 poses" not in node.log()
@@ -116,14 +113,7 @@ def test_the_memory_of_a_huge_plan_is_given_back(client, node):
     """With rmw_fastrtps's default history memory, Fast DDS kept a buffer as large as the largest sample it ever
     received: one 200 MB /plan held 200 MB for the node's life. The loopback profile's DYNAMIC history memory
     frees it once the node has taken (and refused) it."""
-    from rclpy.serialization import serialize_message
-
-    from maru_planner.ros import reactive_conversions as conv
-
-    plan = conv.path_msg(np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]]), "odom", 0.0)
-    for pose in plan.poses:
-        pose.header.frame_id = "x" * 40_000_000
-    huge = serialize_message(plan)
+    huge = _serialized_plan(3, frame_id_chars=40_000_000)
     before = rss_mb(node.proc.pid)
     client.plan_pub.publish(huge)
     assert client.spinning.wait_for(lambda: "bytes for 3 poses (long names?), not decoded" in node.log(), timeout=60)
